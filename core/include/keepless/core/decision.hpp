@@ -1,0 +1,36 @@
+#pragma once
+
+#include <cstdint>
+
+#include "keepless/core/config.hpp"
+
+namespace keepless::core {
+
+enum class Verdict : std::uint8_t { kKeep = 0, kCull, kSkip };
+
+const char* to_string(Verdict v);  // "keep", "cull", "skip"
+
+struct PointDecision {
+  PointId point = 0;
+  Verdict verdict = Verdict::kSkip;
+  std::int64_t flow = 0;      // flow on source -> point (0 when skipped)
+  std::int64_t capacity = 0;  // n(n-1)/2 (0 when skipped)
+};
+
+// Keep iff flow > theta * capacity, in double (exact for these magnitudes).
+Verdict decide(std::int64_t flow, std::int64_t capacity, double theta);
+
+struct Summary {
+  std::uint32_t keyframes = 0;
+  std::uint32_t points = 0;     // distinct points in the window
+  std::uint32_t evaluated = 0;  // n >= 2
+  std::uint32_t kept = 0;
+  std::uint32_t culled = 0;
+  std::uint32_t skipped = 0;
+  std::uint32_t pairs = 0;
+  std::uint32_t arcs = 0;  // all network arcs
+  std::int64_t max_flow = 0;
+  std::int64_t total_cost = 0;
+};
+
+}  // namespace keepless::core

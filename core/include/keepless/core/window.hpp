@@ -1,0 +1,59 @@
+#pragma once
+// The sliding window: keyframes in insertion order and their observations,
+// in storage sized once from Capacities. A failed call changes nothing.
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+
+#include "keepless/core/config.hpp"
+#include "keepless/core/status.hpp"
+
+namespace keepless::core {
+
+struct Keyframe {
+  KeyframeId id = 0;
+  double centre[3] = {0, 0, 0};          // camera centre, metres
+  double orientation[4] = {1, 0, 0, 0};  // unit quaternion w, x, y, z (carried, not used by costs)
+};
+
+struct Observation {
+  PointId point = 0;
+  double u = 0;  // keypoint, pixels
+  double v = 0;
+};
+
+class Window {
+ public:
+  explicit Window(const Capacities& capacities);
+  ~Window();
+  Window(const Window&) = delete;
+  Window& operator=(const Window&) = delete;
+
+  // Adds a keyframe with all its observations, atomically: on any error
+  // (capacity, non-finite number, duplicate keyframe id, a point observed
+  // twice by this keyframe) the window is unchanged.
+  [[nodiscard]] Status add_keyframe(const Keyframe& keyframe, const Observation* observations,
+                                    std::uint32_t count);
+  [[nodiscard]] Status remove_keyframe(KeyframeId id);  // kUnknownKeyframe if absent
+  void clear();
+
+  std::uint32_t keyframe_count() const;
+  // Slot i in insertion order (0 = oldest).
+  const Keyframe& keyframe(std::uint32_t slot) const;
+  const Observation* observations(std::uint32_t slot) const;
+  std::uint32_t observation_count(std::uint32_t slot) const;
+  std::uint32_t total_observations() const;
+  std::uint32_t distinct_points() const;
+  // Slot of a keyframe id, or -1.
+  std::int32_t find_keyframe(KeyframeId id) const;
+
+  const Capacities& capacities() const;
+  std::size_t memory_bytes() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace keepless::core

@@ -1,0 +1,33 @@
+#pragma once
+// Trajectory accuracy as the paper defines it (section IV-B): RMS ATE in
+// metres after Umeyama alignment, and RMS ATE_r in degrees, the angle of
+// E_i = Q_i^-1 P_i with P_i the aligned estimate (evo's APE "angle_deg").
+
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "geometry.hpp"
+
+namespace keepless::eval {
+
+struct Alignment {
+  Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
+  Eigen::Vector3d t = Eigen::Vector3d::Zero();
+  double s = 1.0;
+};
+
+// Least-squares (s, R, t) with dst ~ s R src + t (Umeyama 1991); s = 1 when
+// !with_scale (SE(3)). Needs >= 3 non-collinear points for a unique R.
+Alignment umeyama(const std::vector<Eigen::Vector3d>& src, const std::vector<Eigen::Vector3d>& dst,
+                  bool with_scale);
+
+struct Ate {
+  double rms_m = 0;
+  double rms_r_deg = 0;
+};
+
+Ate absolute_trajectory_error(const std::vector<Pose>& estimate, const std::vector<Pose>& ground_truth,
+                              bool with_scale);
+
+}  // namespace keepless::eval

@@ -1,0 +1,103 @@
+// keepless_make_window: writes a deterministic synthetic window or map in the
+// keepless_sparsify input format (see synthetic_window.hpp for the scene).
+//
+//   keepless_make_window [--workload small|orbslam|large|map] [--keyframes K]
+//                        [--points P] [--obs-per-kf N] [--seed S] --out FILE
+//
+// Explicit counts override the preset. Prints one JSON line with the counts.
+
+#include <cinttypes>
+#include <cstdint>
+#include <cstdio>
+#include <limits>
+#include <string>
+#include <unordered_map>
+
+#include "keepless/core/window_file.hpp"
+#include "synthetic_window.hpp"
+
+namespace {
+
+constexpr const char* kUsage =
+    "usage: keepless_make_window [--workload small|orbslam|large|map] [--keyframes K] "
+    "[--points P] [--obs-per-kf N] [--seed S] --out FILE";
+
+int usage_error(const std::string& reason) {
+  std::fprintf(stderr, "keepless_make_window: %s; %s\n", reason.c_str(), kUsage);
+  return 2;
+}
+
+bool parse_count(const char* text, std::uint32_t* out) {
+  std::uint64_t v = 0;
+  if (!keepless::core::parse_uint64(text, &v) || v < 1 ||
+      v > std::numeric_limits<std::uint32_t>::max()) {
+    return false;
+  }
+  *out = static_cast<std::uint32_t>(v);
+  return true;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  keepless::perf::SyntheticSpec spec;
+  std::string out;
+  // Preset first, so explicit counts override it wherever they appear.
+  for (int i = 1; i + 1 < argc; ++i) {
+    if (std::string(argv[i]) == "--workload" &&
+        !keepless::perf::workload_spec(argv[i + 1], &spec)) {
+      return usage_error(std::string("unknown workload '") + argv[i + 1] + "'");
+    }
+  }
+  for (int i = 1; i < argc; ++i) {
+    const std::string flag = argv[i];
+    if (flag == "--help" || flag == "-h") {
+      std::printf("%s\n", kUsage);
+      return 0;
+    }
+    if (i + 1 >= argc) return usage_error("missing value for " + flag);
+    const char* value = argv[++i];
+    const std::string bad = "bad value for " + flag + ": '" + value + "'";
+    if (flag == "--workload") {
+      continue;  // applied above
+    } else if (flag == "--keyframes") {
+      if (!parse_count(value, &spec.keyframes)) return usage_error(bad);
+    } else if (flag == "--points") {
+      if (!parse_count(value, &spec.points)) return usage_error(bad);
+    } else if (flag == "--obs-per-kf") {
+      if (!parse_count(value, &spec.obs_per_kf)) return usage_error(bad);
+    } else if (flag == "--seed") {
+      if (!keepless::core::parse_uint64(value, &spec.seed)) return usage_error(bad);
+    } else if (flag == "--out") {
+      out = value;
+    } else {
+      return usage_error("unknown flag '" + flag + "'");
+    }
+  }
+  if (out.empty()) return usage_error("--out is required");
+
+  const keepless::core::WindowFile file = keepless::perf::make_synthetic_window(spec);
+  std::string error;
+  if (!keepless::core::write_window_file(out, file, &error)) {
+    std::fprintf(stderr, "keepless_make_window: %s\n", error.c_str());
+    return 1;
+  }
+  std::uint64_t max_track = 0;
+  {
+    std::unordered_map<std::uint64_t, std::uint32_t> views;  // point -> keyframes seeing it
+    for (const auto& list : file.observations) {
+      for (const auto& o : list) {
+        const std::uint32_t n = ++views[o.point];
+        if (n > max_track) max_track = n;
+      }
+    }
+  }
+  const auto& n = file.needs;
+  std::printf(
+      "{\"keyframes\":%u,\"points\":%u,\"observations\":%u,\"obs_per_kf\":%.1f,"
+      "\"pair_arcs\":%u,\"max_track\":%" PRIu64 ",\"seed\":%" PRIu64 "}\n",
+      n.max_keyframes, n.max_points, n.max_observations,
+      n.max_keyframes ? static_cast<double>(n.max_observations) / n.max_keyframes : 0.0,
+      n.max_pair_arcs, max_track, spec.seed);
+  return 0;
+}

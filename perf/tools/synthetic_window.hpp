@@ -1,0 +1,31 @@
+#pragma once
+// A deterministic synthetic window or map: a camera moving along a gently
+// curving corridor (tiled floor, walls with textured posters on plain paint,
+// a ceiling with lamps), pinhole 640x480, f = 500. Points lie on those
+// surfaces, denser where the texture is (tile corners, posters) and sparse on
+// weak texture; each is tracked over a run of consecutive keyframes while it
+// stays in view, with pixel noise. Only integer PRNG output, + - * / and sqrt
+// are used, so a seed gives the same file with any standard library.
+
+#include <cstdint>
+#include <string>
+
+#include "keepless/core/window_file.hpp"
+
+namespace keepless::perf {
+
+struct SyntheticSpec {
+  std::uint32_t keyframes = 20;
+  std::uint32_t points = 8000;
+  std::uint32_t obs_per_kf = 1000;  // target mean; the track lengths are calibrated to it
+  std::uint64_t seed = 1;
+};
+
+// Presets: small, orbslam, large, map. False for an unknown name.
+bool workload_spec(const std::string& name, SyntheticSpec* spec);
+
+// Exactly spec.points points, each seen by >= 1 keyframe; point ids ascend
+// with the keyframe that first sees them.
+core::WindowFile make_synthetic_window(const SyntheticSpec& spec);
+
+}  // namespace keepless::perf

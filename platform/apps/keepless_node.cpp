@@ -1,0 +1,104 @@
+// keepless_node: the onboard sparsifier. Subscribes to the VO's keyframe_t and
+// map_event_t channels, keeps a sliding window of the last K keyframes, and
+// answers every keyframe with a decision_t (culled point ids). See docs/node.md.
+
+#include <lcm/lcm-cpp.hpp>
+
+#include <cerrno>
+#include <csignal>
+#include <cstring>
+#include <cstdio>
+#include <string>
+
+#include "keepless/core/sparsifier.hpp"
+#include "keepless/platform/cpu_pinning.hpp"
+#include "keepless/platform/node.hpp"
+#include "keepless/platform/node_config.hpp"
+
+namespace {
+
+volatile std::sig_atomic_t g_stop = 0;
+void on_signal(int) { g_stop = 1; }
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  using namespace keepless;
+  platform::NodeConfig config;
+  std::string error;
+  switch (platform::parse_node_arguments(argc, argv, config, error)) {
+    case platform::ParseResult::kHelp:
+      std::fputs(platform::node_usage().c_str(), stdout);
+      return 0;
+    case platform::ParseResult::kError:
+      std::fprintf(stderr, "keepless_node: %s\n%s", error.c_str(), platform::node_usage().c_str());
+      return 2;
+    case platform::ParseResult::kOk:
+      break;
+  }
+  if (core::Sparsifier::validate(config.params) != core::Status::kOk) {
+    std::fprintf(stderr, "keepless_node: invalid parameters (M >= 1, 0 <= theta <= 1, box >= 0)\n");
+    return 2;
+  }
+
+  // Real-time set-up is best effort: report what the OS refused, keep going.
+  if (!config.cpus.empty()) {
+    const platform::PinResult pin = platform::pin_to_cpus(config.cpus);
+    if (pin.ok) {
+      std::fprintf(stderr, "keepless_node: pinned to CPUs %s\n", pin.granted.c_str());
+    } else {
+      std::fprintf(stderr, "keepless_node: could not pin to CPUs %s (%s); running on %s\n", config.cpus.c_str(),
+                   pin.error.c_str(), pin.granted.c_str());
+    }
+  }
+
+  std::signal(SIGINT, on_signal);
+  std::signal(SIGTERM, on_signal);
+
+  lcm::LCM bus(config.url);
+  if (!bus.good()) {
+    std::fprintf(stderr, "keepless_node: cannot open LCM URL '%s'\n", config.url.c_str());
+    return 1;
+  }
+  platform::Node node(bus, config);
+  if (!node.start()) {
+    std::fprintf(stderr, "keepless_node: cannot subscribe on '%s'\n", config.url.c_str());
+    return 1;
+  }
+  // Lock after everything is allocated, so the locked set is the working set.
+  if (config.mlock) {
+    const platform::LockResult lock = platform::lock_memory();
+    if (lock.ok) {
+      std::fprintf(stderr, "keepless_node: memory locked\n");
+    } else {
+      std::fprintf(stderr, "keepless_node: mlockall refused (%s); running unlocked\n", lock.error.c_str());
+    }
+  }
+  const core::Capacities caps = platform::window_capacities(config);
+  std::fprintf(stderr,
+               "keepless_node: %s  in %s,%s  out %s,%s,%s  window %u keyframes, %u obs/keyframe, "
+               "capacity %u points %u observations %u pair arcs, %.1f MB fixed, largest decision %zu bytes\n",
+               config.url.c_str(), config.keyframe_channel.c_str(), config.event_channel.c_str(),
+               config.decision_channel.c_str(), config.timing_channel.c_str(), config.status_channel.c_str(),
+               config.window, config.max_observations, caps.max_points, caps.max_observations, caps.max_pair_arcs,
+               static_cast<double>(node.memory_bytes()) / 1e6, node.max_decision_bytes());
+
+  while (!g_stop && !node.finished()) {
+    if (node.spin_once(100) < 0) {
+      if (g_stop || errno == EINTR) continue;  // a signal interrupted the wait
+      std::fprintf(stderr, "keepless_node: LCM error (%s), exiting\n", std::strerror(errno));
+      break;
+    }
+  }
+  node.publish_status(true);
+  const platform::NodeCounters& c = node.counters();
+  std::fprintf(stderr,
+               "keepless_node: %s after %llu keyframes, %llu map events, %llu decisions, %llu rejected, "
+               "latency p50 %.3f ms p99 %.3f ms max %.3f ms\n",
+               g_stop ? "stopped by signal" : "done", static_cast<unsigned long long>(c.keyframes_received),
+               static_cast<unsigned long long>(c.map_events_received),
+               static_cast<unsigned long long>(c.decisions_published),
+               static_cast<unsigned long long>(c.messages_rejected), node.latency().quantile(0.5) / 1e6,
+               node.latency().quantile(0.99) / 1e6, static_cast<double>(node.latency().max()) / 1e6);
+  return 0;
+}

@@ -1,0 +1,236 @@
+// keepless_sparsify: decides one window (or a whole map) offline.
+//
+//   keepless_sparsify --window FILE [--M 100] [--theta 0.5] [--box 64x48] [--decisions OUT]
+//                     [--max-keyframes N] [--max-points N] [--max-observations N]
+//                     [--max-pair-arcs N]
+//
+// The whole file is parsed and checked against the hard limits first, then a
+// Window and Sparsifier sized exactly to its needs decide it in one run.
+// Users' scripts read the output, so its shape is a contract:
+//   --decisions OUT: "<point_id> <keep|cull|skip> <flow> <capacity>" a line, by
+//   point id, written to OUT.tmp and renamed (never a partial OUT);
+//   stdout: the last line is one JSON object (the summary; parse_ms reads and
+//   checks the file, build_ms sizes the Window and Sparsifier and ingests the
+//   keyframes, solve_ms is Sparsifier::run: network build, solve, decisions);
+//   bad input or flags: exit 2, one stderr line ("FILE:LINE: reason", or a
+//   usage line for flags); internal failure: exit 1.
+
+#include <cerrno>
+#include <charconv>
+#include <cinttypes>
+#include <cstdint>
+#include <cstdio>
+#include <cstring>
+#include <exception>
+#include <limits>
+#include <string>
+
+#include "keepless/core/config.hpp"
+#include "keepless/core/decision.hpp"
+#include "keepless/core/sparsifier.hpp"
+#include "keepless/core/status.hpp"
+#include "keepless/core/window.hpp"
+#include "keepless/core/window_file.hpp"
+#include "keepless/platform/monotonic_clock.hpp"
+
+namespace {
+
+namespace core = keepless::core;
+
+constexpr int kExitInput = 2;
+constexpr int kExitInternal = 1;
+
+constexpr const char* kUsage =
+    "usage: keepless_sparsify --window FILE [--M 100] [--theta 0.5] [--box 64x48] "
+    "[--decisions OUT] [--max-keyframes 10000] [--max-points 2000000] "
+    "[--max-observations 10000000] [--max-pair-arcs 50000000]";
+
+struct Options {
+  std::string window;
+  std::string decisions;  // empty: no decisions file
+  core::Params params;
+  core::WindowFileLimits limits;
+};
+
+int usage_error(const std::string& reason) {
+  std::fprintf(stderr, "keepless_sparsify: %s; %s\n", reason.c_str(), kUsage);
+  return kExitInput;
+}
+
+bool parse_limit(const char* text, std::uint32_t* out) {
+  std::uint64_t v = 0;
+  if (!core::parse_uint64(text, &v) || v < 1 || v > std::numeric_limits<std::uint32_t>::max()) {
+    return false;
+  }
+  *out = static_cast<std::uint32_t>(v);
+  return true;
+}
+
+// Returns -1 on success, else the exit status (after printing).
+int parse_args(int argc, char** argv, Options* opt, bool* help) {
+  for (int i = 1; i < argc; ++i) {
+    const std::string flag = argv[i];
+    if (flag == "--help" || flag == "-h") {
+      *help = true;
+      return -1;
+    }
+    if (i + 1 >= argc) return usage_error("missing value for " + flag);
+    const char* value = argv[++i];
+    const std::string bad = "bad value for " + flag + ": '" + value + "'";
+    if (flag == "--window") {
+      if (*value == '\0') return usage_error(bad);
+      opt->window = value;
+    } else if (flag == "--decisions") {
+      if (*value == '\0') return usage_error(bad);
+      opt->decisions = value;
+    } else if (flag == "--M") {
+      std::uint64_t m = 0;
+      if (!core::parse_uint64(value, &m) || m < 1 ||
+          m > static_cast<std::uint64_t>(std::numeric_limits<std::int64_t>::max())) {
+        return usage_error(bad + " (an integer >= 1)");
+      }
+      opt->params.pair_capacity = static_cast<std::int64_t>(m);
+    } else if (flag == "--theta") {
+      double theta = 0;
+      if (!core::parse_finite_double(value, &theta) || !(theta >= 0.0 && theta <= 1.0)) {
+        return usage_error(bad + " (a number in [0, 1])");
+      }
+      opt->params.theta = theta;
+    } else if (flag == "--box") {
+      int w = 0, h = 0;
+      if (!core::parse_box(value, &w, &h)) return usage_error(bad + " (WxH, e.g. 64x48)");
+      opt->params.box_width = w;
+      opt->params.box_height = h;
+    } else if (flag == "--max-keyframes") {
+      if (!parse_limit(value, &opt->limits.max_keyframes)) return usage_error(bad);
+    } else if (flag == "--max-points") {
+      if (!parse_limit(value, &opt->limits.max_points)) return usage_error(bad);
+    } else if (flag == "--max-observations") {
+      if (!parse_limit(value, &opt->limits.max_observations)) return usage_error(bad);
+    } else if (flag == "--max-pair-arcs") {
+      if (!parse_limit(value, &opt->limits.max_pair_arcs)) return usage_error(bad);
+    } else {
+      return usage_error("unknown flag '" + flag + "'");
+    }
+  }
+  if (opt->window.empty()) return usage_error("--window is required");
+  if (core::Sparsifier::validate(opt->params) != core::Status::kOk) {
+    return usage_error("invalid parameters");
+  }
+  return -1;
+}
+
+double ms_since(std::uint64_t start_ns) {
+  return static_cast<double>(keepless::platform::monotonic_ns() - start_ns) / 1e6;
+}
+
+// Writes OUT.tmp, then renames it over OUT; on any failure removes the tmp.
+bool write_decisions(const std::string& path, const core::Sparsifier& sparsifier,
+                     std::string* error) {
+  const std::string tmp = path + ".tmp";
+  std::FILE* f = std::fopen(tmp.c_str(), "wb");
+  if (f == nullptr) {
+    *error = path + ":0: cannot write decisions: " + std::strerror(errno);
+    return false;
+  }
+  const core::PointDecision* d = sparsifier.decisions();
+  bool ok = true;
+  for (std::uint32_t i = 0; ok && i < sparsifier.decision_count(); ++i) {
+    ok = std::fprintf(f, "%" PRIu64 " %s %" PRId64 " %" PRId64 "\n", d[i].point,
+                      core::to_string(d[i].verdict), d[i].flow, d[i].capacity) > 0;
+  }
+  int err = errno;
+  if (std::fclose(f) != 0 && ok) {
+    ok = false;
+    err = errno;
+  }
+  if (ok && std::rename(tmp.c_str(), path.c_str()) != 0) {
+    ok = false;
+    err = errno;
+  }
+  if (!ok) {
+    std::remove(tmp.c_str());
+    *error = path + ":0: cannot write decisions: " + std::strerror(err != 0 ? err : EIO);
+  }
+  return ok;
+}
+
+int run(const Options& opt) {
+  const std::uint64_t t_parse = keepless::platform::monotonic_ns();
+  core::WindowFile file;
+  std::string error;
+  if (!core::read_window_file(opt.window, &file, &error, opt.limits)) {
+    std::fprintf(stderr, "%s\n", error.c_str());
+    return kExitInput;
+  }
+  const double parse_ms = ms_since(t_parse);
+
+  // Sized to the file's exact needs (at least 1 each, an empty file is valid).
+  core::Capacities caps = file.needs;
+  if (caps.max_keyframes == 0) caps.max_keyframes = 1;
+  if (caps.max_points == 0) caps.max_points = 1;
+  if (caps.max_observations == 0) caps.max_observations = 1;
+  if (caps.max_pair_arcs == 0) caps.max_pair_arcs = 1;
+
+  const std::uint64_t t_build = keepless::platform::monotonic_ns();
+  core::Window window(caps);
+  core::Sparsifier sparsifier(caps, opt.params);
+  for (std::size_t k = 0; k < file.keyframes.size(); ++k) {
+    const auto& obs = file.observations[k];
+    const core::Status s =
+        window.add_keyframe(file.keyframes[k], obs.data(), static_cast<std::uint32_t>(obs.size()));
+    if (s != core::Status::kOk) {
+      std::fprintf(stderr, "%s:%" PRIu64 ": keyframe rejected: %s\n", opt.window.c_str(),
+                   file.keyframe_lines[k], core::to_string(s));
+      return kExitInput;
+    }
+  }
+  const double build_ms = ms_since(t_build);
+
+  const std::uint64_t t_solve = keepless::platform::monotonic_ns();
+  const core::Status s = sparsifier.run(window);
+  const double solve_ms = ms_since(t_solve);
+  if (s != core::Status::kOk) {
+    std::fprintf(stderr, "keepless_sparsify: solve failed: %s\n", core::to_string(s));
+    return kExitInternal;
+  }
+
+  if (!opt.decisions.empty() && !write_decisions(opt.decisions, sparsifier, &error)) {
+    std::fprintf(stderr, "%s\n", error.c_str());
+    return kExitInput;
+  }
+
+  const core::Summary& sum = sparsifier.summary();
+  const std::size_t memory = window.memory_bytes() + sparsifier.memory_bytes();
+  char theta[32];
+  *std::to_chars(theta, theta + sizeof theta - 1, opt.params.theta).ptr = '\0';  // shortest exact
+  std::printf(
+      "{\"keyframes\":%u,\"points\":%u,\"evaluated\":%u,\"kept\":%u,\"culled\":%u,"
+      "\"skipped\":%u,\"pairs\":%u,\"arcs\":%u,\"max_flow\":%" PRId64 ",\"total_cost\":%" PRId64
+      ",\"M\":%" PRId64
+      ",\"theta\":%s,\"box_width\":%d,\"box_height\":%d,"
+      "\"parse_ms\":%.3f,\"build_ms\":%.3f,\"solve_ms\":%.3f,\"memory_bytes\":%zu}\n",
+      sum.keyframes, sum.points, sum.evaluated, sum.kept, sum.culled, sum.skipped, sum.pairs,
+      sum.arcs, sum.max_flow, sum.total_cost, opt.params.pair_capacity, theta, opt.params.box_width,
+      opt.params.box_height, parse_ms, build_ms, solve_ms, memory);
+  return std::fflush(stdout) == 0 ? 0 : kExitInternal;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Options opt;
+  bool help = false;
+  const int status = parse_args(argc, argv, &opt, &help);
+  if (status >= 0) return status;
+  if (help) {
+    std::printf("%s\n", kUsage);
+    return 0;
+  }
+  try {
+    return run(opt);
+  } catch (const std::exception& e) {  // allocation failure while sizing a huge input
+    std::fprintf(stderr, "keepless_sparsify: %s\n", e.what());
+    return kExitInternal;
+  }
+}

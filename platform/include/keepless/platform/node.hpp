@@ -1,0 +1,69 @@
+#pragma once
+// keepless_node's loop body: receives keyframe_t / map_event_t as raw LCM
+// buffers, validates them before they touch the window, slides the window,
+// runs the sparsifier and publishes decision_t (+ decision_timing_t), and a
+// periodic status_t. Everything is allocated in the constructor; handling a
+// message allocates nothing (LCM's own C library aside).
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+
+#include "keepless/core/window.hpp"
+#include "keepless/platform/latency_histogram.hpp"
+#include "keepless/platform/message_validation.hpp"
+#include "keepless/platform/node_config.hpp"
+
+namespace lcm {
+class LCM;
+}
+
+namespace keepless::platform {
+
+struct NodeCounters {
+  std::uint64_t keyframes_received = 0;
+  std::uint64_t map_events_received = 0;
+  std::uint64_t messages_rejected = 0;
+  std::uint64_t rejected[kRejectReasonCount] = {};
+  std::uint64_t decisions_published = 0;
+  std::uint64_t budget_exhaustions = 0;
+  std::uint64_t capacity_exceeded = 0;
+  std::uint64_t large_decisions = 0;  // above one LCM datagram
+  std::uint64_t points_culled = 0;
+};
+
+class Node {
+ public:
+  // Sizes everything from `config`. `lcm` must outlive the node.
+  Node(lcm::LCM& lcm, const NodeConfig& config);
+  ~Node();
+  Node(const Node&) = delete;
+  Node& operator=(const Node&) = delete;
+
+  // Subscribes the two input channels; false if LCM is not usable.
+  [[nodiscard]] bool start();
+  // Handles messages for at most timeout_ms and publishes a status when due.
+  // Returns <0 on an LCM error.
+  int spin_once(int timeout_ms);
+  void publish_status(bool final);
+  // --max-keyframes reached.
+  bool finished() const;
+
+  // The handlers behind the subscriptions (public for tests).
+  void handle_keyframe(const void* data, std::uint32_t size);
+  void handle_map_event(const void* data, std::uint32_t size);
+
+  const core::Window& window() const;
+  const NodeCounters& counters() const;
+  const LatencyHistogram& latency() const;
+  const StreamOrder& order() const;
+  std::size_t memory_bytes() const;
+  // Largest decision_t this node can publish, bytes.
+  std::size_t max_decision_bytes() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace keepless::platform

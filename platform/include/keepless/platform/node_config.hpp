@@ -1,0 +1,52 @@
+#pragma once
+// keepless_node's configuration: LCM URL and channels, window size, message
+// limits, paper parameters, real-time options. Every capacity of the node is
+// derived from it once, at start.
+
+#include <cstdint>
+#include <limits>
+#include <string>
+
+#include "keepless/core/config.hpp"
+
+namespace keepless::platform {
+
+struct NodeConfig {
+  std::string url = "udpm://239.255.76.67:7667?ttl=0";  // ttl=0: this host only
+  std::string keyframe_channel = "KEEPLESS_KEYFRAME";
+  std::string event_channel = "KEEPLESS_MAP_EVENT";
+  std::string decision_channel = "KEEPLESS_DECISION";
+  std::string timing_channel = "KEEPLESS_DECISION_TIMING";
+  std::string status_channel = "KEEPLESS_STATUS";
+
+  std::uint32_t window = 20;               // K: keyframes in the window (ORB-SLAM2-sized local map)
+  std::uint32_t max_observations = 2000;   // per keyframe_t; larger messages are refused unread
+  std::uint32_t max_event_ids = 4096;      // per list of a map_event_t
+  std::uint32_t max_pair_arcs = 0;         // point -> pair arcs; 0: the worst case of K full keyframes
+
+  core::Params params;  // M, theta, box
+  std::uint64_t budget_work_units = std::numeric_limits<std::uint64_t>::max();
+
+  std::string cpus;  // e.g. "0,1"; empty: leave affinity alone
+  bool mlock = false;
+  std::uint32_t queue_capacity = 256;  // messages LCM holds per input channel while the node is busy
+  std::uint32_t status_period_ms = 1000;
+  std::uint64_t max_keyframes = 0;  // exit after this many decisions; 0: run until signalled
+  bool quiet = false;               // no per-reject log lines
+};
+
+enum class ParseResult : std::uint8_t { kOk = 0, kHelp, kError };
+
+// Parses keepless_node's flags into `config` (defaults kept for absent flags).
+// On kError, `error` says which flag and why.
+[[nodiscard]] ParseResult parse_node_arguments(int argc, const char* const* argv,
+                                               NodeConfig& config, std::string& error);
+std::string node_usage();
+
+// The window's fixed capacities for `config`, sized for the worst case of K
+// full keyframes (every observation a distinct point; for pair arcs, every
+// point in every keyframe unless max_pair_arcs caps it), so a message within
+// the limits never overflows the window.
+core::Capacities window_capacities(const NodeConfig& config);
+
+}  // namespace keepless::platform

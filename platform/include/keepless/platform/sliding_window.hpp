@@ -1,0 +1,81 @@
+#pragma once
+// The node's window of the last K keyframes, double-buffered so every edit is
+// atomic: an edit that needs more than Window::add_keyframe/remove_keyframe
+// (sliding when full, dropping culled points, applying a map event) is built
+// into the spare window and swapped in only if it succeeded. All storage is
+// sized at construction; no edit allocates.
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "keepless/core/config.hpp"
+#include "keepless/core/status.hpp"
+#include "keepless/core/window.hpp"
+
+namespace keepless::platform {
+
+class SlidingWindow {
+ public:
+  // `capacities.max_keyframes` is K. `max_observations` bounds one keyframe's
+  // observations; `max_event_ids` one list of a map edit.
+  SlidingWindow(const core::Capacities& capacities, std::uint32_t max_observations,
+                std::uint32_t max_event_ids);
+  SlidingWindow(const SlidingWindow&) = delete;
+  SlidingWindow& operator=(const SlidingWindow&) = delete;
+
+  const core::Window& window() const { return *active_; }
+  std::uint32_t max_keyframes() const { return capacities_.max_keyframes; }
+
+  // Adds a keyframe, first dropping the oldest when K are held. On any error
+  // the window is unchanged.
+  [[nodiscard]] core::Status push(const core::Keyframe& keyframe, const core::Observation* observations,
+                                  std::uint32_t count);
+
+  // Drops every observation of these points (any order, at most the window's
+  // point capacity).
+  [[nodiscard]] core::Status drop_points(const core::PointId* points, std::uint32_t count);
+
+  // Deletes points, merges points (from[i] -> into[i]; a keyframe left with
+  // two observations of one point keeps the first in its order), removes
+  // keyframes. Inputs as validated by check_map_event. Atomic.
+  struct Edit {
+    const core::PointId* deleted = nullptr;
+    std::uint32_t deleted_count = 0;
+    const core::PointId* merged_from = nullptr;
+    const core::PointId* merged_into = nullptr;
+    std::uint32_t merged_count = 0;
+    const core::KeyframeId* removed = nullptr;
+    std::uint32_t removed_count = 0;
+  };
+  [[nodiscard]] core::Status edit(const Edit& edit);
+
+  void clear();
+  std::size_t memory_bytes() const;
+
+ private:
+  struct Merge {
+    core::PointId from;
+    core::PointId into;
+  };
+  // Copies the active window into the spare, minus `skip_slots` slots from the
+  // front, minus removed keyframes, with point ids mapped through the sorted
+  // drop/merge tables; then appends `extra` if given. Swaps on success.
+  [[nodiscard]] core::Status rebuild(std::uint32_t skip_front, const core::KeyframeId* removed,
+                                     std::uint32_t removed_count, std::uint32_t drop_count,
+                                     std::uint32_t merge_count, const core::Keyframe* extra,
+                                     const core::Observation* extra_observations, std::uint32_t extra_count);
+
+  core::Capacities capacities_;
+  core::Window a_;
+  core::Window b_;
+  core::Window* active_;
+  core::Window* spare_;
+  std::vector<core::Observation> obs_scratch_;      // one keyframe
+  std::vector<std::uint32_t> order_scratch_;        // one keyframe, for de-duplication
+  std::vector<std::uint8_t> keep_scratch_;
+  std::vector<core::PointId> drop_table_;           // sorted
+  std::vector<Merge> merge_table_;                  // sorted by from
+};
+
+}  // namespace keepless::platform

@@ -1,0 +1,183 @@
+#include "keepless/platform/message_validation.hpp"
+
+#include <algorithm>
+#include <bitset>
+#include <cmath>
+
+#include "keepless/status_t.hpp"
+
+namespace keepless::platform {
+
+using S = keepless::status_t;
+static_assert(static_cast<int>(RejectReason::kOversizeCount) == S::REJECT_OVERSIZE_COUNT);
+static_assert(static_cast<int>(RejectReason::kTruncated) == S::REJECT_TRUNCATED);
+static_assert(static_cast<int>(RejectReason::kFingerprint) == S::REJECT_FINGERPRINT);
+static_assert(static_cast<int>(RejectReason::kNonFinite) == S::REJECT_NON_FINITE);
+static_assert(static_cast<int>(RejectReason::kInvalidField) == S::REJECT_INVALID_FIELD);
+static_assert(static_cast<int>(RejectReason::kUnknownKeyframe) == S::REJECT_UNKNOWN_KEYFRAME);
+static_assert(static_cast<int>(RejectReason::kDuplicateKeyframe) == S::REJECT_DUPLICATE_KEYFRAME);
+static_assert(static_cast<int>(RejectReason::kDuplicateObservation) == S::REJECT_DUPLICATE_OBSERVATION);
+static_assert(static_cast<int>(RejectReason::kOutOfOrder) == S::REJECT_OUT_OF_ORDER);
+static_assert(static_cast<int>(RejectReason::kUtimeBackwards) == S::REJECT_UTIME_BACKWARDS);
+static_assert(static_cast<int>(RejectReason::kWindowCapacity) == S::REJECT_WINDOW_CAPACITY);
+static_assert(kRejectReasonCount == S::NUM_REJECT_REASONS);
+static_assert(kRejectReasonCount <= 16, "status_t.rejected has 16 entries");
+
+const char* to_string(RejectReason r) {
+  switch (r) {
+    case RejectReason::kOversizeCount: return "declared count above capacity";
+    case RejectReason::kTruncated: return "byte length does not match the declared counts";
+    case RejectReason::kFingerprint: return "wrong LCM fingerprint";
+    case RejectReason::kNonFinite: return "non-finite number";
+    case RejectReason::kInvalidField: return "invalid field";
+    case RejectReason::kUnknownKeyframe: return "unknown keyframe";
+    case RejectReason::kDuplicateKeyframe: return "duplicate keyframe";
+    case RejectReason::kDuplicateObservation: return "duplicate observation";
+    case RejectReason::kOutOfOrder: return "sequence out of order";
+    case RejectReason::kUtimeBackwards: return "utime went backwards";
+    case RejectReason::kWindowCapacity: return "window capacity exceeded";
+    case RejectReason::kNone: return "accepted";
+  }
+  return "?";
+}
+
+namespace {
+
+std::int64_t read_be64(const std::uint8_t* p) {
+  std::uint64_t v = 0;
+  for (int i = 0; i < 8; ++i) v = (v << 8) | p[i];
+  return static_cast<std::int64_t>(v);
+}
+
+std::int32_t read_be32(const std::uint8_t* p) {
+  const std::uint32_t v = (std::uint32_t{p[0]} << 24) | (std::uint32_t{p[1]} << 16) |
+                          (std::uint32_t{p[2]} << 8) | std::uint32_t{p[3]};
+  return static_cast<std::int32_t>(v);
+}
+
+// Fingerprint first: a message of another type says nothing about our layout.
+bool fingerprint_ok(const std::uint8_t* p, std::size_t size, std::int64_t hash) {
+  return size >= wire::kFingerprintBytes && read_be64(p) == hash;
+}
+
+bool finite(double x) { return std::isfinite(x); }
+
+bool has_adjacent_equal(const std::uint64_t* sorted, std::size_t n) {
+  for (std::size_t i = 1; i < n; ++i) {
+    if (sorted[i] == sorted[i - 1]) return true;
+  }
+  return false;
+}
+
+}  // namespace
+
+RejectReason check_keyframe_bytes(const void* data, std::size_t size, const MessageLimits& limits) {
+  const auto* p = static_cast<const std::uint8_t*>(data);
+  if (size < wire::kFingerprintBytes) return RejectReason::kTruncated;
+  if (!fingerprint_ok(p, size, keepless::keyframe_t::getHash())) return RejectReason::kFingerprint;
+  if (size < wire::kKeyframeHeaderBytes) return RejectReason::kTruncated;
+  const std::int32_t n = read_be32(p + wire::kKeyframeCountOffset);
+  if (n < 0) return RejectReason::kInvalidField;
+  if (static_cast<std::uint32_t>(n) > limits.max_observations) return RejectReason::kOversizeCount;
+  const std::size_t need = wire::kKeyframeHeaderBytes + wire::kKeyframeBytesPerObservation * static_cast<std::size_t>(n);
+  if (size != need) return RejectReason::kTruncated;
+  return RejectReason::kNone;
+}
+
+RejectReason check_map_event_bytes(const void* data, std::size_t size, const MessageLimits& limits) {
+  const auto* p = static_cast<const std::uint8_t*>(data);
+  if (size < wire::kFingerprintBytes) return RejectReason::kTruncated;
+  if (!fingerprint_ok(p, size, keepless::map_event_t::getHash())) return RejectReason::kFingerprint;
+  if (size < wire::kMapEventHeaderBytes) return RejectReason::kTruncated;
+  std::size_t ids = 0;
+  for (int i = 0; i < 3; ++i) {
+    const std::int32_t n = read_be32(p + wire::kMapEventCountOffset + 4 * static_cast<std::size_t>(i));
+    if (n < 0) return RejectReason::kInvalidField;
+    if (static_cast<std::uint32_t>(n) > limits.max_event_ids) return RejectReason::kOversizeCount;
+    ids += static_cast<std::size_t>(n) * (i == 1 ? 2 : 1);  // merges carry two ids
+  }
+  if (size != wire::kMapEventHeaderBytes + 8 * ids) return RejectReason::kTruncated;
+  return RejectReason::kNone;
+}
+
+RejectReason check_order(const StreamOrder& order, std::int64_t sequence, std::int64_t utime) {
+  if (!order.started) return RejectReason::kNone;
+  if (sequence <= order.last_sequence) return RejectReason::kOutOfOrder;
+  if (utime < order.last_utime) return RejectReason::kUtimeBackwards;
+  return RejectReason::kNone;
+}
+
+RejectReason check_keyframe(const keepless::keyframe_t& msg, const core::Window& window,
+                            std::uint64_t* scratch) {
+  for (double c : msg.centre) {
+    if (!finite(c)) return RejectReason::kNonFinite;
+  }
+  double norm2 = 0;
+  for (double q : msg.orientation) {
+    if (!finite(q)) return RejectReason::kNonFinite;
+    norm2 += q * q;
+  }
+  const auto n = static_cast<std::size_t>(msg.num_observations);
+  if (msg.num_observations < 0 || msg.point_id.size() != n || msg.u.size() != n || msg.v.size() != n) {
+    return RejectReason::kInvalidField;
+  }
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!std::isfinite(msg.u[i]) || !std::isfinite(msg.v[i])) return RejectReason::kNonFinite;
+  }
+  if (msg.image_width <= 0 || msg.image_height <= 0) return RejectReason::kInvalidField;
+  // Float-derived quaternions are off by ~1e-7; anything far from unit is a bug upstream.
+  if (std::fabs(norm2 - 1.0) > 1e-3) return RejectReason::kInvalidField;
+  if (window.find_keyframe(static_cast<core::KeyframeId>(msg.keyframe_id)) >= 0) {
+    return RejectReason::kDuplicateKeyframe;
+  }
+  for (std::size_t i = 0; i < n; ++i) scratch[i] = static_cast<std::uint64_t>(msg.point_id[i]);
+  std::sort(scratch, scratch + n);
+  if (has_adjacent_equal(scratch, n)) return RejectReason::kDuplicateObservation;
+  return RejectReason::kNone;
+}
+
+RejectReason check_map_event(const keepless::map_event_t& msg, const core::Window& window,
+                             std::uint64_t* scratch) {
+  if (msg.num_deleted_points < 0 || msg.num_merged_points < 0 || msg.num_removed_keyframes < 0) {
+    return RejectReason::kInvalidField;
+  }
+  const auto nd = static_cast<std::size_t>(msg.num_deleted_points);
+  const auto nm = static_cast<std::size_t>(msg.num_merged_points);
+  const auto nr = static_cast<std::size_t>(msg.num_removed_keyframes);
+  if (msg.deleted_point_id.size() != nd || msg.merged_from_id.size() != nm ||
+      msg.merged_into_id.size() != nm || msg.removed_keyframe_id.size() != nr) {
+    return RejectReason::kInvalidField;
+  }
+  if (msg.reset) return RejectReason::kNone;
+
+  // Every removed keyframe is in the window, once.
+  std::bitset<1024> seen;
+  for (std::size_t i = 0; i < nr; ++i) {
+    const std::int32_t slot = window.find_keyframe(static_cast<core::KeyframeId>(msg.removed_keyframe_id[i]));
+    if (slot < 0) return RejectReason::kUnknownKeyframe;
+    if (static_cast<std::size_t>(slot) >= seen.size()) return RejectReason::kInvalidField;
+    if (seen.test(static_cast<std::size_t>(slot))) return RejectReason::kInvalidField;
+    seen.set(static_cast<std::size_t>(slot));
+  }
+
+  // Merges: no self-merge, each source once, no chains (a target is not a
+  // source), no merge into a point deleted by the same event.
+  std::uint64_t* deleted = scratch;
+  std::uint64_t* from = scratch + nd;
+  for (std::size_t i = 0; i < nd; ++i) deleted[i] = static_cast<std::uint64_t>(msg.deleted_point_id[i]);
+  for (std::size_t i = 0; i < nm; ++i) {
+    if (msg.merged_from_id[i] == msg.merged_into_id[i]) return RejectReason::kInvalidField;
+    from[i] = static_cast<std::uint64_t>(msg.merged_from_id[i]);
+  }
+  std::sort(deleted, deleted + nd);
+  std::sort(from, from + nm);
+  if (has_adjacent_equal(from, nm)) return RejectReason::kInvalidField;
+  for (std::size_t i = 0; i < nm; ++i) {
+    const auto into = static_cast<std::uint64_t>(msg.merged_into_id[i]);
+    if (std::binary_search(from, from + nm, into)) return RejectReason::kInvalidField;
+    if (std::binary_search(deleted, deleted + nd, into)) return RejectReason::kInvalidField;
+  }
+  return RejectReason::kNone;
+}
+
+}  // namespace keepless::platform

@@ -1,0 +1,405 @@
+#include "keepless/platform/node.hpp"
+
+#include <lcm/lcm-cpp.hpp>
+#include <lcm/lcm.h>
+
+#include <algorithm>
+#include <array>
+#include <cstdio>
+#include <vector>
+
+#include "keepless/core/sparsifier.hpp"
+#include "keepless/decision_t.hpp"
+#include "keepless/decision_timing_t.hpp"
+#include "keepless/keyframe_t.hpp"
+#include "keepless/map_event_t.hpp"
+#include "keepless/platform/monotonic_clock.hpp"
+#include "keepless/platform/sliding_window.hpp"
+#include "keepless/status_t.hpp"
+
+namespace keepless::platform {
+
+namespace {
+
+// LCM sends a message up to this size in one datagram; larger ones are
+// fragmented (and dropped by receivers with a small socket buffer).
+constexpr std::size_t kSingleDatagramBytes = 65000;
+
+RejectReason reason_of(core::Status s) {
+  switch (s) {
+    case core::Status::kCapacityExceeded: return RejectReason::kWindowCapacity;
+    case core::Status::kDuplicateKeyframe: return RejectReason::kDuplicateKeyframe;
+    case core::Status::kDuplicateObservation: return RejectReason::kDuplicateObservation;
+    case core::Status::kUnknownKeyframe: return RejectReason::kUnknownKeyframe;
+    case core::Status::kInvalidArgument: return RejectReason::kNonFinite;
+    default: return RejectReason::kInvalidField;
+  }
+}
+
+}  // namespace
+
+struct Node::Impl {
+  Impl(lcm::LCM& l, const NodeConfig& c)
+      : lcm(l),
+        config(c),
+        capacities(window_capacities(c)),
+        sliding(capacities, c.max_observations, c.max_event_ids),
+        sparsifier(capacities, c.params) {
+    limits.max_observations = c.max_observations;
+    limits.max_event_ids = c.max_event_ids;
+    budget.work_units = c.budget_work_units;
+
+    // Reserved once: decode() then only resizes within capacity.
+    kf.point_id.reserve(c.max_observations);
+    kf.u.reserve(c.max_observations);
+    kf.v.reserve(c.max_observations);
+    event.deleted_point_id.reserve(c.max_event_ids);
+    event.merged_from_id.reserve(c.max_event_ids);
+    event.merged_into_id.reserve(c.max_event_ids);
+    event.removed_keyframe_id.reserve(c.max_event_ids);
+    decision.window_keyframe_id.reserve(capacities.max_keyframes);
+    decision.culled_point_id.reserve(capacities.max_points);
+    observations.resize(c.max_observations);
+    id_scratch.resize(std::max<std::size_t>(c.max_observations, 2 * std::size_t{c.max_event_ids}));
+    culled.resize(capacities.max_points);
+
+    decision.num_window_keyframes = 0;
+    decision.num_culled = 0;
+    max_decision = static_cast<std::size_t>(decision.getEncodedSize()) +
+                   8 * (std::size_t{capacities.max_keyframes} + capacities.max_points);
+    out.resize(max_decision);
+    start_ns = monotonic_ns();
+    next_status_ns = start_ns;
+  }
+
+  void reject(const char* type, const std::string& channel, std::uint32_t size, RejectReason r,
+              bool decoded, std::int64_t sequence, std::int64_t id) {
+    ++counters.messages_rejected;
+    ++counters.rejected[static_cast<std::size_t>(r)];
+    if (config.quiet) return;
+    if (decoded) {
+      std::fprintf(stderr, "keepless_node: rejected %s seq %lld id %lld on %s (%u bytes): %s\n", type,
+                   static_cast<long long>(sequence), static_cast<long long>(id), channel.c_str(), size,
+                   to_string(r));
+    } else {
+      std::fprintf(stderr, "keepless_node: rejected %s on %s (%u bytes): %s\n", type, channel.c_str(), size,
+                   to_string(r));
+    }
+  }
+
+  void fill_window_ids() {
+    const core::Window& w = sliding.window();
+    const std::uint32_t k = w.keyframe_count();
+    decision.window_keyframe_id.resize(k);
+    for (std::uint32_t i = 0; i < k; ++i) {
+      decision.window_keyframe_id[i] = static_cast<std::int64_t>(w.keyframe(i).id);
+    }
+    decision.num_window_keyframes = static_cast<std::int32_t>(k);
+  }
+
+  void clear_counts() {
+    decision.points = decision.evaluated = decision.kept = decision.culled = decision.skipped = 0;
+    decision.pairs = 0;
+    decision.max_flow = decision.total_cost = 0;
+    decision.num_culled = 0;
+    decision.culled_point_id.resize(0);
+  }
+
+  // Publishes `decision`; returns its encoded size (0 on encode failure).
+  std::size_t publish_decision() {
+    const int len = decision.encode(out.data(), 0, static_cast<int>(out.size()));
+    if (len < 0) {
+      std::fprintf(stderr, "keepless_node: decision encode failed (%d)\n", len);
+      return 0;
+    }
+    lcm.publish(config.decision_channel, out.data(), static_cast<unsigned>(len));
+    ++counters.decisions_published;
+    if (static_cast<std::size_t>(len) > kSingleDatagramBytes) ++counters.large_decisions;
+    return static_cast<std::size_t>(len);
+  }
+
+  void answer_rejected(RejectReason r) {
+    decision.sequence = kf.sequence;
+    decision.keyframe_id = kf.keyframe_id;
+    decision.utime = kf.utime;
+    decision.status = r == RejectReason::kWindowCapacity ? keepless::decision_t::STATUS_CAPACITY_EXCEEDED
+                                                         : keepless::decision_t::STATUS_REJECTED_INPUT;
+    decision.reject_reason = static_cast<std::int8_t>(r);
+    if (r == RejectReason::kWindowCapacity) ++counters.capacity_exceeded;
+    clear_counts();
+    fill_window_ids();
+    publish_decision();
+  }
+
+  void on_keyframe(const void* data, std::uint32_t size) {
+    const std::uint64_t t0 = monotonic_ns();
+    ++counters.keyframes_received;
+    RejectReason r = check_keyframe_bytes(data, size, limits);
+    // decode() leaves a vector untouched when its count is 0: clear first
+    // (capacity stays, nothing allocates).
+    kf.point_id.clear();
+    kf.u.clear();
+    kf.v.clear();
+    if (r == RejectReason::kNone && kf.decode(data, 0, static_cast<int>(size)) < 0) r = RejectReason::kTruncated;
+    if (r != RejectReason::kNone) {
+      // Ids unreadable: no decision can name the request.
+      reject("keyframe_t", config.keyframe_channel, size, r, false, 0, 0);
+      return;
+    }
+    r = check_order(order, kf.sequence, kf.utime);
+    if (r == RejectReason::kNone) r = check_keyframe(kf, sliding.window(), id_scratch.data());
+    const std::uint64_t t1 = monotonic_ns();
+    if (r == RejectReason::kNone) {
+      const auto n = static_cast<std::uint32_t>(kf.num_observations);
+      for (std::uint32_t i = 0; i < n; ++i) {
+        observations[i].point = static_cast<core::PointId>(kf.point_id[i]);
+        observations[i].u = static_cast<double>(kf.u[i]);
+        observations[i].v = static_cast<double>(kf.v[i]);
+      }
+      core::Keyframe keyframe;
+      keyframe.id = static_cast<core::KeyframeId>(kf.keyframe_id);
+      std::copy(kf.centre, kf.centre + 3, keyframe.centre);
+      std::copy(kf.orientation, kf.orientation + 4, keyframe.orientation);
+      const core::Status s = sliding.push(keyframe, observations.data(), n);
+      if (s != core::Status::kOk) r = reason_of(s);
+    }
+    if (r != RejectReason::kNone) {
+      reject("keyframe_t", config.keyframe_channel, size, r, true, kf.sequence, kf.keyframe_id);
+      answer_rejected(r);
+      finish_timing(t0, t1, t1, t1, 0, 0);
+      return;
+    }
+    order.started = true;
+    order.last_sequence = kf.sequence;
+    order.last_utime = kf.utime;
+    const std::uint64_t t2 = monotonic_ns();
+
+    const core::Status run = sparsifier.run(sliding.window(), budget);
+    const std::uint64_t t3 = monotonic_ns();
+    decision.sequence = kf.sequence;
+    decision.keyframe_id = kf.keyframe_id;
+    decision.utime = kf.utime;
+    decision.reject_reason = -1;
+    clear_counts();
+    std::uint32_t n_culled = 0;
+    if (run == core::Status::kOk || run == core::Status::kBudgetExhausted) {
+      const core::Summary& sum = sparsifier.summary();
+      decision.status = run == core::Status::kOk ? keepless::decision_t::STATUS_OPTIMAL
+                                                 : keepless::decision_t::STATUS_BUDGET_EXHAUSTED;
+      if (run == core::Status::kBudgetExhausted) ++counters.budget_exhaustions;
+      decision.points = static_cast<std::int32_t>(sum.points);
+      decision.evaluated = static_cast<std::int32_t>(sum.evaluated);
+      decision.kept = static_cast<std::int32_t>(sum.kept);
+      decision.culled = static_cast<std::int32_t>(sum.culled);
+      decision.skipped = static_cast<std::int32_t>(sum.skipped);
+      decision.pairs = static_cast<std::int32_t>(sum.pairs);
+      decision.max_flow = sum.max_flow;
+      decision.total_cost = sum.total_cost;
+      const core::PointDecision* d = sparsifier.decisions();
+      const std::uint32_t count = sparsifier.decision_count();
+      for (std::uint32_t i = 0; i < count && n_culled < culled.size(); ++i) {
+        if (d[i].verdict == core::Verdict::kCull) culled[n_culled++] = d[i].point;
+      }
+      decision.culled_point_id.resize(n_culled);
+      for (std::uint32_t i = 0; i < n_culled; ++i) {
+        decision.culled_point_id[i] = static_cast<std::int64_t>(culled[i]);
+      }
+      decision.num_culled = static_cast<std::int32_t>(n_culled);
+    } else {
+      decision.status = run == core::Status::kCapacityExceeded ? keepless::decision_t::STATUS_CAPACITY_EXCEEDED
+                                                               : keepless::decision_t::STATUS_REJECTED_INPUT;
+      if (run == core::Status::kCapacityExceeded) ++counters.capacity_exceeded;
+      std::fprintf(stderr, "keepless_node: sparsifier failed on keyframe seq %lld: %s (nothing culled)\n",
+                   static_cast<long long>(kf.sequence), core::to_string(run));
+    }
+    fill_window_ids();
+    publish_decision();
+    counters.points_culled += n_culled;
+    finish_timing(t0, t1, t2, t3, sparsifier.solver().stats().work_units, sparsifier.solver().stats().phases);
+
+    // The VO deletes culled points; so does the window, off the latency path.
+    if (n_culled > 0) {
+      const core::Status s = sliding.drop_points(culled.data(), n_culled);
+      if (s != core::Status::kOk) {
+        std::fprintf(stderr, "keepless_node: dropping culled points failed: %s\n", core::to_string(s));
+      }
+    }
+  }
+
+  void finish_timing(std::uint64_t t0, std::uint64_t t1, std::uint64_t t2, std::uint64_t t3,
+                     std::uint64_t work, std::uint64_t phases) {
+    const std::uint64_t t4 = monotonic_ns();
+    latency.record(t4 - t0);
+    timing.sequence = kf.sequence;
+    timing.keyframe_id = kf.keyframe_id;
+    timing.validate_ns = static_cast<std::int64_t>(t1 - t0);
+    timing.window_ns = static_cast<std::int64_t>(t2 - t1);
+    timing.sparsify_ns = static_cast<std::int64_t>(t3 - t2);
+    timing.publish_ns = static_cast<std::int64_t>(t4 - t3);
+    timing.total_ns = static_cast<std::int64_t>(t4 - t0);
+    timing.solver_work_units = static_cast<std::int64_t>(work);
+    timing.solver_phases = static_cast<std::int64_t>(phases);
+    const int len = timing.encode(small.data(), 0, static_cast<int>(small.size()));
+    if (len > 0) lcm.publish(config.timing_channel, small.data(), static_cast<unsigned>(len));
+    if (config.max_keyframes > 0 && counters.decisions_published >= config.max_keyframes) finished = true;
+  }
+
+  void on_map_event(const void* data, std::uint32_t size) {
+    ++counters.map_events_received;
+    RejectReason r = check_map_event_bytes(data, size, limits);
+    event.deleted_point_id.clear();
+    event.merged_from_id.clear();
+    event.merged_into_id.clear();
+    event.removed_keyframe_id.clear();
+    if (r == RejectReason::kNone && event.decode(data, 0, static_cast<int>(size)) < 0) r = RejectReason::kTruncated;
+    if (r != RejectReason::kNone) {
+      reject("map_event_t", config.event_channel, size, r, false, 0, 0);
+      return;
+    }
+    if (!event.reset) r = check_order(order, event.sequence, event.utime);
+    if (r == RejectReason::kNone) r = check_map_event(event, sliding.window(), id_scratch.data());
+    if (r == RejectReason::kNone) {
+      if (event.reset) {
+        sliding.clear();
+      } else {
+        SlidingWindow::Edit e;
+        e.deleted = reinterpret_cast<const core::PointId*>(event.deleted_point_id.data());
+        e.deleted_count = static_cast<std::uint32_t>(event.num_deleted_points);
+        e.merged_from = reinterpret_cast<const core::PointId*>(event.merged_from_id.data());
+        e.merged_into = reinterpret_cast<const core::PointId*>(event.merged_into_id.data());
+        e.merged_count = static_cast<std::uint32_t>(event.num_merged_points);
+        e.removed = reinterpret_cast<const core::KeyframeId*>(event.removed_keyframe_id.data());
+        e.removed_count = static_cast<std::uint32_t>(event.num_removed_keyframes);
+        const core::Status s = sliding.edit(e);
+        if (s != core::Status::kOk) r = reason_of(s);
+      }
+    }
+    if (r != RejectReason::kNone) {
+      reject("map_event_t", config.event_channel, size, r, true, event.sequence, 0);
+      return;
+    }
+    order.started = true;
+    order.last_sequence = event.sequence;
+    order.last_utime = event.utime;
+  }
+
+  void publish_status(bool final) {
+    const std::uint64_t now = monotonic_ns();
+    status.uptime_ns = static_cast<std::int64_t>(now - start_ns);
+    status.is_final = final;
+    status.keyframes_received = static_cast<std::int64_t>(counters.keyframes_received);
+    status.map_events_received = static_cast<std::int64_t>(counters.map_events_received);
+    status.messages_rejected = static_cast<std::int64_t>(counters.messages_rejected);
+    for (std::size_t i = 0; i < 16; ++i) {
+      status.rejected[i] = i < kRejectReasonCount ? static_cast<std::int64_t>(counters.rejected[i]) : 0;
+    }
+    status.decisions_published = static_cast<std::int64_t>(counters.decisions_published);
+    status.budget_exhaustions = static_cast<std::int64_t>(counters.budget_exhaustions);
+    status.capacity_exceeded = static_cast<std::int64_t>(counters.capacity_exceeded);
+    status.large_decisions = static_cast<std::int64_t>(counters.large_decisions);
+    status.points_culled = static_cast<std::int64_t>(counters.points_culled);
+    status.last_sequence = order.started ? order.last_sequence : -1;
+    const core::Window& w = sliding.window();
+    status.window_keyframes = static_cast<std::int32_t>(w.keyframe_count());
+    status.window_points = static_cast<std::int32_t>(w.distinct_points());
+    status.window_observations = static_cast<std::int32_t>(w.total_observations());
+    status.capacity_keyframes = static_cast<std::int32_t>(capacities.max_keyframes);
+    status.capacity_points = static_cast<std::int32_t>(capacities.max_points);
+    status.capacity_observations = static_cast<std::int32_t>(capacities.max_observations);
+    status.memory_bytes = static_cast<std::int64_t>(memory_bytes());
+    status.latency_p50_ns = static_cast<std::int64_t>(latency.quantile(0.5));
+    status.latency_p99_ns = static_cast<std::int64_t>(latency.quantile(0.99));
+    status.latency_max_ns = static_cast<std::int64_t>(latency.max());
+    const int len = status.encode(small.data(), 0, static_cast<int>(small.size()));
+    if (len > 0) lcm.publish(config.status_channel, small.data(), static_cast<unsigned>(len));
+    next_status_ns = now + std::uint64_t{config.status_period_ms} * 1000000ull;
+  }
+
+  std::size_t memory_bytes() const {
+    return sliding.memory_bytes() + sparsifier.memory_bytes() + out.size() + small.size() +
+           observations.size() * sizeof(core::Observation) + id_scratch.size() * sizeof(std::uint64_t) +
+           culled.size() * sizeof(core::PointId) +
+           (kf.point_id.capacity() * 16) +
+           (event.deleted_point_id.capacity() + event.merged_from_id.capacity() +
+            event.merged_into_id.capacity() + event.removed_keyframe_id.capacity()) * 8 +
+           (decision.window_keyframe_id.capacity() + decision.culled_point_id.capacity()) * 8;
+  }
+
+  static void keyframe_cb(const lcm_recv_buf_t* rbuf, const char*, void* user) {
+    static_cast<Impl*>(user)->on_keyframe(rbuf->data, rbuf->data_size);
+  }
+  static void event_cb(const lcm_recv_buf_t* rbuf, const char*, void* user) {
+    static_cast<Impl*>(user)->on_map_event(rbuf->data, rbuf->data_size);
+  }
+
+  lcm::LCM& lcm;
+  NodeConfig config;
+  core::Capacities capacities;
+  MessageLimits limits;
+  SlidingWindow sliding;
+  core::Sparsifier sparsifier;
+  solver::Budget budget;
+  keepless::keyframe_t kf{};
+  keepless::map_event_t event{};
+  keepless::decision_t decision{};
+  keepless::decision_timing_t timing{};
+  keepless::status_t status{};
+  std::vector<core::Observation> observations;
+  std::vector<std::uint64_t> id_scratch;
+  std::vector<core::PointId> culled;
+  std::vector<std::uint8_t> out;
+  std::array<std::uint8_t, 1024> small{};
+  std::size_t max_decision = 0;
+  StreamOrder order;
+  NodeCounters counters;
+  LatencyHistogram latency;
+  std::uint64_t start_ns = 0;
+  std::uint64_t next_status_ns = 0;
+  bool finished = false;
+  lcm_subscription_t* keyframe_sub = nullptr;
+  lcm_subscription_t* event_sub = nullptr;
+};
+
+Node::Node(lcm::LCM& lcm, const NodeConfig& config) : impl_(std::make_unique<Impl>(lcm, config)) {}
+
+Node::~Node() {
+  lcm_t* l = impl_->lcm.getUnderlyingLCM();
+  if (l != nullptr) {
+    if (impl_->keyframe_sub != nullptr) lcm_unsubscribe(l, impl_->keyframe_sub);
+    if (impl_->event_sub != nullptr) lcm_unsubscribe(l, impl_->event_sub);
+  }
+}
+
+bool Node::start() {
+  lcm_t* l = impl_->lcm.getUnderlyingLCM();
+  if (!impl_->lcm.good() || l == nullptr) return false;
+  // The C API: the C++ wrapper would build a std::string per message.
+  impl_->keyframe_sub = lcm_subscribe(l, impl_->config.keyframe_channel.c_str(), &Impl::keyframe_cb, impl_.get());
+  impl_->event_sub = lcm_subscribe(l, impl_->config.event_channel.c_str(), &Impl::event_cb, impl_.get());
+  if (impl_->keyframe_sub == nullptr || impl_->event_sub == nullptr) return false;
+  const int queue = static_cast<int>(impl_->config.queue_capacity);
+  return lcm_subscription_set_queue_capacity(impl_->keyframe_sub, queue) == 0 &&
+         lcm_subscription_set_queue_capacity(impl_->event_sub, queue) == 0;
+}
+
+int Node::spin_once(int timeout_ms) {
+  const std::uint64_t now = monotonic_ns();
+  if (now >= impl_->next_status_ns) impl_->publish_status(false);
+  const std::uint64_t until_status_ms = (impl_->next_status_ns - std::min(impl_->next_status_ns, now)) / 1000000ull;
+  const int wait = static_cast<int>(std::min<std::uint64_t>(static_cast<std::uint64_t>(std::max(timeout_ms, 0)),
+                                                            until_status_ms));
+  return impl_->lcm.handleTimeout(wait);
+}
+
+void Node::publish_status(bool final) { impl_->publish_status(final); }
+bool Node::finished() const { return impl_->finished; }
+void Node::handle_keyframe(const void* data, std::uint32_t size) { impl_->on_keyframe(data, size); }
+void Node::handle_map_event(const void* data, std::uint32_t size) { impl_->on_map_event(data, size); }
+const core::Window& Node::window() const { return impl_->sliding.window(); }
+const NodeCounters& Node::counters() const { return impl_->counters; }
+const LatencyHistogram& Node::latency() const { return impl_->latency; }
+const StreamOrder& Node::order() const { return impl_->order; }
+std::size_t Node::memory_bytes() const { return impl_->memory_bytes(); }
+std::size_t Node::max_decision_bytes() const { return impl_->max_decision; }
+
+}  // namespace keepless::platform

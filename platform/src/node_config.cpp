@@ -1,0 +1,186 @@
+#include "keepless/platform/node_config.hpp"
+
+#include <cerrno>
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
+
+namespace keepless::platform {
+
+namespace {
+
+bool parse_u64(const std::string& text, std::uint64_t min, std::uint64_t max, std::uint64_t& out) {
+  if (text.empty() || text[0] == '-' || text[0] == '+') return false;
+  errno = 0;
+  char* end = nullptr;
+  const unsigned long long v = std::strtoull(text.c_str(), &end, 10);
+  if (errno != 0 || end == text.c_str() || *end != '\0' || v < min || v > max) return false;
+  out = v;
+  return true;
+}
+
+bool parse_double(const std::string& text, double& out) {
+  if (text.empty()) return false;
+  errno = 0;
+  char* end = nullptr;
+  const double v = std::strtod(text.c_str(), &end);
+  if (errno != 0 || end == text.c_str() || *end != '\0' || !std::isfinite(v)) return false;
+  out = v;
+  return true;
+}
+
+// "64x48"
+bool parse_box(const std::string& text, std::int32_t& w, std::int32_t& h) {
+  const auto x = text.find('x');
+  if (x == std::string::npos) return false;
+  std::uint64_t a = 0, b = 0;
+  if (!parse_u64(text.substr(0, x), 0, 1u << 20, a) || !parse_u64(text.substr(x + 1), 0, 1u << 20, b)) {
+    return false;
+  }
+  w = static_cast<std::int32_t>(a);
+  h = static_cast<std::int32_t>(b);
+  return true;
+}
+
+}  // namespace
+
+std::string node_usage() {
+  return "usage: keepless_node [options]\n"
+         "  --url URL                 LCM URL (default udpm://239.255.76.67:7667?ttl=0, this host only)\n"
+         "  --keyframe-channel NAME   keyframe_t input (default KEEPLESS_KEYFRAME)\n"
+         "  --event-channel NAME      map_event_t input (default KEEPLESS_MAP_EVENT)\n"
+         "  --decision-channel NAME   decision_t output (default KEEPLESS_DECISION)\n"
+         "  --timing-channel NAME     decision_timing_t output (default KEEPLESS_DECISION_TIMING)\n"
+         "  --status-channel NAME     status_t output (default KEEPLESS_STATUS)\n"
+         "  --window K                keyframes in the sliding window (default 20)\n"
+         "  --max-observations N      observations per keyframe_t accepted (default 2000)\n"
+         "  --max-event-ids N         ids per list of a map_event_t accepted (default 4096)\n"
+         "  --max-pair-arcs N         solver pair-arc capacity (default 0: worst case K*N*(K-1)/2;\n"
+         "                            less saves memory, a window beyond it is answered 'capacity exceeded')\n"
+         "  --M N                     pair -> sink capacity (default 100)\n"
+         "  --theta X                 keep iff flow > X * n(n-1)/2 (default 0.5)\n"
+         "  --box WxH                 spatial-diversity box in pixels (default 64x48)\n"
+         "  --budget-work N           solver work units per decision (default unlimited)\n"
+         "  --cpus LIST               pin to these CPUs, e.g. 0,1 or 2-3 (reported if refused)\n"
+         "  --mlock                   lock memory with mlockall (reported if refused)\n"
+         "  --queue N                 messages LCM queues per input channel while the node is busy\n"
+         "                            (default 256; LCM drops beyond it, e.g. when a log is replayed fast)\n"
+         "  --status-period-ms N      status_t period (default 1000)\n"
+         "  --max-keyframes N         exit after N decisions (default 0: run until SIGINT/SIGTERM)\n"
+         "  --quiet                   no log line per rejected message (they are still counted)\n"
+         "  --help\n";
+}
+
+ParseResult parse_node_arguments(int argc, const char* const* argv, NodeConfig& config,
+                                 std::string& error) {
+  for (int i = 1; i < argc; ++i) {
+    std::string flag = argv[i];
+    std::string value;
+    bool has_inline_value = false;
+    if (const auto eq = flag.find('='); flag.rfind("--", 0) == 0 && eq != std::string::npos) {
+      value = flag.substr(eq + 1);
+      flag = flag.substr(0, eq);
+      has_inline_value = true;
+    }
+    if (flag == "--help" || flag == "-h") return ParseResult::kHelp;
+    if (flag == "--mlock") {
+      config.mlock = true;
+      continue;
+    }
+    if (flag == "--quiet") {
+      config.quiet = true;
+      continue;
+    }
+    if (!has_inline_value) {
+      if (i + 1 >= argc) {
+        error = flag + ": missing value";
+        return ParseResult::kError;
+      }
+      value = argv[++i];
+    }
+    std::uint64_t n = 0;
+    const auto bad = [&](const char* why) {
+      error = flag + " '" + value + "': " + why;
+      return ParseResult::kError;
+    };
+    if (flag == "--url") {
+      if (value.empty()) return bad("empty");
+      config.url = value;
+    } else if (flag == "--keyframe-channel" || flag == "--event-channel" || flag == "--decision-channel" ||
+               flag == "--timing-channel" || flag == "--status-channel") {
+      if (value.empty()) return bad("empty channel name");
+      std::string& target = flag == "--keyframe-channel" ? config.keyframe_channel
+                            : flag == "--event-channel"  ? config.event_channel
+                            : flag == "--decision-channel" ? config.decision_channel
+                            : flag == "--timing-channel"   ? config.timing_channel
+                                                           : config.status_channel;
+      target = value;
+    } else if (flag == "--window") {
+      if (!parse_u64(value, 2, 256, n)) return bad("expected an integer in 2..256");
+      config.window = static_cast<std::uint32_t>(n);
+    } else if (flag == "--max-observations") {
+      if (!parse_u64(value, 1, 1u << 20, n)) return bad("expected an integer in 1..1048576");
+      config.max_observations = static_cast<std::uint32_t>(n);
+    } else if (flag == "--max-event-ids") {
+      if (!parse_u64(value, 1, 1u << 20, n)) return bad("expected an integer in 1..1048576");
+      config.max_event_ids = static_cast<std::uint32_t>(n);
+    } else if (flag == "--max-pair-arcs") {
+      if (!parse_u64(value, 0, 1u << 28, n)) return bad("expected an integer in 0..2^28");
+      config.max_pair_arcs = static_cast<std::uint32_t>(n);
+    } else if (flag == "--M") {
+      if (!parse_u64(value, 1, 1u << 30, n)) return bad("expected an integer >= 1");
+      config.params.pair_capacity = static_cast<std::int64_t>(n);
+    } else if (flag == "--theta") {
+      double t = 0;
+      if (!parse_double(value, t) || t < 0 || t > 1) return bad("expected a number in [0, 1]");
+      config.params.theta = t;
+    } else if (flag == "--box") {
+      if (!parse_box(value, config.params.box_width, config.params.box_height)) {
+        return bad("expected WxH, e.g. 64x48");
+      }
+    } else if (flag == "--budget-work") {
+      if (!parse_u64(value, 1, std::numeric_limits<std::uint64_t>::max(), n)) return bad("expected an integer >= 1");
+      config.budget_work_units = n;
+    } else if (flag == "--cpus") {
+      if (value.empty()) return bad("empty CPU list");
+      config.cpus = value;
+    } else if (flag == "--queue") {
+      if (!parse_u64(value, 1, 1u << 20, n)) return bad("expected an integer in 1..1048576");
+      config.queue_capacity = static_cast<std::uint32_t>(n);
+    } else if (flag == "--status-period-ms") {
+      if (!parse_u64(value, 1, 3600u * 1000u, n)) return bad("expected an integer in 1..3600000");
+      config.status_period_ms = static_cast<std::uint32_t>(n);
+    } else if (flag == "--max-keyframes") {
+      if (!parse_u64(value, 0, std::numeric_limits<std::uint64_t>::max(), n)) return bad("expected an integer >= 0");
+      config.max_keyframes = n;
+    } else {
+      error = "unknown option '" + std::string(argv[i]) + "'";
+      return ParseResult::kError;
+    }
+  }
+  // The worst-case window must stay addressable by the solver's int32 arc ids.
+  const std::uint64_t arcs = static_cast<std::uint64_t>(config.window) * config.max_observations *
+                             (config.window - 1) / 2;
+  if (config.max_pair_arcs == 0 && arcs > (1ull << 28)) {
+    error = "--window " + std::to_string(config.window) + " with --max-observations " +
+            std::to_string(config.max_observations) + ": worst-case window too large (" +
+            std::to_string(arcs) + " pair arcs > 2^28)";
+    return ParseResult::kError;
+  }
+  return ParseResult::kOk;
+}
+
+core::Capacities window_capacities(const NodeConfig& config) {
+  core::Capacities c;
+  const std::uint64_t k = config.window;
+  const std::uint64_t obs = k * config.max_observations;
+  c.max_keyframes = config.window;
+  c.max_observations = static_cast<std::uint32_t>(obs);
+  c.max_points = static_cast<std::uint32_t>(obs);
+  // Sum over points of n(n-1)/2 with sum n <= obs and n <= K.
+  c.max_pair_arcs = config.max_pair_arcs != 0 ? config.max_pair_arcs
+                                               : static_cast<std::uint32_t>(obs * (k - 1) / 2);
+  return c;
+}
+
+}  // namespace keepless::platform

@@ -1,0 +1,136 @@
+#include "keepless/platform/sliding_window.hpp"
+
+#include <algorithm>
+
+namespace keepless::platform {
+
+SlidingWindow::SlidingWindow(const core::Capacities& capacities, std::uint32_t max_observations,
+                             std::uint32_t max_event_ids)
+    : capacities_(capacities), a_(capacities), b_(capacities), active_(&a_), spare_(&b_) {
+  // A window keyframe never holds more than one message's observations.
+  obs_scratch_.resize(max_observations);
+  order_scratch_.resize(max_observations);
+  keep_scratch_.resize(max_observations);
+  drop_table_.resize(std::max<std::size_t>(max_event_ids, capacities.max_points));
+  merge_table_.resize(max_event_ids);
+}
+
+void SlidingWindow::clear() {
+  active_->clear();
+  spare_->clear();
+}
+
+std::size_t SlidingWindow::memory_bytes() const {
+  return a_.memory_bytes() + b_.memory_bytes() + obs_scratch_.size() * sizeof(core::Observation) +
+         order_scratch_.size() * sizeof(std::uint32_t) + keep_scratch_.size() + drop_table_.size() * sizeof(core::PointId) +
+         merge_table_.size() * sizeof(Merge);
+}
+
+core::Status SlidingWindow::push(const core::Keyframe& keyframe, const core::Observation* observations,
+                                 std::uint32_t count) {
+  if (count > obs_scratch_.size()) return core::Status::kCapacityExceeded;
+  if (active_->keyframe_count() < capacities_.max_keyframes) {
+    return active_->add_keyframe(keyframe, observations, count);  // atomic by contract
+  }
+  // Full: the new keyframe replaces the oldest, in the spare window.
+  if (active_->find_keyframe(keyframe.id) >= 0) return core::Status::kDuplicateKeyframe;
+  return rebuild(1, nullptr, 0, 0, 0, &keyframe, observations, count);
+}
+
+core::Status SlidingWindow::drop_points(const core::PointId* points, std::uint32_t count) {
+  if (count == 0) return core::Status::kOk;
+  if (count > drop_table_.size()) return core::Status::kCapacityExceeded;
+  std::copy(points, points + count, drop_table_.begin());
+  std::sort(drop_table_.begin(), drop_table_.begin() + count);
+  return rebuild(0, nullptr, 0, count, 0, nullptr, nullptr, 0);
+}
+
+core::Status SlidingWindow::edit(const Edit& e) {
+  if (e.deleted_count > drop_table_.size() || e.merged_count > merge_table_.size()) {
+    return core::Status::kCapacityExceeded;
+  }
+  if (e.deleted_count == 0 && e.merged_count == 0 && e.removed_count == 0) return core::Status::kOk;
+  std::copy(e.deleted, e.deleted + e.deleted_count, drop_table_.begin());
+  std::sort(drop_table_.begin(), drop_table_.begin() + e.deleted_count);
+  for (std::uint32_t i = 0; i < e.merged_count; ++i) merge_table_[i] = {e.merged_from[i], e.merged_into[i]};
+  std::sort(merge_table_.begin(), merge_table_.begin() + e.merged_count,
+            [](const Merge& x, const Merge& y) { return x.from < y.from; });
+  return rebuild(0, e.removed, e.removed_count, e.deleted_count, e.merged_count, nullptr, nullptr, 0);
+}
+
+core::Status SlidingWindow::rebuild(std::uint32_t skip_front, const core::KeyframeId* removed,
+                                    std::uint32_t removed_count, std::uint32_t drop_count,
+                                    std::uint32_t merge_count, const core::Keyframe* extra,
+                                    const core::Observation* extra_observations, std::uint32_t extra_count) {
+  core::Window& from = *active_;
+  core::Window& to = *spare_;
+  to.clear();
+  const auto drop_begin = drop_table_.begin();
+  const auto drop_end = drop_table_.begin() + drop_count;
+  const auto merge_begin = merge_table_.begin();
+  const auto merge_end = merge_table_.begin() + merge_count;
+
+  const std::uint32_t keyframes = from.keyframe_count();
+  for (std::uint32_t slot = skip_front; slot < keyframes; ++slot) {
+    const core::Keyframe& kf = from.keyframe(slot);
+    if (std::find(removed, removed + removed_count, kf.id) != removed + removed_count) continue;
+    const core::Observation* obs = from.observations(slot);
+    const std::uint32_t n = from.observation_count(slot);
+    if (n > obs_scratch_.size()) {
+      to.clear();
+      return core::Status::kCapacityExceeded;
+    }
+    std::uint32_t kept = 0;
+    bool merged = false;
+    for (std::uint32_t i = 0; i < n; ++i) {
+      core::Observation o = obs[i];
+      if (drop_count > 0 && std::binary_search(drop_begin, drop_end, o.point)) continue;
+      if (merge_count > 0) {
+        const auto it = std::lower_bound(merge_begin, merge_end, o.point,
+                                         [](const Merge& m, core::PointId p) { return m.from < p; });
+        if (it != merge_end && it->from == o.point) {
+          o.point = it->into;
+          merged = true;
+        }
+      }
+      obs_scratch_[kept++] = o;
+    }
+    if (merged) {
+      // Keep the first observation of each point in keyframe order.
+      std::uint32_t* order = order_scratch_.data();
+      std::uint8_t* keep = keep_scratch_.data();
+      for (std::uint32_t i = 0; i < kept; ++i) {
+        order[i] = i;
+        keep[i] = 1;
+      }
+      std::sort(order, order + kept, [&](std::uint32_t x, std::uint32_t y) {
+        const auto px = obs_scratch_[x].point, py = obs_scratch_[y].point;
+        return px != py ? px < py : x < y;
+      });
+      for (std::uint32_t i = 1; i < kept; ++i) {
+        if (obs_scratch_[order[i]].point == obs_scratch_[order[i - 1]].point) keep[order[i]] = 0;
+      }
+      std::uint32_t j = 0;
+      for (std::uint32_t i = 0; i < kept; ++i) {
+        if (keep[i]) obs_scratch_[j++] = obs_scratch_[i];
+      }
+      kept = j;
+    }
+    const core::Status s = to.add_keyframe(kf, obs_scratch_.data(), kept);
+    if (s != core::Status::kOk) {
+      to.clear();
+      return s;
+    }
+  }
+  if (extra != nullptr) {
+    const core::Status s = to.add_keyframe(*extra, extra_observations, extra_count);
+    if (s != core::Status::kOk) {
+      to.clear();
+      return s;
+    }
+  }
+  std::swap(active_, spare_);  // the old window is cleared when next reused
+  return core::Status::kOk;
+}
+
+}  // namespace keepless::platform

@@ -1,0 +1,16 @@
+#pragma once
+
+#include <cstdint>
+
+namespace keepless::solver {
+
+enum class [[nodiscard]] Status : std::uint8_t {
+  kOptimal = 0,
+  kBudgetExhausted,   // stopped early; the flow is valid but not maximum
+  kInvalidInput,      // node out of range, negative capacity or cost, source == sink
+  kCapacityExceeded,  // more nodes or arcs than the constructor reserved
+};
+
+const char* to_string(Status s);
+
+}  // namespace keepless::solver

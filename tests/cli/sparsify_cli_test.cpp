@@ -1,0 +1,548 @@
+// keepless_sparsify (and keepless_make_window) run as child processes on files
+// written to a temp dir: the exit status, the one-line stderr contract, the
+// decisions file and the JSON summary, checked against hand-computed values
+// and against the independent reference implementation.
+
+#include <fcntl.h>
+#include <gtest/gtest.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "keepless/core/config.hpp"
+#include "keepless/core/decision.hpp"
+#include "keepless/core/window_file.hpp"
+#include "reference_sparsifier.hpp"
+
+extern char** environ;
+
+namespace keepless {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct Result {
+  int status = -1;  // exit status, -1 if killed by a signal
+  std::string out;
+  std::string err;
+};
+
+std::string read_all(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+std::size_t count_lines(const std::string& s) {
+  return static_cast<std::size_t>(std::count(s.begin(), s.end(), '\n'));
+}
+
+// The last line, without its newline.
+std::string last_line(std::string s) {
+  if (!s.empty() && s.back() == '\n') s.pop_back();
+  const std::size_t nl = s.rfind('\n');
+  return nl == std::string::npos ? s : s.substr(nl + 1);
+}
+
+// The number after "key": in a one-line JSON object; fails the test if absent.
+double json_number(const std::string& json, const std::string& key) {
+  const std::string needle = "\"" + key + "\":";
+  const std::size_t at = json.find(needle);
+  EXPECT_NE(at, std::string::npos) << key << " missing in " << json;
+  if (at == std::string::npos) return -1;
+  return std::strtod(json.c_str() + at + needle.size(), nullptr);
+}
+
+std::int64_t json_int(const std::string& json, const std::string& key) {
+  const std::string needle = "\"" + key + "\":";
+  const std::size_t at = json.find(needle);
+  EXPECT_NE(at, std::string::npos) << key << " missing in " << json;
+  if (at == std::string::npos) return -1;
+  return std::strtoll(json.c_str() + at + needle.size(), nullptr, 10);
+}
+
+class SparsifyCliTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    std::string pattern = ::testing::TempDir() + "keepless_cli_XXXXXX";
+    ASSERT_NE(::mkdtemp(pattern.data()), nullptr);
+    dir_ = pattern;
+  }
+  void TearDown() override {
+    std::error_code ec;
+    fs::remove_all(dir_, ec);
+  }
+
+  std::string path(const std::string& name) const { return dir_ + "/" + name; }
+
+  std::string write(const std::string& name, const std::string& content) const {
+    const std::string p = path(name);
+    std::ofstream(p, std::ios::binary) << content;
+    return p;
+  }
+
+  Result run(const char* binary, const std::vector<std::string>& args) const {
+    const std::string out_path = path("stdout.txt"), err_path = path("stderr.txt");
+    posix_spawn_file_actions_t actions;
+    posix_spawn_file_actions_init(&actions);
+    posix_spawn_file_actions_addopen(&actions, 1, out_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC,
+                                     0644);
+    posix_spawn_file_actions_addopen(&actions, 2, err_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC,
+                                     0644);
+    std::vector<std::string> all{binary};
+    all.insert(all.end(), args.begin(), args.end());
+    std::vector<char*> argv;
+    for (std::string& a : all) argv.push_back(a.data());
+    argv.push_back(nullptr);
+    pid_t pid = 0;
+    Result r;
+    const int spawned = posix_spawn(&pid, binary, &actions, nullptr, argv.data(), environ);
+    posix_spawn_file_actions_destroy(&actions);
+    EXPECT_EQ(spawned, 0) << "cannot run " << binary;
+    if (spawned != 0) return r;
+    int wstatus = 0;
+    EXPECT_EQ(waitpid(pid, &wstatus, 0), pid);
+    r.status = WIFEXITED(wstatus) ? WEXITSTATUS(wstatus) : -1;
+    r.out = read_all(out_path);
+    r.err = read_all(err_path);
+    return r;
+  }
+
+  Result sparsify(const std::vector<std::string>& args) const {
+    return run(KEEPLESS_SPARSIFY_BIN, args);
+  }
+
+  // Bad input: exit 2, exactly one stderr line "WINDOW:LINE: ..." containing
+  // `reason`, no stdout, no decisions file and no temp file left.
+  void expect_input_error(const std::string& text, long line, const std::string& reason,
+                          std::vector<std::string> extra = {}) const {
+    const std::string window = write("bad.txt", text);
+    const std::string out = path("decisions.txt");
+    std::vector<std::string> args{"--window", window, "--decisions", out};
+    args.insert(args.end(), extra.begin(), extra.end());
+    expect_error_result(sparsify(args), window, line, reason);
+  }
+
+  void expect_error_result(const Result& r, const std::string& window, long line,
+                           const std::string& reason) const {
+    EXPECT_EQ(r.status, 2) << r.err;
+    EXPECT_EQ(count_lines(r.err), 1u) << r.err;
+    const std::string prefix = window + ":" + std::to_string(line) + ": ";
+    EXPECT_EQ(r.err.rfind(prefix, 0), 0u) << "expected prefix '" << prefix << "', got " << r.err;
+    EXPECT_NE(r.err.find(reason), std::string::npos) << r.err;
+    EXPECT_EQ(r.out, "");
+    EXPECT_FALSE(fs::exists(path("decisions.txt")));
+    EXPECT_FALSE(fs::exists(path("decisions.txt.tmp")));
+  }
+
+  std::string dir_;
+};
+
+// A valid 2-keyframe window, lines 1-4, for tests that append a bad line 5.
+const char* const kGoodHead =
+    "# two keyframes\n"
+    "kf 10 0 0 0\n"
+    "kf 20 1 0 0 1 0 0 0\n"
+    "obs 10 1 100 100\n";
+
+TEST_F(SparsifyCliTest, UnreadableWindowFileIsLineZero) {
+  const std::string missing = path("no_such_file.txt");
+  expect_error_result(sparsify({"--window", missing, "--decisions", path("decisions.txt")}),
+                      missing, 0, "cannot open");
+  // A directory opens but cannot be read.
+  expect_error_result(sparsify({"--window", dir_, "--decisions", path("decisions.txt")}), dir_, 0,
+                      "");
+}
+
+TEST_F(SparsifyCliTest, UnknownKeyframe) {
+  expect_input_error(std::string(kGoodHead) + "obs 30 1 5 5\n", 5, "unknown keyframe 30");
+  // Declared only after the observation: still unknown on the obs line.
+  expect_input_error(std::string(kGoodHead) + "obs 30 1 5 5\nkf 30 0 0 0\n", 5,
+                     "unknown keyframe 30");
+}
+
+TEST_F(SparsifyCliTest, DuplicateKeyframeId) {
+  expect_input_error(std::string(kGoodHead) + "kf 10 5 5 5\n", 5,
+                     "duplicate keyframe id 10 (first declared on line 2)");
+}
+
+TEST_F(SparsifyCliTest, DuplicateObservation) {
+  // The repeat comes after another keyframe's records.
+  expect_input_error(std::string(kGoodHead) + "obs 20 1 7 7\nobs 10 1 101 101 # again\n", 6,
+                     "duplicate observation of point 1 by keyframe 10 (first on line 4)");
+}
+
+TEST_F(SparsifyCliTest, NonFiniteNumbers) {
+  for (const char* line : {"obs 20 2 nan 5", "obs 20 2 5 inf", "obs 20 2 -inf 5", "kf 30 0 nan 0",
+                           "kf 30 0 0 0 1 0 0 infinity", "obs 20 2 1e999 5"}) {
+    SCOPED_TRACE(line);
+    expect_input_error(std::string(kGoodHead) + line + "\n", 5, "");
+  }
+}
+
+TEST_F(SparsifyCliTest, MalformedNumbersAndFieldCounts) {
+  const std::pair<const char*, const char*> cases[] = {
+      {"obs 20 2 1.5abc 5", "malformed u"},
+      {"obs 20 2 5 7,5", "malformed v"},
+      {"kf 30 0 0 0x10", "malformed cz"},
+      {"obs 20 2 5", "obs needs 4 values"},
+      {"obs 20 2 5 5 5", "obs needs 4 values"},
+      {"kf 30 0 0", "kf needs 4 or 8 values"},
+      {"kf 30 0 0 0 1 0 0", "kf needs 4 or 8 values"},
+      {"kf 30 0 0 0 1 0 0 0 0", "kf needs 4 or 8 values"},
+      {"obs 20 2.0 5 5", "malformed point id"},
+      {"obs 20 abc 5 5", "malformed point id"},
+      {"frame 30 0 0 0", "unknown record 'frame'"},
+  };
+  for (const auto& c : cases) {
+    SCOPED_TRACE(c.first);
+    expect_input_error(std::string(kGoodHead) + c.first + "  # comment\n", 5, c.second);
+  }
+}
+
+TEST_F(SparsifyCliTest, IdOverflowAndNegativeIds) {
+  const std::pair<const char*, const char*> cases[] = {
+      {"obs 20 18446744073709551616 5 5", "exceeds 2^64-1"},
+      {"kf 18446744073709551616 0 0 0", "exceeds 2^64-1"},
+      {"obs 20 -3 5 5", "negative point id"},
+      {"obs -20 3 5 5", "negative keyframe id"},
+      {"kf -1 0 0 0", "negative keyframe id"},
+  };
+  for (const auto& c : cases) {
+    SCOPED_TRACE(c.first);
+    expect_input_error(std::string(kGoodHead) + c.first + "\n", 5, c.second);
+  }
+  // The largest id is fine.
+  const std::string ok =
+      write("ok.txt", std::string(kGoodHead) + "obs 20 18446744073709551615 5 5\n");
+  EXPECT_EQ(sparsify({"--window", ok}).status, 0);
+}
+
+TEST_F(SparsifyCliTest, CapacityExceededOnTheLineThatCrossesIt) {
+  // Lines 1-3: kf; 4-6: point 7 by all three (3 pair arcs); 7-8: point 8 by two (1).
+  const std::string text =
+      "kf 1 0 0 0\nkf 2 1 0 0\nkf 3 2 0 0\n"
+      "obs 1 7 10 10\nobs 2 7 10 10\nobs 3 7 10 10\n"
+      "obs 1 8 200 200\nobs 2 8 200 200\n";
+  expect_input_error(text, 3, "capacity exceeded", {"--max-keyframes", "2"});
+  expect_input_error(text, 7, "capacity exceeded", {"--max-points", "1"});
+  expect_input_error(text, 8, "capacity exceeded", {"--max-observations", "4"});
+  expect_input_error(text, 6, "capacity exceeded", {"--max-pair-arcs", "2"});
+  expect_input_error(text, 8, "capacity exceeded", {"--max-pair-arcs", "3"});
+  // Exactly at the limits: accepted.
+  const std::string ok = write("ok.txt", text);
+  const Result r = sparsify({"--window", ok, "--max-keyframes", "3", "--max-points", "2",
+                             "--max-observations", "5", "--max-pair-arcs", "4"});
+  EXPECT_EQ(r.status, 0) << r.err;
+}
+
+TEST_F(SparsifyCliTest, FlagErrorsPrintOneUsageLine) {
+  const std::string window = write("w.txt", kGoodHead);
+  const std::string out = path("decisions.txt");
+  const std::vector<std::vector<std::string>> cases = {
+      {},
+      {"--decisions", out},
+      {"--window"},
+      {"--window", window, "--M"},
+      {"--window", window, "--bogus", "1"},
+      {"--window", window, "--M", "0"},
+      {"--window", window, "--M", "-5"},
+      {"--window", window, "--M", "1.5"},
+      {"--window", window, "--M", "99999999999999999999"},
+      {"--window", window, "--theta", "1.5"},
+      {"--window", window, "--theta", "-0.1"},
+      {"--window", window, "--theta", "nan"},
+      {"--window", window, "--theta", "0.5x"},
+      {"--window", window, "--box", "64"},
+      {"--window", window, "--box", "64x"},
+      {"--window", window, "--box", "ax48"},
+      {"--window", window, "--box", "-64x48"},
+      {"--window", window, "--max-keyframes", "0"},
+      {"--window", window, "--max-points", "4294967296"},
+      {"--window", window, "--max-observations", "many"},
+      {"--window", window, "--max-pair-arcs", ""},
+      {"--window", "", "--decisions", out},
+  };
+  for (const auto& args : cases) {
+    std::string shown;
+    for (const auto& a : args) shown += a + " ";
+    SCOPED_TRACE(shown);
+    const Result r = sparsify(args);
+    EXPECT_EQ(r.status, 2);
+    EXPECT_EQ(count_lines(r.err), 1u) << r.err;
+    EXPECT_NE(r.err.find("usage: keepless_sparsify --window FILE"), std::string::npos) << r.err;
+    EXPECT_EQ(r.out, "");
+    EXPECT_FALSE(fs::exists(out));
+    EXPECT_FALSE(fs::exists(out + ".tmp"));
+  }
+  const Result help = sparsify({"--help"});
+  EXPECT_EQ(help.status, 0);
+  EXPECT_NE(help.out.find("usage: keepless_sparsify"), std::string::npos);
+}
+
+TEST_F(SparsifyCliTest, FailureKeepsAnEarlierDecisionsFileUntouched) {
+  const std::string out = write("decisions.txt", "earlier run\n");
+  const std::string window = write("bad.txt", std::string(kGoodHead) + "obs 99 1 1 1\n");
+  const Result r = sparsify({"--window", window, "--decisions", out});
+  EXPECT_EQ(r.status, 2);
+  EXPECT_EQ(read_all(out), "earlier run\n");
+  EXPECT_FALSE(fs::exists(out + ".tmp"));
+}
+
+TEST_F(SparsifyCliTest, UnwritableDecisionsFileFailsCleanly) {
+  const std::string window = write("w.txt", kGoodHead);
+  const std::string out = path("missing_dir/decisions.txt");
+  const Result r = sparsify({"--window", window, "--decisions", out});
+  EXPECT_EQ(r.status, 2);
+  EXPECT_EQ(count_lines(r.err), 1u) << r.err;
+  EXPECT_EQ(r.err.rfind(out + ":0: ", 0), 0u) << r.err;
+  EXPECT_EQ(r.out, "");
+}
+
+// Three keyframes A=10 (0,0,0), B=20 (1,0,0), C=30 (10,0,0); points 1 (A,B,C),
+// 2 and 3 (A,B), 4 (C only). Keypoints are >= 200 px apart, so no box holds a
+// neighbour: N = 0 and c_s = floor(log10(0*0 + 1)) = 0 on every arc.
+//   m = 3: c_m(3) = 1, c_m(2) = ceil(3/1 * 1) = 3.
+//   c_b: AB d=1: ceil(10/1.1) = 10; AC d=10: ceil(10/2) = 5; BC d=9: ceil(10/1.9) = 6.
+//   Capacities: point 1: 3, points 2, 3: 1, point 4: skipped.
+//   Pair arcs: 3 (point 1) + 1 + 1 = 5; pairs 3; arcs = 3 source + 5 + 3 sink = 11.
+const char* const kHandWindow =
+    "kf 10 0 0 0\n"
+    "kf 20 1 0 0\n"
+    "kf 30 10 0 0\n"
+    "obs 10 1 100 100\nobs 10 2 300 100\nobs 10 3 500 100\n"
+    "obs 20 3 500 100\nobs 20 2 300 100\nobs 20 1 100 100\n"
+    "obs 30 4 100 400\nobs 30 1 100 100\n";
+
+struct HandCase {
+  const char* m;
+  const char* theta;
+  const char* decisions;
+  std::int64_t max_flow, total_cost, kept, culled;
+};
+
+TEST_F(SparsifyCliTest, HandComputedWindow) {
+  const HandCase cases[] = {
+      // M=1: each pair carries its cheapest point, point 1 (cost 1) everywhere:
+      // AB 1+0+10, AC 1+0+5, BC 1+0+6 = 24; point 1 flow 3 > 0.5*3: keep.
+      {"1", "0.5", "1 keep 3 3\n2 cull 0 1\n3 cull 0 1\n4 skip 0 0\n", 3, 24, 1, 2},
+      // M=2: AB also carries point 2 (cost 3, tie with 3 -> smaller id): +3+0+10.
+      {"2", "0.5", "1 keep 3 3\n2 keep 1 1\n3 cull 0 1\n4 skip 0 0\n", 4, 37, 2, 1},
+      // M=100: everything flows: 24 + 13 + 13.
+      {"100", "0.5", "1 keep 3 3\n2 keep 1 1\n3 keep 1 1\n4 skip 0 0\n", 5, 50, 3, 0},
+      // theta=1: keep iff flow > capacity, never.
+      {"100", "1", "1 cull 3 3\n2 cull 1 1\n3 cull 1 1\n4 skip 0 0\n", 5, 50, 0, 3},
+  };
+  const std::string window = write("hand.txt", kHandWindow);
+  const std::string out = path("decisions.txt");
+  for (const HandCase& c : cases) {
+    SCOPED_TRACE(std::string("M=") + c.m + " theta=" + c.theta);
+    const Result r =
+        sparsify({"--window", window, "--M", c.m, "--theta", c.theta, "--decisions", out});
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_EQ(r.err, "");
+    EXPECT_EQ(read_all(out), c.decisions);
+    EXPECT_FALSE(fs::exists(out + ".tmp"));
+    const std::string json = last_line(r.out);
+    ASSERT_EQ(json.front(), '{');
+    ASSERT_EQ(json.back(), '}');
+    EXPECT_EQ(json_int(json, "keyframes"), 3);
+    EXPECT_EQ(json_int(json, "points"), 4);
+    EXPECT_EQ(json_int(json, "evaluated"), 3);
+    EXPECT_EQ(json_int(json, "kept"), c.kept);
+    EXPECT_EQ(json_int(json, "culled"), c.culled);
+    EXPECT_EQ(json_int(json, "skipped"), 1);
+    EXPECT_EQ(json_int(json, "pairs"), 3);
+    EXPECT_EQ(json_int(json, "arcs"), 11);
+    EXPECT_EQ(json_int(json, "max_flow"), c.max_flow);
+    EXPECT_EQ(json_int(json, "total_cost"), c.total_cost);
+    EXPECT_EQ(json_int(json, "M"), std::atoll(c.m));
+    EXPECT_EQ(json_number(json, "theta"), std::atof(c.theta));
+    EXPECT_GE(json_number(json, "solve_ms"), 0.0);
+    EXPECT_GE(json_number(json, "build_ms"), 0.0);
+    EXPECT_GT(json_int(json, "memory_bytes"), 0);
+  }
+}
+
+TEST_F(SparsifyCliTest, EmptyWindowIsValid) {
+  const std::string window = write("empty.txt", "# nothing here\n\n");
+  const std::string out = path("decisions.txt");
+  const Result r = sparsify({"--window", window, "--decisions", out});
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_EQ(read_all(out), "");
+  const std::string json = last_line(r.out);
+  EXPECT_EQ(json_int(json, "keyframes"), 0);
+  EXPECT_EQ(json_int(json, "points"), 0);
+  EXPECT_EQ(json_int(json, "max_flow"), 0);
+}
+
+// Runs the CLI on `window` and compares decisions and summary with the
+// reference implementation on the same file.
+void expect_matches_reference(const Result& r, const std::string& window, const std::string& out,
+                              const core::Params& params) {
+  ASSERT_EQ(r.status, 0) << r.err;
+  core::WindowFile file;
+  std::string error;
+  ASSERT_TRUE(core::read_window_file(window, &file, &error)) << error;
+  std::vector<test::RefKeyframe> frames;
+  for (std::size_t k = 0; k < file.keyframes.size(); ++k) {
+    test::RefKeyframe f;
+    f.id = file.keyframes[k].id;
+    for (int i = 0; i < 3; ++i) f.centre[i] = file.keyframes[k].centre[i];
+    for (const core::Observation& o : file.observations[k])
+      f.observations.push_back({o.point, o.u, o.v});
+    frames.push_back(f);
+  }
+  const test::RefResult ref = test::reference_sparsify(frames, params);
+  std::string expected;
+  std::int64_t kept = 0, culled = 0, skipped = 0;
+  for (const test::RefPoint& p : ref.points) {
+    expected += std::to_string(p.id) + " " + core::to_string(p.verdict) + " " +
+                std::to_string(p.flow) + " " + std::to_string(p.capacity) + "\n";
+    kept += p.verdict == core::Verdict::kKeep;
+    culled += p.verdict == core::Verdict::kCull;
+    skipped += p.verdict == core::Verdict::kSkip;
+  }
+  EXPECT_EQ(read_all(out), expected);
+  EXPECT_GT(kept, 0);  // the case exercises both verdicts
+  EXPECT_GT(culled, 0);
+  const std::string json = last_line(r.out);
+  EXPECT_EQ(json_int(json, "keyframes"), static_cast<std::int64_t>(frames.size()));
+  EXPECT_EQ(json_int(json, "points"), static_cast<std::int64_t>(ref.points.size()));
+  EXPECT_EQ(json_int(json, "evaluated"), ref.evaluated);
+  EXPECT_EQ(json_int(json, "kept"), kept);
+  EXPECT_EQ(json_int(json, "culled"), culled);
+  EXPECT_EQ(json_int(json, "skipped"), skipped);
+  EXPECT_EQ(json_int(json, "pairs"), ref.pairs);
+  EXPECT_EQ(json_int(json, "arcs"),
+            static_cast<std::int64_t>(ref.evaluated) + ref.pair_arcs + ref.pairs);
+  EXPECT_EQ(json_int(json, "max_flow"), ref.max_flow);
+  EXPECT_EQ(json_int(json, "total_cost"), ref.total_cost);
+}
+
+// A small window with clustered keypoints (non-zero c_s), repeated baselines
+// and shared points, written by hand so it does not depend on the generator.
+std::string clustered_window() {
+  std::string text = "# clustered\n";
+  const double centres[5][3] = {{0, 0, 0}, {0.5, 0, 0}, {0.5, 0.2, 0}, {3, 0, 1}, {12, 1, 0}};
+  for (int k = 0; k < 5; ++k) {
+    std::ostringstream line;
+    line << "kf " << 100 + k << " " << centres[k][0] << " " << centres[k][1] << " " << centres[k][2]
+         << " 1 0 0 0\n";
+    text += line.str();
+  }
+  // Point p seen by keyframes [p % 5, p % 5 + 1 + p % 3] (clipped), keypoints
+  // on a 20 px lattice so boxes overlap often and exactly at their borders.
+  for (int p = 0; p < 60; ++p) {
+    const int first = p % 5, last = std::min(4, first + 1 + p % 3);
+    for (int k = first; k <= last; ++k) {
+      const int u = 20 * ((p * 7 + k) % 12), v = 24 * ((p * 3 + k) % 9);
+      text += "obs " + std::to_string(100 + k) + " " + std::to_string(1000 + p * 13) + " " +
+              std::to_string(u) + " " + std::to_string(v) + "\n";
+    }
+  }
+  return text;
+}
+
+TEST_F(SparsifyCliTest, MatchesReferenceOnAClusteredWindow) {
+  const std::string window = write("clustered.txt", clustered_window());
+  const std::string out = path("decisions.txt");
+  struct P {
+    const char *m, *theta, *box;
+  };
+  for (const P& p : {P{"3", "0.5", "64x48"}, P{"1", "0.2", "40x40"}, P{"5", "0.7", "0x0"}}) {
+    SCOPED_TRACE(std::string(p.m) + " " + p.theta + " " + p.box);
+    core::Params params;
+    params.pair_capacity = std::atoll(p.m);
+    params.theta = std::atof(p.theta);
+    ASSERT_TRUE(core::parse_box(p.box, &params.box_width, &params.box_height));
+    const Result r = sparsify(
+        {"--window", window, "--M", p.m, "--theta", p.theta, "--box", p.box, "--decisions", out});
+    expect_matches_reference(r, window, out, params);
+  }
+}
+
+#ifdef KEEPLESS_MAKE_WINDOW_BIN
+
+TEST_F(SparsifyCliTest, GeneratorIsDeterministicPerSeed) {
+  const std::vector<std::string> common = {"--keyframes",  "6",  "--points", "400",
+                                           "--obs-per-kf", "150"};
+  const auto make = [&](const char* seed, const std::string& name) {
+    std::vector<std::string> args = common;
+    args.insert(args.end(), {"--seed", seed, "--out", path(name)});
+    const Result r = run(KEEPLESS_MAKE_WINDOW_BIN, args);
+    EXPECT_EQ(r.status, 0) << r.err;
+    return read_all(path(name));
+  };
+  const std::string a = make("7", "a.txt");
+  const std::string b = make("7", "b.txt");
+  const std::string c = make("8", "c.txt");
+  EXPECT_FALSE(a.empty());
+  EXPECT_EQ(a, b);
+  EXPECT_NE(a, c);
+}
+
+TEST_F(SparsifyCliTest, GeneratorWritesTracksOverConsecutiveKeyframes) {
+  const Result r = run(KEEPLESS_MAKE_WINDOW_BIN, {"--workload", "small", "--points", "1500",
+                                                  "--seed", "3", "--out", path("small.txt")});
+  ASSERT_EQ(r.status, 0) << r.err;
+  core::WindowFile file;
+  std::string error;
+  ASSERT_TRUE(core::read_window_file(path("small.txt"), &file, &error)) << error;
+  EXPECT_EQ(file.keyframes.size(), 10u);    // the preset
+  EXPECT_EQ(file.needs.max_points, 1500u);  // the override
+  EXPECT_EQ(json_int(last_line(r.out), "points"), 1500);
+  std::map<std::uint64_t, std::vector<std::size_t>> views;
+  for (std::size_t k = 0; k < file.keyframes.size(); ++k) {
+    for (const core::Observation& o : file.observations[k]) {
+      EXPECT_GE(o.u, 0.0);
+      EXPECT_LE(o.u, 640.0);
+      EXPECT_GE(o.v, 0.0);
+      EXPECT_LE(o.v, 480.0);
+      views[o.point].push_back(k);
+    }
+  }
+  std::size_t longest = 0, multi = 0;
+  for (const auto& entry : views) {
+    const auto& kfs = entry.second;
+    EXPECT_EQ(kfs.back() - kfs.front() + 1, kfs.size()) << "point " << entry.first;
+    longest = std::max(longest, kfs.size());
+    multi += kfs.size() >= 2;
+  }
+  EXPECT_GE(longest, 5u);              // long tracks exist
+  EXPECT_GT(multi, views.size() / 2);  // most points are evaluated
+}
+
+TEST_F(SparsifyCliTest, MatchesReferenceOnGeneratedWindows) {
+  const std::string out = path("decisions.txt");
+  for (const char* seed : {"1", "2"}) {
+    SCOPED_TRACE(seed);
+    const std::string window = path(std::string("gen") + seed + ".txt");
+    const Result g =
+        run(KEEPLESS_MAKE_WINDOW_BIN, {"--keyframes", "8", "--points", "600", "--obs-per-kf", "200",
+                                       "--seed", seed, "--out", window});
+    ASSERT_EQ(g.status, 0) << g.err;
+    core::Params params;
+    params.pair_capacity = 20;
+    const Result r = sparsify({"--window", window, "--M", "20", "--decisions", out});
+    expect_matches_reference(r, window, out, params);
+  }
+}
+
+#endif  // KEEPLESS_MAKE_WINDOW_BIN
+
+}  // namespace
+}  // namespace keepless

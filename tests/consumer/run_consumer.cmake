@@ -1,0 +1,37 @@
+# cmake -P script behind the consumer_installed_package test (see CMakeLists.txt).
+function(run)
+  execute_process(COMMAND ${ARGN} RESULT_VARIABLE rc)
+  if(NOT rc EQUAL 0)
+    string(REPLACE ";" " " cmd "${ARGN}")
+    message(FATAL_ERROR "failed (${rc}): ${cmd}")
+  endif()
+endfunction()
+
+# A fresh prefix each run, so a missing install rule cannot hide behind an
+# earlier run's files.
+file(REMOVE_RECURSE ${PREFIX} ${CONSUMER_BUILD})
+run(${CMAKE_COMMAND} --install ${KEEPLESS_BUILD_DIR} --prefix ${PREFIX})
+
+set(args -S ${CONSUMER_SOURCE} -B ${CONSUMER_BUILD} -G ${GENERATOR}
+    -DCMAKE_BUILD_TYPE=${BUILD_TYPE} -DCMAKE_PREFIX_PATH=${PREFIX})
+if(TOOLCHAIN)
+  # Cross: the toolchain confines find_package to the sysroot; the prefix is
+  # one more root to search.
+  list(APPEND args -DCMAKE_TOOLCHAIN_FILE=${TOOLCHAIN} -DKEEPLESS_SYSROOT=${SYSROOT}
+       -DCMAKE_FIND_ROOT_PATH=${PREFIX})
+else()
+  list(APPEND args -DCMAKE_CXX_COMPILER=${CXX_COMPILER})
+endif()
+run(${CMAKE_COMMAND} ${args})
+run(${CMAKE_COMMAND} --build ${CONSUMER_BUILD})
+
+string(REPLACE "|" ";" emulator "${EMULATOR}")
+execute_process(COMMAND ${emulator} ${CONSUMER_BUILD}/onboard_module
+                RESULT_VARIABLE rc OUTPUT_VARIABLE out)
+message("${out}")
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "onboard_module exited with ${rc}")
+endif()
+if(NOT out MATCHES "onboard_module: [0-9]+ keyframes, [0-9]+ points: kept [1-9][0-9]*, culled [1-9][0-9]*")
+  message(FATAL_ERROR "onboard_module printed no decision summary")
+endif()

@@ -1,0 +1,150 @@
+#pragma once
+// Seeded random windows shaped like a SLAM local map: points tracked over runs
+// of consecutive keyframes, keypoints clustered on a lattice (so box borders
+// are hit exactly and c_s repeats), and camera centres drawn from a small pool
+// (so c_b repeats). Heavy ties are the point: they exercise the tie-break.
+
+#include <algorithm>
+#include <cstdint>
+#include <random>
+#include <set>
+#include <vector>
+
+#include "keepless/core/config.hpp"
+#include "keepless/core/window.hpp"
+#include "reference_sparsifier.hpp"
+
+namespace keepless::test {
+
+class Rng {
+ public:
+  explicit Rng(std::uint64_t seed) : engine_(seed) {}
+  std::uint64_t next() { return engine_(); }
+  // Uniform-enough integer in [lo, hi]; a plain modulo keeps the sequence
+  // identical across standard libraries.
+  std::int64_t between(std::int64_t lo, std::int64_t hi) {
+    return lo + static_cast<std::int64_t>(engine_() % static_cast<std::uint64_t>(hi - lo + 1));
+  }
+  bool chance(int percent) { return between(0, 99) < percent; }
+
+ private:
+  std::mt19937_64 engine_;
+};
+
+struct RandomCase {
+  std::vector<RefKeyframe> frames;
+  core::Params params;
+};
+
+inline RandomCase random_case(std::uint64_t seed, std::uint32_t max_keyframes = 12,
+                              std::uint32_t max_points = 60) {
+  Rng rng(seed);
+  RandomCase c;
+  const auto k = static_cast<std::uint32_t>(rng.between(2, max_keyframes));
+  // Dense windows crowd many keypoints into one box, so c_s reaches 3 and 4.
+  const bool dense = rng.chance(15);
+  const auto p = static_cast<std::uint32_t>(
+      dense ? rng.between(max_points, 3 * max_points) : rng.between(3, max_points));
+  const std::int64_t spread = dense ? 2 : 5;
+
+  // Camera centres: a small pool of integer positions, plus a few one-offs.
+  double pool[3][3];
+  for (auto& centre : pool) {
+    for (double& x : centre) x = static_cast<double>(rng.between(-15, 15));
+  }
+  std::set<std::uint64_t> ids;
+  c.frames.resize(k);
+  for (auto& f : c.frames) {
+    do {
+      f.id = static_cast<std::uint64_t>(rng.between(0, 10 * k));
+    } while (!ids.insert(f.id).second);
+    if (rng.chance(70)) {
+      const auto& centre = pool[rng.between(0, 2)];
+      std::copy(centre, centre + 3, f.centre);
+    } else {
+      for (double& x : f.centre) x = static_cast<double>(rng.between(-400, 400)) / 8.0;
+    }
+  }
+
+  // Per-frame keypoint clusters on a lattice of 8 x 6 pixels.
+  std::vector<std::vector<std::pair<double, double>>> clusters(k);
+  for (auto& cl : clusters) {
+    const auto count = dense ? 1 : rng.between(1, 4);
+    for (std::int64_t i = 0; i < count; ++i) {
+      cl.push_back({static_cast<double>(8 * rng.between(0, 80)),
+                    static_cast<double>(6 * rng.between(0, 80))});
+    }
+  }
+  const auto keypoint = [&](std::uint32_t slot) -> std::pair<double, double> {
+    if (rng.chance(10)) {  // off-lattice
+      return {static_cast<double>(rng.between(0, 64000)) / 100.0,
+              static_cast<double>(rng.between(0, 48000)) / 100.0};
+    }
+    const auto& cl = clusters[slot][static_cast<std::size_t>(
+        rng.between(0, static_cast<std::int64_t>(clusters[slot].size()) - 1))];
+    return {cl.first + 8.0 * static_cast<double>(rng.between(-spread, spread)),
+            cl.second + 6.0 * static_cast<double>(rng.between(-spread, spread))};
+  };
+
+  // Points: sparse ids (some huge), tracked over a run of consecutive frames,
+  // sometimes over a random subset.
+  std::set<std::uint64_t> point_ids;
+  for (std::uint32_t i = 0; i < p; ++i) {
+    std::uint64_t id;
+    do {
+      id = rng.chance(10) ? (std::uint64_t{1} << 63) + rng.next() % 1000
+                          : static_cast<std::uint64_t>(rng.between(0, 4 * p));
+    } while (!point_ids.insert(id).second);
+    std::vector<std::uint32_t> slots;
+    if (rng.chance(20)) {
+      for (std::uint32_t s = 0; s < k; ++s) {
+        if (rng.chance(40)) slots.push_back(s);
+      }
+    } else {
+      const auto start = static_cast<std::uint32_t>(rng.between(0, k - 1));
+      const auto length = static_cast<std::uint32_t>(rng.between(1, std::min<std::uint32_t>(k - start, 7)));
+      for (std::uint32_t s = start; s < start + length; ++s) slots.push_back(s);
+    }
+    for (std::uint32_t s : slots) {
+      const auto uv = keypoint(s);
+      c.frames[s].observations.push_back({id, uv.first, uv.second});
+    }
+  }
+  for (auto& f : c.frames) {  // observation order within a keyframe is arbitrary
+    for (std::size_t i = f.observations.size(); i > 1; --i) {
+      std::swap(f.observations[i - 1],
+                f.observations[static_cast<std::size_t>(rng.between(0, static_cast<std::int64_t>(i) - 1))]);
+    }
+  }
+
+  // Small M so pair capacities bind; sometimes the paper's defaults.
+  c.params.pair_capacity = rng.chance(10) ? 100 : rng.between(1, 5);
+  const double thetas[] = {0.0, 0.25, 0.5, 0.75, 1.0};
+  c.params.theta = thetas[rng.between(0, 4)];
+  if (rng.chance(20)) {
+    const std::int32_t boxes[][2] = {{0, 0}, {63, 47}, {16, 12}, {128, 96}};
+    const auto& b = boxes[rng.between(0, 3)];
+    c.params.box_width = b[0];
+    c.params.box_height = b[1];
+  }
+  return c;
+}
+
+// Loads frames into a window; false if the window refused one.
+inline bool load(core::Window& window, const std::vector<RefKeyframe>& frames) {
+  window.clear();
+  for (const auto& f : frames) {
+    core::Keyframe kf;
+    kf.id = f.id;
+    std::copy(f.centre, f.centre + 3, kf.centre);
+    std::vector<core::Observation> obs;
+    for (const auto& o : f.observations) obs.push_back({o.point, o.u, o.v});
+    if (window.add_keyframe(kf, obs.data(), static_cast<std::uint32_t>(obs.size())) !=
+        core::Status::kOk) {
+      return false;
+    }
+  }
+  return true;
+}
+
+}  // namespace keepless::test

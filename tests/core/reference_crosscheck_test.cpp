@@ -1,0 +1,211 @@
+// Seeded random windows: the sparsifier (SSP solver on the built network), the
+// closed form, and the independent naive reference (tests/support) agree
+// exactly on every flow, verdict, max flow and total cost; the solver's
+// optimality certificate holds; LEMON's network simplex finds the same cost.
+
+#include <gtest/gtest.h>
+
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <tuple>
+#include <vector>
+
+#include "flow_certificate.hpp"
+#include "keepless/core/closed_form.hpp"
+#include "keepless/core/sparsifier.hpp"
+#include "random_window.hpp"
+#include "reference_sparsifier.hpp"
+
+#ifdef KEEPLESS_HAVE_LEMON
+#include <lemon/list_graph.h>
+#include <lemon/network_simplex.h>
+#endif
+
+namespace keepless::core {
+namespace {
+
+const Capacities kCaps{16, 2048, 8192, 32768};
+
+::testing::AssertionResult agrees(const Sparsifier& s, const ClosedForm& closed,
+                                  const test::RefResult& ref) {
+  const Summary& sum = s.summary();
+  const PaperNetwork& net = s.network();
+  if (s.decision_count() != ref.points.size()) {
+    return ::testing::AssertionFailure() << "decisions " << s.decision_count() << " vs reference "
+                                         << ref.points.size();
+  }
+  std::uint32_t kept = 0, culled = 0, skipped = 0;
+  for (std::uint32_t i = 0; i < s.decision_count(); ++i) {
+    const PointDecision& d = s.decisions()[i];
+    const test::RefPoint& r = ref.points[i];
+    if (d.point != r.id || d.flow != r.flow || d.capacity != r.capacity || d.verdict != r.verdict ||
+        net.point_views(i) != r.views) {
+      return ::testing::AssertionFailure()
+             << "point " << d.point << " (ref " << r.id << "): flow " << d.flow << " vs " << r.flow
+             << ", capacity " << d.capacity << " vs " << r.capacity << ", verdict "
+             << to_string(d.verdict) << " vs " << to_string(r.verdict);
+    }
+    if (closed.point_flow(i) != d.flow) {
+      return ::testing::AssertionFailure() << "point " << d.point << ": closed form flow "
+                                           << closed.point_flow(i) << " vs " << d.flow;
+    }
+    kept += d.verdict == Verdict::kKeep;
+    culled += d.verdict == Verdict::kCull;
+    skipped += d.verdict == Verdict::kSkip;
+  }
+  // The solver's arc flows are the closed form's selection, arc by arc.
+  for (std::uint32_t a = 0; a < net.pair_arc_count(); ++a) {
+    if ((s.solver().flow(net.arc_solver_id(a)) == 1) != closed.arc_selected(a)) {
+      return ::testing::AssertionFailure() << "pair arc " << a << " selection differs";
+    }
+  }
+  if (sum.max_flow != ref.max_flow || sum.total_cost != ref.total_cost ||
+      closed.max_flow() != ref.max_flow || closed.total_cost() != ref.total_cost) {
+    return ::testing::AssertionFailure()
+           << "max flow " << sum.max_flow << " / closed " << closed.max_flow() << " / ref "
+           << ref.max_flow << "; cost " << sum.total_cost << " / closed " << closed.total_cost()
+           << " / ref " << ref.total_cost;
+  }
+  if (sum.points != ref.points.size() || sum.evaluated != ref.evaluated || sum.pairs != ref.pairs ||
+      net.pair_arc_count() != ref.pair_arcs || sum.arcs != ref.evaluated + ref.pair_arcs + ref.pairs ||
+      sum.kept != kept || sum.culled != culled || sum.skipped != skipped ||
+      sum.kept + sum.culled != sum.evaluated) {
+    return ::testing::AssertionFailure() << "summary counts differ";
+  }
+  return ::testing::AssertionSuccess();
+}
+
+#ifdef KEEPLESS_HAVE_LEMON
+// Min-cost flow of the solver's value by LEMON's network simplex.
+std::int64_t lemon_cost(const solver::MinCostFlow& s, solver::NodeId source, solver::NodeId sink) {
+  using Graph = lemon::ListDigraph;
+  Graph g;
+  std::vector<Graph::Node> nodes;
+  for (std::int32_t v = 0; v < s.node_count(); ++v) nodes.push_back(g.addNode());
+  Graph::ArcMap<std::int64_t> cap(g), cost(g);
+  for (solver::ArcId a = 0; a < s.arc_count(); ++a) {
+    const auto arc = g.addArc(nodes[static_cast<std::size_t>(s.tail(a))],
+                              nodes[static_cast<std::size_t>(s.head(a))]);
+    cap[arc] = s.capacity(a);
+    cost[arc] = s.cost(a);
+  }
+  lemon::NetworkSimplex<Graph, std::int64_t, std::int64_t> ns(g);
+  ns.upperMap(cap).costMap(cost).stSupply(nodes[static_cast<std::size_t>(source)],
+                                          nodes[static_cast<std::size_t>(sink)], s.flow_value());
+  if (ns.run() != lemon::NetworkSimplex<Graph, std::int64_t, std::int64_t>::OPTIMAL) return -1;
+  return ns.totalCost<std::int64_t>();
+}
+#endif
+
+// Params are fixed per Sparsifier; building one per window would dominate the
+// test's run time, so one is kept per distinct Params.
+class SparsifierCache {
+ public:
+  Sparsifier& get(const Params& p) {
+    const auto key = std::make_tuple(p.pair_capacity, p.theta, p.box_width, p.box_height);
+    auto& slot = cache_[key];
+    if (!slot) slot = std::make_unique<Sparsifier>(kCaps, p);
+    return *slot;
+  }
+
+ private:
+  std::map<std::tuple<std::int64_t, double, std::int32_t, std::int32_t>, std::unique_ptr<Sparsifier>>
+      cache_;
+};
+
+TEST(ReferenceCrossCheck, RandomWindows) {
+  SparsifierCache sparsifiers;
+  Window window(kCaps);
+  ClosedForm closed(kCaps);
+  std::uint32_t windows = 0, culled = 0, kept = 0, bound = 0;
+  for (std::uint64_t seed = 1; seed <= 1500; ++seed) {
+    const test::RandomCase c = test::random_case(seed);
+    ASSERT_TRUE(test::load(window, c.frames)) << "seed " << seed;
+    Sparsifier& s = sparsifiers.get(c.params);
+    ASSERT_EQ(s.run(window), Status::kOk) << "seed " << seed;
+    closed.solve(s.network(), c.params);
+    const test::RefResult ref = test::reference_sparsify(c.frames, c.params);
+    ASSERT_TRUE(agrees(s, closed, ref)) << "seed " << seed;
+    if (seed % 5 == 0) {
+      ASSERT_TRUE(test::flow_certificate(s.solver(), s.network().source(), s.network().sink()))
+          << "seed " << seed;
+    }
+#ifdef KEEPLESS_HAVE_LEMON
+    if (seed % 25 == 0) {
+      ASSERT_EQ(lemon_cost(s.solver(), s.network().source(), s.network().sink()),
+                s.summary().total_cost)
+          << "seed " << seed;
+    }
+#endif
+    ++windows;
+    culled += s.summary().culled;
+    kept += s.summary().kept;
+    for (std::uint32_t q = 0; q < s.network().pair_count(); ++q) {
+      bound += s.solver().flow(s.network().pair_sink_arc(q)) == c.params.pair_capacity;
+    }
+  }
+  // The generator must produce the cases the check is for.
+  EXPECT_EQ(windows, 1500u);
+  EXPECT_GT(culled, 1000u);
+  EXPECT_GT(kept, 1000u);
+  EXPECT_GT(bound, 1000u);
+}
+
+// Keypoints far outside any image (cell indices clamp), at huge magnitudes
+// where the box test's subtraction rounds, and next to clamped cell borders:
+// the grid still counts exactly what the all-pairs reference counts.
+TEST(ReferenceCrossCheck, ExtremeCoordinates) {
+  const double bases[] = {0.0,    -1e300, 1e300,  1.7e308, -1.7e308, 1e15 + 0.5, -3e12,
+                          68719476736.0 /* 2^30 * 64 */, -51539607552.0 /* -2^30 * 48 */};
+  const double offsets[] = {0, 0.25, 16, 24, 31.999, 32, 32.5, -32, -24, -1};
+  for (std::uint64_t seed = 1; seed <= 60; ++seed) {
+    test::Rng rng(seed);
+    test::RandomCase c = test::random_case(seed, 6, 40);
+    for (auto& f : c.frames) {
+      for (auto& o : f.observations) {
+        o.u = bases[rng.between(0, 8)] + offsets[rng.between(0, 9)];
+        o.v = rng.chance(50) ? o.u : bases[rng.between(0, 8)] + offsets[rng.between(0, 9)];
+      }
+    }
+    Window window(kCaps);
+    ASSERT_TRUE(test::load(window, c.frames));
+    Sparsifier s(kCaps, c.params);
+    ClosedForm closed(kCaps);
+    ASSERT_EQ(s.run(window), Status::kOk);
+    closed.solve(s.network(), c.params);
+    ASSERT_TRUE(agrees(s, closed, test::reference_sparsify(c.frames, c.params))) << "seed " << seed;
+  }
+}
+
+// A window sliding over a long sequence: the removal and compaction path
+// feeds the same answers as a fresh reference of the current content.
+TEST(ReferenceCrossCheck, SlidingWindow) {
+  for (std::uint64_t seed = 1; seed <= 30; ++seed) {
+    const test::RandomCase c = test::random_case(1000 + seed, 16, 200);
+    const std::uint32_t size = 4 + static_cast<std::uint32_t>(seed % 5);
+    Window window(kCaps);
+    Sparsifier s(kCaps, c.params);
+    ClosedForm closed(kCaps);
+    for (const auto& f : c.frames) {
+      if (window.keyframe_count() == size) {
+        ASSERT_EQ(window.remove_keyframe(window.keyframe(seed % 2 ? 0 : 1).id), Status::kOk);
+      }
+      Keyframe kf;
+      kf.id = f.id;
+      std::copy(f.centre, f.centre + 3, kf.centre);
+      std::vector<Observation> obs;
+      for (const auto& o : f.observations) obs.push_back({o.point, o.u, o.v});
+      ASSERT_EQ(window.add_keyframe(kf, obs.data(), static_cast<std::uint32_t>(obs.size())),
+                Status::kOk);
+      ASSERT_EQ(s.run(window), Status::kOk);
+      closed.solve(s.network(), c.params);
+      const auto ref = test::reference_sparsify(test::ref_frames_of(window), c.params);
+      ASSERT_TRUE(agrees(s, closed, ref)) << "seed " << seed << " keyframe " << f.id;
+      ASSERT_TRUE(test::flow_certificate(s.solver(), s.network().source(), s.network().sink()));
+    }
+  }
+}
+
+}  // namespace
+}  // namespace keepless::core

@@ -1,0 +1,150 @@
+// After construction and one warm-up, the decision path allocates nothing:
+// a counting global operator new (replaced for this binary only) sees zero
+// calls across add_keyframe / remove_keyframe / run on random windows.
+
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <cstdlib>
+#include <new>
+#include <vector>
+
+#include "keepless/core/closed_form.hpp"
+#include "keepless/core/sparsifier.hpp"
+#include "random_window.hpp"
+
+namespace {
+std::atomic<bool> g_counting{false};
+std::atomic<std::uint64_t> g_allocations{0};
+
+void* counted(std::size_t size) {
+  if (g_counting.load(std::memory_order_relaxed)) g_allocations.fetch_add(1, std::memory_order_relaxed);
+  if (void* p = std::malloc(size == 0 ? 1 : size)) return p;
+  throw std::bad_alloc();
+}
+void* counted_aligned(std::size_t size, std::align_val_t align) {
+  if (g_counting.load(std::memory_order_relaxed)) g_allocations.fetch_add(1, std::memory_order_relaxed);
+  const auto a = static_cast<std::size_t>(align);
+  const std::size_t rounded = (size + a - 1) / a * a;
+  if (void* p = std::aligned_alloc(a, rounded == 0 ? a : rounded)) return p;
+  throw std::bad_alloc();
+}
+}  // namespace
+
+void* operator new(std::size_t size) { return counted(size); }
+void* operator new[](std::size_t size) { return counted(size); }
+void* operator new(std::size_t size, const std::nothrow_t&) noexcept {
+  try {
+    return counted(size);
+  } catch (...) {
+    return nullptr;
+  }
+}
+void* operator new[](std::size_t size, const std::nothrow_t&) noexcept {
+  try {
+    return counted(size);
+  } catch (...) {
+    return nullptr;
+  }
+}
+void* operator new(std::size_t size, std::align_val_t a) { return counted_aligned(size, a); }
+void* operator new[](std::size_t size, std::align_val_t a) { return counted_aligned(size, a); }
+void operator delete(void* p) noexcept { std::free(p); }
+void operator delete[](void* p) noexcept { std::free(p); }
+void operator delete(void* p, std::size_t) noexcept { std::free(p); }
+void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
+void operator delete(void* p, std::align_val_t) noexcept { std::free(p); }
+void operator delete[](void* p, std::align_val_t) noexcept { std::free(p); }
+void operator delete(void* p, std::size_t, std::align_val_t) noexcept { std::free(p); }
+void operator delete[](void* p, std::size_t, std::align_val_t) noexcept { std::free(p); }
+
+namespace keepless::core {
+namespace {
+
+struct Prepared {
+  Keyframe keyframe;
+  std::vector<Observation> observations;
+};
+
+TEST(ZeroAllocation, CounterSeesAllocations) {
+  g_allocations = 0;
+  g_counting = true;
+  auto* p = new std::vector<int>(10);
+  g_counting = false;
+  delete p;
+  EXPECT_EQ(g_allocations.load(), 2u);  // the vector and its buffer
+}
+
+TEST(ZeroAllocation, DecisionPathAllocatesNothing) {
+  const Capacities caps{12, 2048, 8192, 32768};
+  // Every input is prepared before counting starts.
+  std::vector<std::vector<Prepared>> windows;
+  for (std::uint64_t seed = 1; seed <= 40; ++seed) {
+    const auto c = test::random_case(seed, 12, 150);
+    std::vector<Prepared> frames;
+    for (const auto& f : c.frames) {
+      Prepared p;
+      p.keyframe.id = f.id;
+      std::copy(f.centre, f.centre + 3, p.keyframe.centre);
+      for (const auto& o : f.observations) p.observations.push_back({o.point, o.u, o.v});
+      frames.push_back(p);
+    }
+    windows.push_back(frames);
+  }
+
+  Window window(caps);
+  Sparsifier sparsifier(caps, Params{});
+  ClosedForm closed(caps);
+  // Warm-up: one full pass, so lazily initialised library state (if any) exists.
+  for (const auto& f : windows[0]) {
+    ASSERT_EQ(window.add_keyframe(f.keyframe, f.observations.data(),
+                                  static_cast<std::uint32_t>(f.observations.size())),
+              Status::kOk);
+  }
+  ASSERT_EQ(sparsifier.run(window), Status::kOk);
+  closed.solve(sparsifier.network(), sparsifier.params());
+  window.clear();
+
+  std::uint64_t runs = 0, kept = 0, removals = 0;
+  std::uint32_t statuses_ok = 0;
+  g_allocations = 0;
+  g_counting = true;
+  for (const auto& frames : windows) {
+    for (std::size_t i = 0; i < frames.size(); ++i) {
+      // Slide: keep at most 6 keyframes, dropping the oldest.
+      if (window.keyframe_count() == 6) {
+        statuses_ok += window.remove_keyframe(window.keyframe(0).id) == Status::kOk;
+        ++removals;
+      }
+      const auto& f = frames[i];
+      statuses_ok += window.add_keyframe(f.keyframe, f.observations.data(),
+                                         static_cast<std::uint32_t>(f.observations.size())) ==
+                     Status::kOk;
+      const Status s = sparsifier.run(window);
+      statuses_ok += s == Status::kOk;
+      closed.solve(sparsifier.network(), sparsifier.params());
+      kept += sparsifier.summary().kept;
+      ++runs;
+    }
+    // Failures allocate nothing either.
+    const auto& last = frames.back();
+    statuses_ok += window.add_keyframe(last.keyframe, last.observations.data(),
+                                       static_cast<std::uint32_t>(last.observations.size())) ==
+                   Status::kDuplicateKeyframe;
+    solver::Budget tiny;
+    tiny.work_units = 3;
+    statuses_ok += sparsifier.run(window, tiny) != Status::kOk || sparsifier.summary().evaluated == 0;
+    while (window.keyframe_count() > 0) {
+      statuses_ok += window.remove_keyframe(window.keyframe(0).id) == Status::kOk;
+      ++removals;
+    }
+  }
+  g_counting = false;
+  EXPECT_EQ(g_allocations.load(), 0u);
+  EXPECT_EQ(statuses_ok, 2 * runs + 2 * windows.size() + removals);
+  EXPECT_GT(runs, 100u);
+  EXPECT_GT(kept, 0u);
+}
+
+}  // namespace
+}  // namespace keepless::core

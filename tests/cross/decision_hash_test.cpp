@@ -1,0 +1,303 @@
+// Decisions must not depend on the architecture: a board (aarch64) and the
+// x86-64 machine that tuned it must keep the same points. These tests hash
+// everything the decision path outputs for a fixed, generated workload and
+// compare with hashes recorded on x86-64; the aarch64 suite (ctest under
+// qemu, toolchains/cross_build.sh) asserts the same constants.
+//
+// If a deliberate change to the costs, the network or the solver's tie-break
+// changes the decisions, the failure prints the new hash: re-record it here
+// and check that the aarch64 suite agrees (docs/cross.md).
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "keepless/core/config.hpp"
+#include "keepless/core/costs.hpp"
+#include "keepless/core/decision.hpp"
+#include "keepless/core/sparsifier.hpp"
+#include "keepless/core/status.hpp"
+#include "keepless/core/window.hpp"
+
+namespace keepless::core {
+namespace {
+
+// Recorded from the x86-64 release build; see the file comment.
+constexpr std::uint64_t kExpectedCostHash = 0x231e8d5f5870d2a7ULL;
+constexpr std::uint64_t kExpectedDecisionHash = 0x6da842663cdda28eULL;
+
+// splitmix64: a fixed, portable stream (std:: distributions are not
+// specified bit for bit across standard libraries).
+class SplitMix64 {
+ public:
+  explicit SplitMix64(std::uint64_t seed) : state_(seed) {}
+  std::uint64_t next() {
+    std::uint64_t z = (state_ += 0x9e3779b97f4a7c15ULL);
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+    return z ^ (z >> 31);
+  }
+  std::uint32_t below(std::uint32_t n) { return static_cast<std::uint32_t>(next() % n); }
+  // k / 2^bits, exactly representable: the inputs themselves never differ.
+  double fraction(int bits) {
+    return std::ldexp(static_cast<double>(next() >> (64 - bits)), -bits);
+  }
+
+ private:
+  std::uint64_t state_;
+};
+
+// FNV-1a 64 over explicit little-endian bytes (no struct padding, no
+// host byte order).
+class Fnv1a64 {
+ public:
+  void add(std::uint64_t value, int bytes = 8) {
+    for (int i = 0; i < bytes; ++i) {
+      hash_ ^= (value >> (8 * i)) & 0xffu;
+      hash_ *= 0x100000001b3ULL;
+    }
+  }
+  void add_signed(std::int64_t value) { add(static_cast<std::uint64_t>(value)); }
+  std::uint64_t value() const { return hash_; }
+
+ private:
+  std::uint64_t hash_ = 0xcbf29ce484222325ULL;
+};
+
+std::string hex(std::uint64_t v) {
+  char text[32];
+  std::snprintf(text, sizeof text, "0x%016llx", static_cast<unsigned long long>(v));
+  return text;
+}
+
+// ---------------------------------------------------------------------------
+// The float paths that feed integer costs, on their own, including the inputs
+// where a last-bit difference would flip the result.
+
+TEST(CrossArchitecture, FloatFedCostsMatchRecordedHash) {
+  SplitMix64 rng(0x6b6565706c657373ULL);  // "keepless"
+  Fnv1a64 hash;
+  std::uint64_t checked = 0;
+
+  // Baseline: random centres, plus distances where 10 / (0.1 d + 1) is an
+  // integer (d = 0, 10, 15, 40, 90) or lands next to one.
+  for (int i = 0; i < 20000; ++i) {
+    double a[3], b[3];
+    for (int c = 0; c < 3; ++c) {
+      a[c] = (static_cast<double>(rng.below(4001)) - 2000.0) / 7.0 + rng.fraction(20);
+      b[c] = a[c] + (static_cast<double>(rng.below(201)) - 100.0) * rng.fraction(30);
+    }
+    hash.add_signed(baseline_cost(a, b));
+    ++checked;
+  }
+  const double exact[] = {0.0, 10.0, 15.0, 40.0, 90.0, 2.5, 1.0 / 3.0, 0.1, 30.0, 23.333333333333332};
+  for (double d : exact) {
+    for (int step = -2; step <= 2; ++step) {
+      double dd = d;
+      for (int s = 0; s < std::abs(step); ++s) dd = std::nextafter(dd, step < 0 ? -1.0 : 1e9);
+      const double a[3] = {0.0, 0.0, 0.0};
+      const double b[3] = {dd, 0.0, 0.0};
+      const double c[3] = {dd * 0.6, dd * 0.8, 0.0};  // the same length off-axis, rounded
+      hash.add_signed(baseline_cost(a, b));
+      hash.add_signed(baseline_cost(a, c));
+      checked += 2;
+    }
+  }
+
+  // Box tests: random offsets, and offsets on and one ulp either side of the
+  // box edge, for the paper's box and odd-sized ones.
+  const std::int32_t boxes[][2] = {{64, 48}, {63, 47}, {1, 1}, {0, 0}, {640, 480}};
+  for (const auto& box : boxes) {
+    for (int i = 0; i < 4000; ++i) {
+      const double du = (static_cast<double>(rng.below(2001)) - 1000.0) / 13.0;
+      const double dv = (static_cast<double>(rng.below(2001)) - 1000.0) / 17.0;
+      hash.add(in_box(du, dv, box[0], box[1]) ? 1 : 0, 1);
+      ++checked;
+    }
+    const double hu = 0.5 * box[0], hv = 0.5 * box[1];
+    for (double su : {-1.0, 1.0}) {
+      for (double sv : {-1.0, 1.0}) {
+        for (double eu : {std::nextafter(hu, 0.0), hu, std::nextafter(hu, 1e9)}) {
+          for (double ev : {std::nextafter(hv, 0.0), hv, std::nextafter(hv, 1e9)}) {
+            hash.add(in_box(su * eu, sv * ev, box[0], box[1]) ? 1 : 0, 1);
+            ++checked;
+          }
+        }
+      }
+    }
+  }
+
+  // Keep-or-cull threshold: flow against theta * n(n-1)/2 at the boundary.
+  for (double theta : {0.0, 0.1, 0.3, 0.5, 0.7, 1.0, 1.0 / 3.0}) {
+    for (std::int64_t n = 2; n <= 40; ++n) {
+      const std::int64_t capacity = n * (n - 1) / 2;
+      for (std::int64_t flow = 0; flow <= capacity; ++flow) {
+        hash.add(static_cast<std::uint64_t>(decide(flow, capacity, theta)), 1);
+        ++checked;
+      }
+    }
+  }
+
+  EXPECT_GT(checked, 40000u);
+  EXPECT_EQ(hash.value(), kExpectedCostHash)
+      << "float-fed costs hash " << hex(hash.value()) << " (expected " << hex(kExpectedCostHash)
+      << "): the costs changed on this architecture or by a code change";
+}
+
+// ---------------------------------------------------------------------------
+// Whole windows through the Sparsifier.
+
+struct GeneratedWindow {
+  std::vector<Keyframe> keyframes;
+  std::vector<std::vector<Observation>> observations;  // per keyframe
+  Params params;
+};
+
+// A camera moving through a scene: points are tracked over a few consecutive
+// keyframes (sometimes with a gap), keypoints cluster in image regions so
+// that box counts vary, and some coordinates sit on a coarse grid so that box
+// edges are hit exactly.
+GeneratedWindow generate_window(SplitMix64& rng, std::uint32_t index) {
+  GeneratedWindow w;
+  const std::uint32_t k = 2 + rng.below(11);  // 2..12 keyframes
+  const std::uint32_t points = 10 + rng.below(240);
+  const std::int64_t pair_capacities[] = {1, 2, 3, 5, 8, 20, 100};
+  const double thetas[] = {0.5, 0.5, 0.25, 0.75, 1.0 / 3.0};
+  w.params.pair_capacity = pair_capacities[rng.below(7)];
+  w.params.theta = thetas[rng.below(5)];
+  if (index % 4 == 3) {
+    w.params.box_width = 16 + 2 * static_cast<std::int32_t>(rng.below(40));
+    w.params.box_height = 12 + static_cast<std::int32_t>(rng.below(60));
+  }
+
+  double position[3] = {0.0, 0.0, 1.5};
+  w.keyframes.resize(k);
+  w.observations.resize(k);
+  for (std::uint32_t f = 0; f < k; ++f) {
+    Keyframe& kf = w.keyframes[f];
+    kf.id = 1000u * index + 7u * f + rng.below(7);
+    if (index % 3 == 1) {
+      // Steps of a length where ceil(10 / (0.1 d + 1)) is an exact integer,
+      // in a random direction: the computed distance lands within an ulp or
+      // so of it, so any change in how it is rounded (a fused multiply-add,
+      // excess precision) moves c_b and the total cost.
+      const double critical[] = {2.5, 10.0, 15.0, 40.0};
+      const double d = critical[rng.below(4)];
+      double dir[3] = {rng.fraction(30) - 0.5, rng.fraction(30) - 0.5, rng.fraction(30) - 0.5};
+      const double norm = std::sqrt(dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2]);
+      for (int c = 0; c < 3; ++c) position[c] += norm > 0.0 ? d * dir[c] / norm : 0.0;
+    } else {
+      // Steps from standing still to 12 m; some windows revisit a centre.
+      const double step = (index % 5 == 0 && f % 3 == 2) ? 0.0 : 12.0 * rng.fraction(16);
+      position[0] += step;
+      position[1] += (rng.fraction(12) - 0.5) * step;
+      position[2] += (rng.fraction(10) - 0.5) * 0.2;
+    }
+    for (int c = 0; c < 3; ++c) kf.centre[c] = position[c];
+  }
+
+  const std::uint32_t clusters = 1 + rng.below(6);
+  for (std::uint32_t p = 0; p < points; ++p) {
+    const PointId id = 5000u * index + 3u * p + rng.below(3);
+    const std::uint32_t first = rng.below(k);
+    const std::uint32_t length = 1 + rng.below(k - first < 7 ? k - first : 7);
+    const std::uint32_t gap = rng.below(5) == 0 ? first + rng.below(length) : k;  // one missed keyframe
+    const std::uint32_t cluster = rng.below(clusters);
+    const bool on_grid = rng.below(4) == 0;
+    for (std::uint32_t f = first; f < first + length; ++f) {
+      if (f == gap && length > 2) continue;
+      Observation o;
+      o.point = id;
+      if (on_grid) {
+        o.u = 16.0 * rng.below(40);
+        o.v = 12.0 * rng.below(40);
+      } else {
+        o.u = 80.0 + 100.0 * cluster + 120.0 * rng.fraction(24) - 9.5 * (f - first);
+        o.v = 60.0 + 70.0 * cluster + 90.0 * rng.fraction(24);
+      }
+      w.observations[f].push_back(o);
+    }
+  }
+  // The tracker's order, not sorted by id.
+  for (auto& list : w.observations) {
+    for (std::size_t i = list.size(); i > 1; --i) {
+      std::swap(list[i - 1], list[rng.below(static_cast<std::uint32_t>(i))]);
+    }
+  }
+  return w;
+}
+
+TEST(CrossArchitecture, SparsifierDecisionsMatchRecordedHash) {
+  constexpr std::uint32_t kWindows = 40;
+  Capacities capacities;
+  capacities.max_keyframes = 16;
+  capacities.max_points = 1024;
+  capacities.max_observations = 4096;
+  capacities.max_pair_arcs = 32768;
+
+  SplitMix64 rng(0x2024'0511'0000'0005ULL);
+  Fnv1a64 hash;
+  Window window(capacities);
+  std::uint64_t kept = 0, culled = 0, skipped = 0;
+  // Text copy of the decisions for diffing two architectures by hand.
+  const char* dump_path = std::getenv("KEEPLESS_DECISIONS_DUMP");
+  std::FILE* dump = dump_path != nullptr ? std::fopen(dump_path, "w") : nullptr;
+
+  for (std::uint32_t index = 0; index < kWindows; ++index) {
+    const GeneratedWindow g = generate_window(rng, index);
+    window.clear();
+    for (std::size_t f = 0; f < g.keyframes.size(); ++f) {
+      ASSERT_EQ(window.add_keyframe(g.keyframes[f], g.observations[f].data(),
+                                    static_cast<std::uint32_t>(g.observations[f].size())),
+                Status::kOk)
+          << "window " << index << " keyframe " << f;
+    }
+    Sparsifier sparsifier(capacities, g.params);
+    ASSERT_EQ(sparsifier.run(window), Status::kOk) << "window " << index;
+
+    const Summary& s = sparsifier.summary();
+    ASSERT_EQ(sparsifier.decision_count(), window.distinct_points());
+    ASSERT_EQ(s.kept + s.culled + s.skipped, s.points);
+    hash.add(index, 4);
+    hash.add(sparsifier.decision_count(), 4);
+    const PointDecision* d = sparsifier.decisions();
+    for (std::uint32_t i = 0; i < sparsifier.decision_count(); ++i) {
+      hash.add(d[i].point);
+      hash.add(static_cast<std::uint64_t>(d[i].verdict), 1);
+      hash.add_signed(d[i].flow);
+      hash.add_signed(d[i].capacity);
+      if (dump != nullptr) {
+        std::fprintf(dump, "%u %llu %s %lld %lld\n", index, static_cast<unsigned long long>(d[i].point),
+                     to_string(d[i].verdict), static_cast<long long>(d[i].flow),
+                     static_cast<long long>(d[i].capacity));
+      }
+    }
+    hash.add_signed(s.max_flow);
+    hash.add_signed(s.total_cost);
+    if (dump != nullptr) {
+      std::fprintf(dump, "%u max_flow %lld cost %lld\n", index, static_cast<long long>(s.max_flow),
+                   static_cast<long long>(s.total_cost));
+    }
+    kept += s.kept;
+    culled += s.culled;
+    skipped += s.skipped;
+  }
+  if (dump != nullptr) std::fclose(dump);
+
+  // The workload exercises every verdict, so the hash covers real decisions.
+  EXPECT_GT(kept, 0u);
+  EXPECT_GT(culled, 0u);
+  EXPECT_GT(skipped, 0u);
+  EXPECT_EQ(hash.value(), kExpectedDecisionHash)
+      << "decision hash " << hex(hash.value()) << " (expected " << hex(kExpectedDecisionHash)
+      << "; kept " << kept << ", culled " << culled << ", skipped " << skipped << ")";
+}
+
+}  // namespace
+}  // namespace keepless::core

@@ -1,0 +1,254 @@
+// Runs keepless_eval --quick end to end and checks the shape and sanity of
+// what it reports. The paper's numbers are deliberately not asserted.
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <memory>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+namespace {
+
+// ---- a small JSON reader, enough for the summary line ----
+struct Json {
+  enum Kind { kNull, kBool, kNumber, kString, kArray, kObject } kind = kNull;
+  double number = 0;
+  bool boolean = false;
+  std::string str;
+  std::vector<Json> items;
+  std::map<std::string, Json> fields;
+  bool has(const std::string& k) const { return kind == kObject && fields.count(k) > 0; }
+  const Json& at(const std::string& k) const { return fields.at(k); }
+};
+
+class Parser {
+ public:
+  explicit Parser(const std::string& s) : s_(s) {}
+  bool parse(Json* out) {
+    if (!value(out)) return false;
+    ws();
+    return i_ == s_.size();
+  }
+
+ private:
+  void ws() {
+    while (i_ < s_.size() && std::isspace(static_cast<unsigned char>(s_[i_]))) ++i_;
+  }
+  bool lit(const char* w) {
+    const std::string t(w);
+    if (s_.compare(i_, t.size(), t) != 0) return false;
+    i_ += t.size();
+    return true;
+  }
+  bool string(std::string* out) {
+    if (s_[i_] != '"') return false;
+    ++i_;
+    while (i_ < s_.size() && s_[i_] != '"') {
+      if (s_[i_] == '\\') ++i_;
+      if (i_ < s_.size()) out->push_back(s_[i_++]);
+    }
+    if (i_ >= s_.size()) return false;
+    ++i_;
+    return true;
+  }
+  bool value(Json* v) {
+    ws();
+    if (i_ >= s_.size()) return false;
+    const char c = s_[i_];
+    if (c == '{') {
+      v->kind = Json::kObject;
+      ++i_;
+      ws();
+      if (s_[i_] == '}') { ++i_; return true; }
+      for (;;) {
+        ws();
+        std::string key;
+        if (!string(&key)) return false;
+        ws();
+        if (s_[i_++] != ':') return false;
+        if (!value(&v->fields[key])) return false;
+        ws();
+        if (s_[i_] == ',') { ++i_; continue; }
+        if (s_[i_] == '}') { ++i_; return true; }
+        return false;
+      }
+    }
+    if (c == '[') {
+      v->kind = Json::kArray;
+      ++i_;
+      ws();
+      if (s_[i_] == ']') { ++i_; return true; }
+      for (;;) {
+        v->items.emplace_back();
+        if (!value(&v->items.back())) return false;
+        ws();
+        if (s_[i_] == ',') { ++i_; continue; }
+        if (s_[i_] == ']') { ++i_; return true; }
+        return false;
+      }
+    }
+    if (c == '"') {
+      v->kind = Json::kString;
+      return string(&v->str);
+    }
+    if (lit("null")) { v->kind = Json::kNull; return true; }
+    if (lit("true")) { v->kind = Json::kBool; v->boolean = true; return true; }
+    if (lit("false")) { v->kind = Json::kBool; return true; }
+    char* end = nullptr;
+    v->kind = Json::kNumber;
+    v->number = std::strtod(s_.c_str() + i_, &end);
+    if (end == s_.c_str() + i_) return false;
+    i_ = static_cast<std::size_t>(end - s_.c_str());
+    return true;
+  }
+  const std::string& s_;
+  std::size_t i_ = 0;
+};
+
+struct RunOutput {
+  int status = -1;
+  std::string stdout_text;
+  std::string last_line;
+};
+
+RunOutput run(const std::string& args) {
+  RunOutput r;
+  const std::string cmd = std::string(KEEPLESS_EVAL_BIN) + " " + args + " 2>/dev/null";
+  FILE* p = popen(cmd.c_str(), "r");
+  if (!p) return r;
+  char buf[4096];
+  std::size_t n;
+  while ((n = fread(buf, 1, sizeof buf, p)) > 0) r.stdout_text.append(buf, n);
+  const int st = pclose(p);
+  r.status = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+  std::istringstream in(r.stdout_text);
+  std::string line;
+  while (std::getline(in, line))
+    if (!line.empty()) r.last_line = line;
+  return r;
+}
+
+bool available() { return std::filesystem::exists(KEEPLESS_EVAL_BIN); }
+bool data_available() { return std::filesystem::exists(std::string(KEEPLESS_EVAL_DATA) + "/SOURCES.md"); }
+std::string tum_file() { return std::string(KEEPLESS_EVAL_DATA) + "/evo/freiburg1_xyz-groundtruth.txt"; }
+
+double num(const Json& o, const std::string& k) {
+  EXPECT_TRUE(o.has(k)) << k;
+  if (!o.has(k)) return NAN;
+  EXPECT_EQ(o.at(k).kind, Json::kNumber) << k;
+  return o.at(k).number;
+}
+
+TEST(KeeplessEval, QuickRunReportsEveryInputWithSaneNumbers) {
+  if (!available()) GTEST_SKIP() << "keepless_eval not built";
+  if (!data_available()) GTEST_SKIP() << "no data at " << KEEPLESS_EVAL_DATA;
+  const std::string out = (std::filesystem::temp_directory_path() / "keepless_eval_test_quick").string();
+  std::filesystem::remove_all(out);
+  const RunOutput r = run("--quick --data-root " + std::string(KEEPLESS_EVAL_DATA) + " --out " + out);
+  ASSERT_EQ(r.status, 0);
+  Json j;
+  ASSERT_TRUE(Parser(r.last_line).parse(&j)) << r.last_line;
+  ASSERT_TRUE(j.has("inputs"));
+  EXPECT_EQ(j.at("mode").str, "quick");
+  const auto& inputs = j.at("inputs").items;
+  std::map<std::string, int> kinds;
+  for (const Json& in : inputs) {
+    ASSERT_TRUE(in.has("input"));
+    const std::string kind = in.at("kind").str;
+    ++kinds[kind];
+    SCOPED_TRACE(in.at("input").str);
+    // Sparsification keeps fewer points; it never adds any.
+    const double mp = num(in, "mp_percent");
+    EXPECT_GT(mp, 0.0);
+    EXPECT_LT(mp, 100.0);
+    EXPECT_GT(num(in, "kf_percent"), 0.0);
+    EXPECT_LE(num(in, "kf_percent"), 400.0);  // fewer redundant points can mean fewer culled keyframes
+    EXPECT_GT(num(in, "ba_time_percent"), 0.0);
+    for (const char* k : {"ate_original_m", "ate_ours_m", "ate_random_m", "ate_r_original_deg", "ate_r_ours_deg"}) {
+      const double v = num(in, k);
+      EXPECT_TRUE(std::isfinite(v) && v >= 0) << k << " = " << v;
+    }
+    ASSERT_TRUE(in.has("ate_anms_m"));
+    if (kind == "bal") {
+      EXPECT_EQ(in.at("ate_original_m").number, 0.0);  // the full solution is the reference
+      EXPECT_LT(num(in, "ate_ours_m"), num(in, "extent"));  // re-solve lands near the full one
+    } else {
+      EXPECT_GT(num(in, "mps_original"), num(in, "mps_ours"));
+      const double anms = num(in, "ate_anms_m");
+      EXPECT_TRUE(std::isfinite(anms) && anms >= 0);
+      // Equal-count baselines keep a comparable number of points.
+      EXPECT_NEAR(num(in, "mp_percent_random"), mp, 30.0);
+      EXPECT_NEAR(num(in, "mp_percent_anms"), mp, 30.0);
+    }
+    if (kind == "trajectory") {
+      EXPECT_LT(num(in, "ate_original_m"), 0.5);  // a stereo back end on a desk-sized scene
+      EXPECT_EQ(in.at("ablation").items.size(), 3u);
+    }
+  }
+  EXPECT_EQ(kinds["trajectory"], 1);
+  EXPECT_EQ(kinds["images"], 1);
+  EXPECT_EQ(kinds["bal"], 1);
+  // Files: tables, CSV of every run, plots.
+  for (const char* f : {"tables.md", "runs.csv", "ate_vs_kept.svg", "time_vs_M.svg", "keypoints_ours_vs_anms.svg"})
+    EXPECT_TRUE(std::filesystem::exists(out + "/" + f)) << f;
+  std::ifstream csv(out + "/runs.csv");
+  std::string header, line;
+  std::getline(csv, header);
+  EXPECT_EQ(header.rfind("input,name,group,kind,variant,", 0), 0u);
+  std::map<std::string, int> variants;
+  while (std::getline(csv, line)) {
+    std::stringstream ss(line);
+    std::string field;
+    for (int i = 0; i < 5 && std::getline(ss, field, ','); ++i) {}
+    ++variants[field];
+  }
+  for (const char* v : {"original", "ours", "anms", "random", "c_c", "c_c+c_s", "c_c+c_b", "full"})
+    EXPECT_GE(variants[v], 1) << v;
+  std::ifstream tables(out + "/tables.md");
+  const std::string t((std::istreambuf_iterator<char>(tables)), std::istreambuf_iterator<char>());
+  for (const char* h : {"Table I", "Table II", "Table III", "Table IV", "Table V", "BAL"})
+    EXPECT_NE(t.find(h), std::string::npos) << h;
+  std::filesystem::remove_all(out);
+}
+
+TEST(KeeplessEval, NoiseFreeInputGivesNearZeroErrorAndIsDeterministic) {
+  if (!available()) GTEST_SKIP() << "keepless_eval not built";
+  if (!std::filesystem::exists(tum_file())) GTEST_SKIP() << "no " << tum_file();
+  const std::string args = "--quick --noise-free --no-ablation --max-keyframes 20 --seed 7 --trajectory " + tum_file() + " --format tum";
+  const RunOutput a = run(args), b = run(args);
+  ASSERT_EQ(a.status, 0);
+  ASSERT_EQ(b.status, 0);
+  Json ja, jb;
+  ASSERT_TRUE(Parser(a.last_line).parse(&ja));
+  ASSERT_TRUE(Parser(b.last_line).parse(&jb));
+  ASSERT_EQ(ja.at("inputs").items.size(), 1u);
+  const Json& in = ja.at("inputs").items[0];
+  // Exact measurements and odometry: the back end has nothing to correct.
+  EXPECT_LT(num(in, "ate_original_m"), 1e-6);
+  EXPECT_LT(num(in, "ate_r_original_deg"), 1e-4);
+  EXPECT_LT(num(in, "ate_ours_m"), 1e-6);
+  EXPECT_LT(num(in, "mp_percent"), 100.0);
+  // Same seed, same result (timings aside).
+  const Json& in2 = jb.at("inputs").items[0];
+  for (const char* k : {"mps_original", "mps_ours", "kfs_original", "kfs_ours", "ate_original_m", "ate_ours_m",
+                        "ate_anms_m", "ate_random_m", "ate_r_ours_deg"})
+    EXPECT_EQ(num(in, k), num(in2, k)) << k;
+}
+
+TEST(KeeplessEval, RejectsBadFlagsWithStatus2) {
+  if (!available()) GTEST_SKIP() << "keepless_eval not built";
+  EXPECT_EQ(run("--no-such-flag").status, 2);
+  EXPECT_EQ(run("--M abc --bal /nonexistent").status, 2);
+  EXPECT_EQ(run("--trajectory /nonexistent/file.txt --format tum").status, 2);
+  EXPECT_EQ(run("").status, 2);  // no input
+}
+
+}  // namespace

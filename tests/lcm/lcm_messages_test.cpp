@@ -1,0 +1,145 @@
+// The keepless LCM types: encode/decode round trips, and the wire layout the
+// node's pre-decode checks rely on (count offsets, header sizes).
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+
+#include "keepless/decision_t.hpp"
+#include "keepless/decision_timing_t.hpp"
+#include "keepless/platform/message_validation.hpp"
+#include "keepless/status_t.hpp"
+#include "message_builders.hpp"
+
+namespace kt = keepless::testing;
+namespace wire = keepless::platform::wire;
+
+namespace {
+
+std::int32_t be32_at(const std::vector<std::uint8_t>& b, std::size_t off) {
+  return static_cast<std::int32_t>((std::uint32_t{b[off]} << 24) | (std::uint32_t{b[off + 1]} << 16) |
+                                   (std::uint32_t{b[off + 2]} << 8) | std::uint32_t{b[off + 3]});
+}
+
+TEST(LcmMessages, KeyframeRoundTrip) {
+  keepless::keyframe_t m = kt::make_keyframe(7, 42, {5, -3, 9000000000LL});
+  m.centre[1] = -2.25;
+  m.orientation[0] = std::sqrt(0.5);
+  m.orientation[3] = std::sqrt(0.5);
+  m.u[1] = 12.5f;
+  const auto bytes = kt::encode(m);
+  ASSERT_EQ(bytes.size(), wire::kKeyframeHeaderBytes + 3 * wire::kKeyframeBytesPerObservation);
+
+  keepless::keyframe_t d{};
+  ASSERT_EQ(d.decode(bytes.data(), 0, static_cast<int>(bytes.size())), static_cast<int>(bytes.size()));
+  EXPECT_EQ(d.sequence, 7);
+  EXPECT_EQ(d.utime, m.utime);
+  EXPECT_EQ(d.keyframe_id, 42);
+  EXPECT_EQ(d.centre[1], -2.25);
+  EXPECT_EQ(d.orientation[3], m.orientation[3]);
+  EXPECT_EQ(d.image_width, 640);
+  EXPECT_EQ(d.point_id, m.point_id);
+  EXPECT_EQ(d.u, m.u);
+  EXPECT_EQ(d.v, m.v);
+  // Re-encoding the decoded message gives the same bytes.
+  EXPECT_EQ(kt::encode(d), bytes);
+}
+
+TEST(LcmMessages, KeyframeCountAtFixedOffset) {
+  for (int n : {0, 1, 17, 2000}) {
+    std::vector<std::int64_t> ids;
+    for (int i = 0; i < n; ++i) ids.push_back(i);
+    const auto bytes = kt::encode(kt::make_keyframe(1, 1, ids));
+    ASSERT_EQ(bytes.size(), wire::kKeyframeHeaderBytes + wire::kKeyframeBytesPerObservation * n);
+    EXPECT_EQ(be32_at(bytes, wire::kKeyframeCountOffset), n);
+  }
+}
+
+TEST(LcmMessages, KeyframeAtDefaultCapacityFitsOneDatagram) {
+  const auto bytes = kt::encode(kt::make_keyframe(1, 1, kt::id_range(0, 2000)));
+  EXPECT_LT(bytes.size(), 65000u);
+}
+
+TEST(LcmMessages, MapEventRoundTripAndOffsets) {
+  keepless::map_event_t e = kt::make_event(3);
+  e.reset = true;
+  e.deleted_point_id = {1, 2};
+  e.merged_from_id = {10, 11, 12};
+  e.merged_into_id = {20, 21, 22};
+  e.removed_keyframe_id = {99};
+  kt::finalize(e);
+  const auto bytes = kt::encode(e);
+  ASSERT_EQ(bytes.size(), wire::kMapEventHeaderBytes + 8 * (2 + 2 * 3 + 1));
+  EXPECT_EQ(be32_at(bytes, wire::kMapEventCountOffset), 2);
+  EXPECT_EQ(be32_at(bytes, wire::kMapEventCountOffset + 4), 3);
+  EXPECT_EQ(be32_at(bytes, wire::kMapEventCountOffset + 8), 1);
+
+  keepless::map_event_t d{};
+  ASSERT_EQ(d.decode(bytes.data(), 0, static_cast<int>(bytes.size())), static_cast<int>(bytes.size()));
+  EXPECT_TRUE(d.reset);
+  EXPECT_EQ(d.deleted_point_id, e.deleted_point_id);
+  EXPECT_EQ(d.merged_from_id, e.merged_from_id);
+  EXPECT_EQ(d.merged_into_id, e.merged_into_id);
+  EXPECT_EQ(d.removed_keyframe_id, e.removed_keyframe_id);
+}
+
+TEST(LcmMessages, DecisionRoundTrip) {
+  keepless::decision_t m{};
+  m.sequence = 11;
+  m.keyframe_id = 5;
+  m.utime = 123;
+  m.status = keepless::decision_t::STATUS_BUDGET_EXHAUSTED;
+  m.reject_reason = -1;
+  m.points = 10;
+  m.evaluated = 8;
+  m.kept = 6;
+  m.culled = 2;
+  m.skipped = 2;
+  m.pairs = 3;
+  m.max_flow = 17;
+  m.total_cost = 99;
+  m.window_keyframe_id = {3, 4, 5};
+  m.num_window_keyframes = 3;
+  m.culled_point_id = {-1, 7};  // -1: the bit pattern of 2^64 - 1
+  m.num_culled = 2;
+  const auto bytes = kt::encode(m);
+  keepless::decision_t d{};
+  ASSERT_GT(d.decode(bytes.data(), 0, static_cast<int>(bytes.size())), 0);
+  EXPECT_EQ(d.status, keepless::decision_t::STATUS_BUDGET_EXHAUSTED);
+  EXPECT_EQ(d.window_keyframe_id, m.window_keyframe_id);
+  EXPECT_EQ(d.culled_point_id, m.culled_point_id);
+  EXPECT_EQ(static_cast<std::uint64_t>(d.culled_point_id[0]), ~std::uint64_t{0});
+  EXPECT_EQ(d.total_cost, 99);
+  EXPECT_EQ(kt::encode(d), bytes);
+}
+
+TEST(LcmMessages, StatusAndTimingRoundTrip) {
+  keepless::status_t s{};
+  s.is_final = true;
+  s.rejected[keepless::status_t::REJECT_TRUNCATED] = 4;
+  s.latency_p99_ns = 1234567;
+  s.memory_bytes = 1 << 20;
+  const auto bytes = kt::encode(s);
+  keepless::status_t d{};
+  ASSERT_GT(d.decode(bytes.data(), 0, static_cast<int>(bytes.size())), 0);
+  EXPECT_TRUE(d.is_final);
+  EXPECT_EQ(d.rejected[keepless::status_t::REJECT_TRUNCATED], 4);
+  EXPECT_EQ(d.latency_p99_ns, 1234567);
+
+  keepless::decision_timing_t t{};
+  t.sequence = 2;
+  t.sparsify_ns = 555;
+  const auto tb = kt::encode(t);
+  keepless::decision_timing_t td{};
+  ASSERT_GT(td.decode(tb.data(), 0, static_cast<int>(tb.size())), 0);
+  EXPECT_EQ(td.sparsify_ns, 555);
+}
+
+TEST(LcmMessages, DecodeRefusesOtherTypes) {
+  const auto bytes = kt::encode(kt::make_keyframe(1, 1, {1, 2}));
+  keepless::decision_t d{};
+  EXPECT_LT(d.decode(bytes.data(), 0, static_cast<int>(bytes.size())), 0);
+}
+
+}  // namespace

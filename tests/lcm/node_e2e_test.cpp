@@ -1,0 +1,212 @@
+// keepless_node and keepless_vo_sim as separate processes over udpm (a
+// test-unique port, ttl=0): every keyframe gets exactly one decision, in
+// order, equal to the core library's for the same stream; and a bus recorded
+// with lcm-logger, replayed with lcm-logplayer into a fresh node, gives the
+// same decisions byte for byte.
+
+#include <gtest/gtest.h>
+#include <lcm/lcm-cpp.hpp>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdlib>
+#include <functional>
+#include <map>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "child_process.hpp"
+#include "keepless/decision_t.hpp"
+#include "keepless/keyframe_t.hpp"
+#include "keepless/map_event_t.hpp"
+#include "keepless/platform/node_config.hpp"
+#include "reference_node.hpp"
+
+namespace kt = keepless::testing;
+
+namespace {
+
+// Distinct per test process (and per use within it), so concurrent runs of
+// the suite (release and sanitizer builds, other checkouts) do not share a bus.
+int unique_port(int offset) { return 20000 + static_cast<int>(getpid() % 10000) * 4 + offset; }
+std::string udpm(int port) { return "udpm://239.255.76.67:" + std::to_string(port) + "?ttl=0"; }
+
+struct Message {
+  std::string channel;
+  std::vector<std::uint8_t> bytes;
+};
+
+struct Recorder {
+  std::vector<Message> messages;
+  std::size_t statuses = 0;
+  void on_message(const lcm::ReceiveBuffer* rb, const std::string& channel) {
+    if (channel == "KEEPLESS_STATUS") {
+      ++statuses;
+      return;
+    }
+    const auto* p = static_cast<const std::uint8_t*>(rb->data);
+    messages.push_back({channel, std::vector<std::uint8_t>(p, p + rb->data_size)});
+  }
+  std::vector<Message> on(const std::string& channel) const {
+    std::vector<Message> out;
+    for (const Message& m : messages) {
+      if (m.channel == channel) out.push_back(m);
+    }
+    return out;
+  }
+};
+
+class TempDir {
+ public:
+  TempDir() {
+    char tmpl[] = "/tmp/keepless_e2e_XXXXXX";
+    const char* d = mkdtemp(tmpl);
+    path_ = d != nullptr ? d : "/tmp";
+  }
+  ~TempDir() {
+    if (!::testing::Test::HasFailure() && path_ != "/tmp") {
+      const std::string cmd = "rm -rf '" + path_ + "'";
+      if (std::system(cmd.c_str()) != 0) {
+      }
+    }
+  }
+  std::string file(const std::string& name) const { return path_ + "/" + name; }
+
+ private:
+  std::string path_;
+};
+
+void pump_until(lcm::LCM& bus, int timeout_ms, const std::function<bool()>& done) {
+  const auto end = std::chrono::steady_clock::now() + std::chrono::milliseconds(timeout_ms);
+  while (!done() && std::chrono::steady_clock::now() < end) bus.handleTimeout(20);
+}
+
+template <class M>
+M decode(const Message& m) {
+  M out{};
+  EXPECT_GT(out.decode(m.bytes.data(), 0, static_cast<int>(m.bytes.size())), 0) << m.channel;
+  return out;
+}
+
+constexpr int kKeyframes = 60;
+
+TEST(NodeEndToEnd, EveryKeyframeGetsOneDecisionEqualToTheLibrary) {
+  TempDir tmp;
+  const std::string url = udpm(unique_port(0));
+  lcm::LCM bus(url);
+  ASSERT_TRUE(bus.good());
+  Recorder rec;
+  bus.subscribe(".*", &Recorder::on_message, &rec);
+
+  kt::ChildProcess node({KEEPLESS_NODE_BIN, "--url", url, "--max-keyframes", std::to_string(kKeyframes),
+                         "--status-period-ms", "100"},
+                        tmp.file("node.log"));
+  ASSERT_TRUE(node.started());
+  kt::ChildProcess sim({KEEPLESS_SIM_BIN, "--url", url, "--keyframes", std::to_string(kKeyframes), "--seed", "3",
+                        "--event-every", "7", "--quiet", "--report", tmp.file("report")},
+                       tmp.file("sim.log"));
+  ASSERT_TRUE(sim.started());
+  pump_until(bus, 120000, [&] { return !sim.running(); });
+  pump_until(bus, 300, [] { return false; });  // stragglers
+  ASSERT_TRUE(sim.wait(1000)) << "simulator did not finish\n" << sim.log();
+  ASSERT_TRUE(node.wait(10000)) << "node did not stop after --max-keyframes\n" << node.log();
+  EXPECT_EQ(sim.exit_code(), 0) << sim.log();
+  EXPECT_EQ(node.exit_code(), 0) << node.log();
+
+  const std::vector<Message> keyframes = rec.on("KEEPLESS_KEYFRAME");
+  const std::vector<Message> decisions = rec.on("KEEPLESS_DECISION");
+  ASSERT_EQ(keyframes.size(), static_cast<std::size_t>(kKeyframes));
+  ASSERT_EQ(decisions.size(), keyframes.size()) << "one decision per keyframe";
+  EXPECT_FALSE(rec.on("KEEPLESS_MAP_EVENT").empty()) << "the stream should include map events";
+
+  // In order, one each, equal to the core library fed the same stream.
+  keepless::platform::NodeConfig defaults;
+  kt::ReferenceNode ref(keepless::platform::window_capacities(defaults), defaults.params, defaults.window);
+  std::size_t next_decision = 0;
+  std::int64_t culled = 0;
+  for (const Message& m : rec.messages) {
+    if (m.channel == "KEEPLESS_MAP_EVENT") {
+      ref.apply(decode<keepless::map_event_t>(m));
+    } else if (m.channel == "KEEPLESS_KEYFRAME") {
+      const auto kf = decode<keepless::keyframe_t>(m);
+      const kt::ReferenceDecision expected = ref.step(kf);
+      ASSERT_LT(next_decision, decisions.size());
+      const auto d = decode<keepless::decision_t>(decisions[next_decision++]);
+      ASSERT_EQ(d.sequence, kf.sequence) << "decisions out of order";
+      ASSERT_EQ(d.keyframe_id, kf.keyframe_id);
+      kt::expect_same(expected, d, ("keyframe " + std::to_string(kf.keyframe_id)).c_str());
+      culled += d.num_culled;
+    }
+  }
+  EXPECT_GT(culled, 0);
+}
+
+TEST(NodeEndToEnd, RecordedBusReplaysToIdenticalDecisions) {
+  if (std::string(LCM_LOGGER_BIN).empty() || std::string(LCM_LOGPLAYER_BIN).empty()) {
+    GTEST_SKIP() << "lcm-logger / lcm-logplayer not installed (liblcm-bin)";
+  }
+  TempDir tmp;
+  const std::string url = udpm(unique_port(1));
+  const std::string replay_url = udpm(unique_port(2));
+  const int n = 40;
+
+  // 1. Record a closed-loop run.
+  std::vector<Message> recorded;
+  {
+    kt::ChildProcess logger({LCM_LOGGER_BIN, "-q", "-f", "--lcm-url=" + url, tmp.file("bus.lcmlog")},
+                            tmp.file("logger.log"));
+    ASSERT_TRUE(logger.started());
+    std::this_thread::sleep_for(std::chrono::milliseconds(500));  // subscribed before anything is sent
+    kt::ChildProcess node({KEEPLESS_NODE_BIN, "--url", url, "--max-keyframes", std::to_string(n),
+                           "--status-period-ms", "100"},
+                          tmp.file("node.log"));
+    kt::ChildProcess sim({KEEPLESS_SIM_BIN, "--url", url, "--keyframes", std::to_string(n), "--scene", "room",
+                          "--event-every", "5", "--quiet"},
+                         tmp.file("sim.log"));
+    ASSERT_TRUE(sim.wait(120000)) << sim.log();
+    ASSERT_EQ(sim.exit_code(), 0) << sim.log();
+    ASSERT_TRUE(node.wait(10000)) << node.log();
+    std::this_thread::sleep_for(std::chrono::milliseconds(300));
+    logger.stop();
+    lcm::LogFile log(tmp.file("bus.lcmlog"), "r");
+    ASSERT_TRUE(log.good());
+    for (const lcm::LogEvent* e = log.readNextEvent(); e != nullptr; e = log.readNextEvent()) {
+      const auto* p = static_cast<const std::uint8_t*>(e->data);
+      recorded.push_back({e->channel, std::vector<std::uint8_t>(p, p + e->datalen)});
+    }
+  }
+  std::vector<Message> recorded_decisions;
+  std::size_t recorded_keyframes = 0;
+  for (const Message& m : recorded) {
+    if (m.channel == "KEEPLESS_DECISION") recorded_decisions.push_back(m);
+    if (m.channel == "KEEPLESS_KEYFRAME") ++recorded_keyframes;
+  }
+  ASSERT_EQ(recorded_keyframes, static_cast<std::size_t>(n)) << "the log holds every keyframe";
+  ASSERT_EQ(recorded_decisions.size(), static_cast<std::size_t>(n)) << "the log holds every decision";
+
+  // 2. Replay the VO's channels into a fresh node on another bus.
+  lcm::LCM bus(replay_url);
+  ASSERT_TRUE(bus.good());
+  Recorder replayed;
+  bus.subscribe("KEEPLESS_(DECISION|STATUS)", &Recorder::on_message, &replayed);
+  kt::ChildProcess node({KEEPLESS_NODE_BIN, "--url", replay_url, "--max-keyframes", std::to_string(n),
+                         "--status-period-ms", "100"},
+                        tmp.file("replay_node.log"));
+  pump_until(bus, 10000, [&] { return replayed.statuses > 0; });
+  ASSERT_GT(replayed.statuses, 0u) << "fresh node not up\n" << node.log();
+  kt::ChildProcess player({LCM_LOGPLAYER_BIN, "--lcm-url=" + replay_url, "--regexp=^KEEPLESS_(KEYFRAME|MAP_EVENT)$",
+                           tmp.file("bus.lcmlog")},
+                          tmp.file("player.log"));
+  pump_until(bus, 120000, [&] { return replayed.on("KEEPLESS_DECISION").size() >= static_cast<std::size_t>(n); });
+  player.stop();
+  ASSERT_TRUE(node.wait(10000)) << node.log();
+
+  const std::vector<Message> decisions = replayed.on("KEEPLESS_DECISION");
+  ASSERT_EQ(decisions.size(), recorded_decisions.size()) << node.log();
+  for (std::size_t i = 0; i < decisions.size(); ++i) {
+    EXPECT_EQ(decisions[i].bytes, recorded_decisions[i].bytes) << "decision " << i << " differs";
+  }
+}
+
+}  // namespace

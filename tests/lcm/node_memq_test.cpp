@@ -1,0 +1,437 @@
+// keepless_node's loop on memq://: every class of bad message is refused
+// before it touches the window, counted under its reason, and nothing valid
+// around it is lost; valid streams slide the window and get one decision each,
+// equal to the core library's.
+
+#include <gtest/gtest.h>
+#include <lcm/lcm-cpp.hpp>
+
+#include <cmath>
+#include <limits>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "keepless/decision_t.hpp"
+#include "keepless/platform/node.hpp"
+#include "keepless/status_t.hpp"
+#include "message_builders.hpp"
+#include "reference_node.hpp"
+
+namespace kt = keepless::testing;
+using keepless::platform::Node;
+using keepless::platform::NodeConfig;
+using keepless::platform::RejectReason;
+
+namespace {
+
+struct WindowSnapshot {
+  struct Obs {
+    std::uint64_t point;
+    double u, v;
+    bool operator==(const Obs& o) const { return point == o.point && u == o.u && v == o.v; }
+  };
+  std::vector<std::uint64_t> ids;
+  std::vector<std::vector<Obs>> obs;
+  bool operator==(const WindowSnapshot& o) const { return ids == o.ids && obs == o.obs; }
+};
+
+WindowSnapshot snapshot(const keepless::core::Window& w) {
+  WindowSnapshot s;
+  for (std::uint32_t i = 0; i < w.keyframe_count(); ++i) {
+    s.ids.push_back(w.keyframe(i).id);
+    std::vector<WindowSnapshot::Obs> o;
+    for (std::uint32_t j = 0; j < w.observation_count(i); ++j) {
+      o.push_back({w.observations(i)[j].point, w.observations(i)[j].u, w.observations(i)[j].v});
+    }
+    s.obs.push_back(o);
+  }
+  return s;
+}
+
+class NodeOnMemq : public ::testing::Test {
+ protected:
+  void SetUp() override { make_node(default_config()); }
+
+  static NodeConfig default_config() {
+    NodeConfig c;
+    c.url = "memq://";
+    c.window = 4;
+    c.max_observations = 64;
+    c.max_event_ids = 16;
+    c.params.pair_capacity = 5;  // small M so windows cull something
+    c.status_period_ms = 3600 * 1000;
+    c.quiet = true;
+    return c;
+  }
+
+  void make_node(const NodeConfig& c) {
+    config_ = c;
+    node_.reset();
+    bus_ = std::make_unique<lcm::LCM>("memq://");
+    ASSERT_TRUE(bus_->good());
+    node_ = std::make_unique<Node>(*bus_, config_);
+    ASSERT_TRUE(node_->start());
+    decisions_.clear();
+    statuses_.clear();
+    bus_->subscribe(config_.decision_channel, &NodeOnMemq::on_decision, this);
+    bus_->subscribe(config_.status_channel, &NodeOnMemq::on_status, this);
+  }
+
+  void on_decision(const lcm::ReceiveBuffer*, const std::string&, const keepless::decision_t* d) {
+    decisions_.push_back(*d);
+  }
+  void on_status(const lcm::ReceiveBuffer*, const std::string&, const keepless::status_t* s) {
+    statuses_.push_back(*s);
+  }
+
+  void pump() {
+    for (int i = 0; i < 1000 && bus_->handleTimeout(0) > 0; ++i) {
+    }
+  }
+  void send_bytes(const std::string& channel, const std::vector<std::uint8_t>& bytes) {
+    bus_->publish(channel, bytes.data(), static_cast<unsigned>(bytes.size()));
+    pump();
+  }
+  void send(const keepless::keyframe_t& m) { send_bytes(config_.keyframe_channel, kt::encode(m)); }
+  void send(keepless::map_event_t e) {
+    kt::finalize(e);
+    send_bytes(config_.event_channel, kt::encode(e));
+  }
+
+  // Three overlapping keyframes, sequences 1..3, ids 10..12.
+  void fill() {
+    send(kt::make_keyframe(1, 10, kt::id_range(0, 30)));
+    send(kt::make_keyframe(2, 11, kt::id_range(10, 30)));
+    send(kt::make_keyframe(3, 12, kt::id_range(20, 30)));
+    ASSERT_EQ(node_->window().keyframe_count(), 3u);
+    ASSERT_EQ(decisions_.size(), 3u);
+    ASSERT_EQ(node_->counters().messages_rejected, 0u);
+  }
+
+  std::uint64_t rejected(RejectReason r) const { return node_->counters().rejected[static_cast<int>(r)]; }
+
+  // The bad message was counted under `r` alone and the window is as before;
+  // the next valid keyframe is still accepted.
+  void expect_rejected_only(RejectReason r, const WindowSnapshot& before) {
+    EXPECT_EQ(rejected(r), 1u) << to_string(r);
+    EXPECT_EQ(node_->counters().messages_rejected, 1u);
+    EXPECT_TRUE(snapshot(node_->window()) == before) << "window changed";
+    const std::size_t decisions_before = decisions_.size();
+    send(kt::make_keyframe(100, 50, kt::id_range(25, 30)));
+    ASSERT_EQ(decisions_.size(), decisions_before + 1);
+    EXPECT_EQ(decisions_.back().status, keepless::decision_t::STATUS_OPTIMAL);
+    EXPECT_EQ(decisions_.back().keyframe_id, 50);
+    EXPECT_EQ(node_->window().find_keyframe(50), 3);
+  }
+
+  NodeConfig config_;
+  std::unique_ptr<lcm::LCM> bus_;
+  std::unique_ptr<Node> node_;
+  std::vector<keepless::decision_t> decisions_;
+  std::vector<keepless::status_t> statuses_;
+};
+
+// --- one test per rejection reason ---------------------------------------
+
+TEST_F(NodeOnMemq, RejectsOversizeCountBeforeDecoding) {
+  fill();
+  const WindowSnapshot before = snapshot(node_->window());
+  send(kt::make_keyframe(4, 13, kt::id_range(0, 65)));  // limit 64
+  EXPECT_EQ(decisions_.size(), 3u) << "a message refused unread gets no decision";
+  expect_rejected_only(RejectReason::kOversizeCount, before);
+}
+
+TEST_F(NodeOnMemq, RejectsOversizeMapEvent) {
+  fill();
+  const WindowSnapshot before = snapshot(node_->window());
+  keepless::map_event_t e = kt::make_event(4);
+  e.deleted_point_id = kt::id_range(0, 17);  // limit 16
+  send(e);
+  expect_rejected_only(RejectReason::kOversizeCount, before);
+}
+
+TEST_F(NodeOnMemq, RejectsNanPose) {
+  fill();
+  const WindowSnapshot before = snapshot(node_->window());
+  keepless::keyframe_t m = kt::make_keyframe(4, 13, kt::id_range(0, 10));
+  m.centre[2] = std::numeric_limits<double>::quiet_NaN();
+  send(m);
+  ASSERT_EQ(decisions_.size(), 4u);
+  EXPECT_EQ(decisions_.back().status, keepless::decision_t::STATUS_REJECTED_INPUT);
+  EXPECT_EQ(decisions_.back().reject_reason, keepless::status_t::REJECT_NON_FINITE);
+  EXPECT_EQ(decisions_.back().num_culled, 0);
+  expect_rejected_only(RejectReason::kNonFinite, before);
+}
+
+TEST_F(NodeOnMemq, RejectsInfiniteKeypoint) {
+  fill();
+  const WindowSnapshot before = snapshot(node_->window());
+  keepless::keyframe_t m = kt::make_keyframe(4, 13, kt::id_range(0, 10));
+  m.v[7] = std::numeric_limits<float>::infinity();
+  send(m);
+  expect_rejected_only(RejectReason::kNonFinite, before);
+}
+
+TEST_F(NodeOnMemq, RejectsUnknownKeyframe) {
+  fill();
+  const WindowSnapshot before = snapshot(node_->window());
+  keepless::map_event_t e = kt::make_event(4);
+  e.removed_keyframe_id = {11, 999};  // 11 is known, 999 is not: nothing is removed
+  send(e);
+  expect_rejected_only(RejectReason::kUnknownKeyframe, before);
+}
+
+TEST_F(NodeOnMemq, RejectsDuplicateObservation) {
+  fill();
+  const WindowSnapshot before = snapshot(node_->window());
+  send(kt::make_keyframe(4, 13, {1, 2, 3, 2}));
+  ASSERT_EQ(decisions_.size(), 4u);
+  EXPECT_EQ(decisions_.back().reject_reason, keepless::status_t::REJECT_DUPLICATE_OBSERVATION);
+  expect_rejected_only(RejectReason::kDuplicateObservation, before);
+}
+
+TEST_F(NodeOnMemq, RejectsDuplicateKeyframe) {
+  fill();
+  const WindowSnapshot before = snapshot(node_->window());
+  send(kt::make_keyframe(4, 11, kt::id_range(0, 5)));
+  expect_rejected_only(RejectReason::kDuplicateKeyframe, before);
+}
+
+TEST_F(NodeOnMemq, RejectsOutOfOrderSequence) {
+  fill();
+  const WindowSnapshot before = snapshot(node_->window());
+  send(kt::make_keyframe(3, 13, kt::id_range(0, 5)));  // 3 was already accepted
+  expect_rejected_only(RejectReason::kOutOfOrder, before);
+}
+
+TEST_F(NodeOnMemq, RejectsOutOfOrderMapEvent) {
+  fill();
+  const WindowSnapshot before = snapshot(node_->window());
+  keepless::map_event_t e = kt::make_event(2);
+  e.deleted_point_id = {0};
+  send(e);
+  expect_rejected_only(RejectReason::kOutOfOrder, before);
+}
+
+TEST_F(NodeOnMemq, RejectsUtimeGoingBackwards) {
+  fill();
+  const WindowSnapshot before = snapshot(node_->window());
+  keepless::keyframe_t m = kt::make_keyframe(4, 13, kt::id_range(0, 5));
+  m.utime = 1;
+  send(m);
+  expect_rejected_only(RejectReason::kUtimeBackwards, before);
+}
+
+TEST_F(NodeOnMemq, RejectsWrongFingerprint) {
+  fill();
+  const WindowSnapshot before = snapshot(node_->window());
+  std::vector<std::uint8_t> bytes = kt::encode(kt::make_keyframe(4, 13, kt::id_range(0, 5)));
+  bytes[3] ^= 0x40;
+  send_bytes(config_.keyframe_channel, bytes);
+  expect_rejected_only(RejectReason::kFingerprint, before);
+}
+
+TEST_F(NodeOnMemq, RejectsAnotherTypeOnTheKeyframeChannel) {
+  fill();
+  const WindowSnapshot before = snapshot(node_->window());
+  keepless::decision_t d{};
+  send_bytes(config_.keyframe_channel, kt::encode(d));
+  expect_rejected_only(RejectReason::kFingerprint, before);
+}
+
+TEST_F(NodeOnMemq, RejectsTruncatedBytes) {
+  fill();
+  const WindowSnapshot before = snapshot(node_->window());
+  std::vector<std::uint8_t> bytes = kt::encode(kt::make_keyframe(4, 13, kt::id_range(0, 5)));
+  bytes.resize(bytes.size() - 5);
+  send_bytes(config_.keyframe_channel, bytes);
+  expect_rejected_only(RejectReason::kTruncated, before);
+}
+
+TEST_F(NodeOnMemq, RejectsTrailingBytesAndStubs) {
+  fill();
+  const WindowSnapshot before = snapshot(node_->window());
+  std::vector<std::uint8_t> bytes = kt::encode(kt::make_keyframe(4, 13, kt::id_range(0, 5)));
+  bytes.push_back(0);
+  send_bytes(config_.keyframe_channel, bytes);
+  send_bytes(config_.keyframe_channel, std::vector<std::uint8_t>(bytes.begin(), bytes.begin() + 5));
+  keepless::map_event_t e = kt::make_event(4);
+  e.deleted_point_id = {1, 2};
+  kt::finalize(e);
+  std::vector<std::uint8_t> eb = kt::encode(e);
+  eb.pop_back();
+  send_bytes(config_.event_channel, eb);
+  EXPECT_EQ(rejected(RejectReason::kTruncated), 3u);
+  EXPECT_EQ(node_->counters().messages_rejected, 3u);
+  EXPECT_TRUE(snapshot(node_->window()) == before);
+}
+
+TEST_F(NodeOnMemq, RejectsNegativeCountAndBadFields) {
+  fill();
+  const WindowSnapshot before = snapshot(node_->window());
+  std::vector<std::uint8_t> bytes = kt::encode(kt::make_keyframe(4, 13, {}));
+  bytes[keepless::platform::wire::kKeyframeCountOffset] = 0xff;  // count = negative
+  send_bytes(config_.keyframe_channel, bytes);
+  keepless::keyframe_t m = kt::make_keyframe(4, 13, kt::id_range(0, 5));
+  m.image_width = 0;
+  send(m);
+  m = kt::make_keyframe(4, 13, kt::id_range(0, 5));
+  m.orientation[0] = 2;  // not a unit quaternion
+  send(m);
+  keepless::map_event_t e = kt::make_event(4);
+  e.merged_from_id = {1, 2};
+  e.merged_into_id = {2, 3};  // a chain
+  send(e);
+  EXPECT_EQ(rejected(RejectReason::kInvalidField), 4u);
+  EXPECT_EQ(node_->counters().messages_rejected, 4u);
+  EXPECT_TRUE(snapshot(node_->window()) == before);
+}
+
+TEST_F(NodeOnMemq, StatusCountsRejectsByReason) {
+  fill();
+  send(kt::make_keyframe(3, 13, kt::id_range(0, 5)));  // out of order
+  std::vector<std::uint8_t> bytes = kt::encode(kt::make_keyframe(4, 13, kt::id_range(0, 5)));
+  bytes.resize(20);
+  send_bytes(config_.keyframe_channel, bytes);  // truncated
+  node_->publish_status(true);
+  pump();
+  ASSERT_EQ(statuses_.size(), 1u);
+  const keepless::status_t& s = statuses_.back();
+  EXPECT_TRUE(s.is_final);
+  EXPECT_EQ(s.keyframes_received, 5);
+  EXPECT_EQ(s.messages_rejected, 2);
+  EXPECT_EQ(s.rejected[keepless::status_t::REJECT_OUT_OF_ORDER], 1);
+  EXPECT_EQ(s.rejected[keepless::status_t::REJECT_TRUNCATED], 1);
+  EXPECT_EQ(s.decisions_published, 4);  // 3 + the answered out-of-order one
+  EXPECT_EQ(s.window_keyframes, 3);
+  EXPECT_EQ(s.last_sequence, 3);
+  EXPECT_EQ(s.capacity_keyframes, 4);
+  EXPECT_GT(s.memory_bytes, 0);
+  EXPECT_GT(s.latency_max_ns, 0);
+}
+
+// --- valid streams --------------------------------------------------------
+
+TEST_F(NodeOnMemq, SlidesAndMatchesTheLibrary) {
+  kt::ReferenceNode ref(keepless::platform::window_capacities(config_), config_.params, config_.window);
+  std::vector<kt::ReferenceDecision> expected;
+  for (int i = 0; i < 10; ++i) {
+    const keepless::keyframe_t m = kt::make_keyframe(i + 1, 100 + i, kt::id_range(i * 8, 40));
+    expected.push_back(ref.step(m));
+    send(m);
+  }
+  ASSERT_EQ(decisions_.size(), 10u);
+  int culled = 0;
+  for (int i = 0; i < 10; ++i) {
+    EXPECT_EQ(decisions_[i].sequence, i + 1);
+    EXPECT_EQ(decisions_[i].keyframe_id, 100 + i);
+    kt::expect_same(expected[i], decisions_[i], ("keyframe " + std::to_string(i)).c_str());
+    culled += decisions_[i].num_culled;
+  }
+  EXPECT_GT(culled, 0) << "the stream should exercise culling";
+  EXPECT_EQ(node_->window().keyframe_count(), 4u);
+  EXPECT_EQ(node_->window().keyframe(0).id, 106u);
+}
+
+TEST_F(NodeOnMemq, CulledPointsLeaveTheWindow) {
+  for (int i = 0; i < 6; ++i) send(kt::make_keyframe(i + 1, i, kt::id_range(0, 40)));
+  std::vector<std::int64_t> all_culled;
+  for (const auto& d : decisions_) {
+    all_culled.insert(all_culled.end(), d.culled_point_id.begin(), d.culled_point_id.end());
+  }
+  ASSERT_FALSE(all_culled.empty());
+  const keepless::core::Window& w = node_->window();
+  for (std::uint32_t k = 0; k < w.keyframe_count(); ++k) {
+    for (std::uint32_t j = 0; j < w.observation_count(k); ++j) {
+      const auto p = static_cast<std::int64_t>(w.observations(k)[j].point);
+      EXPECT_EQ(std::count(all_culled.begin(), all_culled.end(), p), 0) << "culled point " << p << " still observed";
+    }
+  }
+  EXPECT_EQ(static_cast<std::int64_t>(node_->counters().points_culled), static_cast<std::int64_t>(all_culled.size()));
+}
+
+TEST_F(NodeOnMemq, MapEventDeletesMergesAndRemoves) {
+  NodeConfig c = default_config();
+  c.params.pair_capacity = 100;  // nothing culled: the edits alone shape the window
+  make_node(c);
+  fill();  // 10: 0..29, 11: 10..39, 12: 20..49
+  keepless::map_event_t e = kt::make_event(4);
+  e.deleted_point_id = {0, 1, 12345};  // 12345 is not in the window: ignored
+  e.merged_from_id = {21, 45};
+  e.merged_into_id = {20, 500};  // 21 -> 20 collides in keyframes that saw both
+  e.removed_keyframe_id = {11};
+  send(e);
+  ASSERT_EQ(node_->counters().messages_rejected, 0u);
+  const keepless::core::Window& w = node_->window();
+  ASSERT_EQ(w.keyframe_count(), 2u);
+  EXPECT_EQ(w.keyframe(0).id, 10u);
+  EXPECT_EQ(w.keyframe(1).id, 12u);
+  EXPECT_EQ(w.observation_count(0), 27u);  // 30 - {0, 1} - merged duplicate 21
+  EXPECT_EQ(w.observation_count(1), 29u);  // 30 - merged duplicate 21; 45 renamed
+  for (std::uint32_t k = 0; k < 2; ++k) {
+    for (std::uint32_t j = 0; j < w.observation_count(k); ++j) {
+      const auto p = w.observations(k)[j].point;
+      EXPECT_NE(p, 0u);
+      EXPECT_NE(p, 21u);
+      EXPECT_NE(p, 45u);
+    }
+  }
+  EXPECT_EQ(w.observations(1)[24].point, 500u);  // 45 was 26th in keyframe 12, 21 (2nd) merged away
+
+  keepless::map_event_t reset = kt::make_event(1);  // a reset restarts sequence checking
+  reset.reset = true;
+  send(reset);
+  EXPECT_EQ(node_->window().keyframe_count(), 0u);
+  send(kt::make_keyframe(2, 10, kt::id_range(0, 5)));
+  EXPECT_EQ(node_->window().keyframe_count(), 1u);
+  EXPECT_EQ(node_->counters().messages_rejected, 0u);
+}
+
+TEST_F(NodeOnMemq, EmptyListsAfterFullOnesDecodeEmpty) {
+  fill();
+  keepless::map_event_t e = kt::make_event(4);
+  e.deleted_point_id = {0};
+  send(e);
+  send(kt::make_keyframe(5, 13, {}));  // no observations after ones with many
+  keepless::map_event_t empty = kt::make_event(6);
+  send(empty);
+  EXPECT_EQ(node_->counters().messages_rejected, 0u);
+  EXPECT_EQ(node_->window().keyframe_count(), 4u);
+  EXPECT_EQ(node_->window().observation_count(3), 0u);
+}
+
+TEST_F(NodeOnMemq, BudgetExhaustedCullsNothing) {
+  NodeConfig c = default_config();
+  c.budget_work_units = 1;
+  make_node(c);
+  for (int i = 0; i < 4; ++i) send(kt::make_keyframe(i + 1, i, kt::id_range(0, 40)));
+  ASSERT_EQ(decisions_.size(), 4u);
+  EXPECT_EQ(decisions_.back().status, keepless::decision_t::STATUS_BUDGET_EXHAUSTED);
+  EXPECT_EQ(decisions_.back().num_culled, 0);
+  EXPECT_GE(node_->counters().budget_exhaustions, 1u);
+  EXPECT_EQ(node_->window().total_observations(), 160u);
+}
+
+TEST_F(NodeOnMemq, WindowCapacityIsAnsweredNotFatal) {
+  NodeConfig c = default_config();
+  c.max_pair_arcs = 50;  // far below what four overlapping keyframes need
+  make_node(c);
+  for (int i = 0; i < 4; ++i) send(kt::make_keyframe(i + 1, i, kt::id_range(0, 40)));
+  ASSERT_EQ(decisions_.size(), 4u);
+  EXPECT_EQ(decisions_.back().status, keepless::decision_t::STATUS_CAPACITY_EXCEEDED);
+  EXPECT_EQ(decisions_.back().num_culled, 0);
+  EXPECT_GE(node_->counters().capacity_exceeded, 1u);
+}
+
+TEST_F(NodeOnMemq, StopsAfterMaxKeyframes) {
+  NodeConfig c = default_config();
+  c.max_keyframes = 2;
+  make_node(c);
+  send(kt::make_keyframe(1, 1, kt::id_range(0, 5)));
+  EXPECT_FALSE(node_->finished());
+  send(kt::make_keyframe(2, 2, kt::id_range(0, 5)));
+  EXPECT_TRUE(node_->finished());
+}
+
+}  // namespace

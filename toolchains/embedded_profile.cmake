@@ -1,0 +1,21 @@
+# Embedded build profile, included right after project(keepless) through
+# CMAKE_PROJECT_keepless_INCLUDE (see the `embedded` preset). The board
+# libraries keepless::solver and keepless::core are compiled for size and
+# without exceptions or RTTI: the decision path reports errors as status enums
+# and never needs either. Tests and tools keep the default flags; they link
+# the embedded libraries, so the suite exercises exactly what a board runs.
+set(KEEPLESS_EMBEDDED_PROFILE ON)
+
+# The targets do not exist yet here: apply the options once the top-level
+# CMakeLists.txt has been processed. -Os follows -O3 of CMAKE_BUILD_TYPE on
+# the command line, so it wins.
+function(keepless_apply_embedded_profile)
+  foreach(target keepless_solver keepless_core)
+    if(NOT TARGET ${target})
+      message(FATAL_ERROR "embedded profile: no target ${target}")
+    endif()
+    target_compile_options(${target} PRIVATE -Os -fno-exceptions -fno-rtti)
+  endforeach()
+  message(STATUS "embedded profile: keepless_solver, keepless_core with -Os -fno-exceptions -fno-rtti")
+endfunction()
+cmake_language(DEFER DIRECTORY ${CMAKE_SOURCE_DIR} CALL keepless_apply_embedded_profile)
