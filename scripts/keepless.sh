@@ -9,7 +9,7 @@ cd "$(dirname "$0")/.."
 
 PACKAGES=(
   cmake g++ make pkg-config
-  libeigen3-dev liblcm-dev liblcm-bin libglib2.0-dev
+  libeigen3-dev liblcm-dev liblcm-bin liblcm-java libglib2.0-dev
   libopencv-core-dev libopencv-features2d-dev libopencv-imgproc-dev libopencv-imgcodecs-dev
   libgtest-dev libgmock-dev libbenchmark-dev liblemon-dev libceres-dev
 )
@@ -47,7 +47,7 @@ case "${1:-}" in
   test-asan)
     install_missing
     build asan
-    ctest --preset asan --label-exclude "${KEEPLESS_ASAN_EXCLUDE:-slow}"
+    ctest --preset asan
     ;;
   *)
     echo "usage: $0 demo|test|test-asan" >&2

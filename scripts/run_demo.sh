@@ -75,11 +75,13 @@ if [ "$REPLAY" = 1 ] && [ "$have_logger" = 1 ]; then
   echo "== replay: lcm-logplayer $REPORT/bus.lcmlog -> a fresh keepless_node on $REPLAY_URL"
   lcm-logger -q -f --channel=KEEPLESS_DECISION --lcm-url="$REPLAY_URL" "$REPORT/replay.lcmlog" >>"$REPORT/logger.log" 2>&1 &
   RLOGGER=$!; PIDS+=("$RLOGGER")
-  "$NODE" --url "$REPLAY_URL" --max-keyframes "$KEYFRAMES" --quiet 2>"$REPORT/replay_node.log" &
+  # The player does not wait for decisions: give the fresh node room to queue.
+  "$NODE" --url "$REPLAY_URL&recv_buf_size=4194304" --queue 4096 --max-keyframes "$KEYFRAMES" --quiet \
+    2>"$REPORT/replay_node.log" &
   RNODE=$!; PIDS+=("$RNODE")
   sleep 0.5
   lcm-logplayer --lcm-url="$REPLAY_URL" --regexp="^KEEPLESS_(KEYFRAME|MAP_EVENT)$" "$REPORT/bus.lcmlog" >/dev/null
-  for _ in $(seq 100); do kill -0 "$RNODE" 2>/dev/null || break; sleep 0.1; done
+  for _ in $(seq 600); do kill -0 "$RNODE" 2>/dev/null || break; sleep 0.1; done
   stop "$RNODE"
   sleep 0.3
   stop "$RLOGGER"

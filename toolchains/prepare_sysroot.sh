@@ -10,9 +10,10 @@
 # GoogleTest, LEMON, Eigen) and the runtime that qemu loads with -L.
 #
 # Cached: SYSROOT/.keepless-sysroot holds a hash of the package list; a rerun
-# with the same list does nothing. Default SYSROOT:
+# with the same list does nothing (delete the sysroot to pick up package
+# updates). Default SYSROOT:
 #   ${KEEPLESS_CACHE_DIR:-${XDG_CACHE_HOME:-$HOME/.cache}/keepless}/sysroot-<arch>
-# Needs root (apt-get) only when the cache is cold.
+# Needs no root: apt runs with a private state directory under the cache.
 set -euo pipefail
 
 arch="${1:-}"
@@ -42,7 +43,7 @@ packages=(
   liblemon-dev
 )
 arch_all_packages=(libeigen3-dev)
-layout_version=2  # bump when the extraction steps below change
+layout_version=3  # bump when the extraction steps below change
 
 stamp_text="$(printf '%s\n' "layout=$layout_version" "$debarch" "${packages[@]}" "${arch_all_packages[@]}")"
 stamp_hash="$(printf '%s' "$stamp_text" | sha256sum | cut -d' ' -f1)"
@@ -51,13 +52,21 @@ if [[ -f "$sysroot/.keepless-sysroot" && "$(cat "$sysroot/.keepless-sysroot")" =
   exit 0
 fi
 
-as_root() { if [[ $(id -u) -eq 0 ]]; then "$@"; else sudo "$@"; fi; }
-
-# The foreign architecture must be known to apt to download its packages.
-if ! dpkg --print-foreign-architectures | grep -qx "$debarch"; then
-  as_root dpkg --add-architecture "$debarch"
-  as_root apt-get update -q
-fi
+# apt runs with its own state under the cache, for the target architecture
+# only: the host's dpkg architectures and package lists are left untouched
+# (no `dpkg --add-architecture`), so the host's own apt runs never fetch or
+# trip over foreign indices. Only the first run (or a stale list) updates.
+apt_dir="$cache/apt-$arch"
+mkdir -p "$apt_dir/lists/partial" "$apt_dir/archives/partial"
+apt_opts=(-o "APT::Architecture=$debarch" -o "APT::Architectures::=$debarch"
+          -o "Dir::State::Lists=$apt_dir/lists" -o "Dir::Cache=$apt_dir"
+          -o "Dir::Cache::pkgcache=" -o "Dir::Cache::srcpkgcache=")
+apt_update() {
+  # A partial update (a mirror mid-sync) is not fatal: the download below
+  # fails clearly if a package is really missing.
+  apt-get "${apt_opts[@]}" update -qq || echo "prepare_sysroot: apt-get update reported errors" >&2
+}
+[[ -n "$(ls -A "$apt_dir/lists" | grep -v '^partial$' | grep -v '^lock$')" ]] || apt_update
 
 debs="$cache/debs-$arch"
 mkdir -p "$debs"
@@ -69,10 +78,11 @@ targets+=("${arch_all_packages[@]}")
   # Old versions would also be extracted: start each download from empty.
   rm -f ./*.deb
   # apt-get download as root warns that _apt cannot write here; harmless.
-  if ! apt-get download -q "${targets[@]}" >"$debs/apt.log" 2>&1; then
+  if ! apt-get "${apt_opts[@]}" download -q "${targets[@]}" >"$debs/apt.log" 2>&1; then
     # A stale package list points at versions the mirror no longer has.
-    as_root apt-get update -q
-    apt-get download -q "${targets[@]}" >"$debs/apt.log" 2>&1 || { cat "$debs/apt.log" >&2; exit 1; }
+    apt_update
+    apt-get "${apt_opts[@]}" download -q "${targets[@]}" >"$debs/apt.log" 2>&1 ||
+      { cat "$debs/apt.log" >&2; exit 1; }
   fi
 )
 

@@ -16,12 +16,25 @@ void connectivity_costs(std::uint32_t m, std::int64_t* table) {
 }
 
 std::int64_t spatial_cost(std::uint64_t a, std::uint64_t b) {
-  // a*b + 1 can exceed 64 bits only for absurd counts; 128 bits keep it exact.
-  __extension__ using U128 = unsigned __int128;
-  U128 x = static_cast<U128>(a) * b + 1;
+  // a*b + 1 exactly, as four 32-bit limbs (most significant first): 64-bit
+  // arithmetic only, because 32-bit ARM has no unsigned __int128.
+  constexpr std::uint64_t kLow = 0xffffffffu;
+  const std::uint64_t p0 = (a & kLow) * (b & kLow), p1 = (a & kLow) * (b >> 32);
+  const std::uint64_t p2 = (a >> 32) * (b & kLow), p3 = (a >> 32) * (b >> 32);
+  const std::uint64_t mid = (p0 >> 32) + (p1 & kLow) + (p2 & kLow);
+  std::uint64_t lo = (mid << 32) | (p0 & kLow);
+  std::uint64_t hi = p3 + (p1 >> 32) + (p2 >> 32) + (mid >> 32);
+  if (++lo == 0) ++hi;
+  std::uint64_t limb[4] = {hi >> 32, hi & kLow, lo >> 32, lo & kLow};
   std::int64_t digits = 0;
-  while (x >= 10) {  // at most 38 iterations
-    x /= 10;
+  // While x >= 10: x /= 10 by long division over the limbs (at most 38 times).
+  while (limb[0] != 0 || limb[1] != 0 || limb[2] != 0 || limb[3] >= 10) {
+    std::uint64_t remainder = 0;
+    for (std::uint64_t& l : limb) {
+      const std::uint64_t current = (remainder << 32) | l;
+      l = current / 10;
+      remainder = current % 10;
+    }
     ++digits;
   }
   return digits;

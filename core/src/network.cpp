@@ -5,32 +5,12 @@
 #include <limits>
 #include <vector>
 
+#include "box_neighbours.hpp"
 #include "keepless/core/costs.hpp"
 
 namespace keepless::core {
 
 namespace {
-
-// Keypoints are bucketed into cells of the box size. Cell coordinates are
-// clamped so that any finite keypoint maps to a valid cell; the clamp is
-// monotone, so a query range still covers every keypoint it must.
-constexpr std::int64_t kCellLimit = std::int64_t{1} << 30;
-
-std::int64_t cell_of(double x, double cell_size) {
-  const double c = std::floor(x / cell_size);
-  if (!(c > static_cast<double>(-kCellLimit))) return -kCellLimit;
-  if (c > static_cast<double>(kCellLimit)) return kCellLimit;
-  return static_cast<std::int64_t>(c);
-}
-
-std::uint64_t cell_key(std::int64_t cx, std::int64_t cy) {
-  return (static_cast<std::uint64_t>(cy + kCellLimit) << 32) |
-         static_cast<std::uint64_t>(cx + kCellLimit);
-}
-
-// The query range is widened by a relative margin far above rounding error, so
-// the grid never misses a keypoint that the exact box test accepts.
-double margin(double x, double half) { return (std::fabs(x) + half) * 1e-12 + 1e-12; }
 
 std::int32_t saturate_i32(std::uint64_t x) {
   const auto max = static_cast<std::uint64_t>(std::numeric_limits<std::int32_t>::max());
@@ -55,15 +35,11 @@ struct PaperNetwork::Impl {
     std::uint32_t slot;
     std::uint32_t index;  // into the window's observations, flattened in slot order
   };
-  struct Cell {  // one keypoint of a keyframe, sorted by (cell key, index)
-    std::uint64_t key;
-    std::uint32_t index;
-  };
 
   Capacities caps;
   // Scratch over observations.
   std::vector<Record> records;
-  std::vector<Cell> cells;
+  std::vector<std::uint32_t> box_scratch;  // count_box_neighbours, [4 * max_observations + 1]
   std::vector<std::uint32_t> neighbours;  // N(p, f) by flattened index
   std::vector<std::uint32_t> slot_begin;  // [max_keyframes + 1]
   // Points, ascending id.
@@ -88,7 +64,7 @@ struct PaperNetwork::Impl {
     const std::size_t k = c.max_keyframes;
     const std::size_t q = k * (k - (k > 0 ? 1 : 0)) / 2;
     records.resize(c.max_observations);
-    cells.resize(c.max_observations);
+    box_scratch.resize(BoxScratch::kWordsPerObservation * std::size_t{c.max_observations} + 1);
     neighbours.resize(c.max_observations);
     slot_begin.resize(k + 1);
     point_id.resize(c.max_points);
@@ -111,39 +87,10 @@ struct PaperNetwork::Impl {
     sink = 1;
   }
 
-  // N(p, f): the other keypoints of slot `slot` in the closed box around
-  // keypoint `self` (a flattened index into that slot's observations).
-  std::uint32_t count_neighbours(const Window& window, std::uint32_t slot, std::uint32_t self,
-                                 const Params& params) const {
-    const Observation* obs = window.observations(slot);
-    const std::uint32_t base = slot_begin[slot];
-    const Observation& o = obs[self - base];
-    const double half_w = 0.5 * params.box_width;
-    const double half_h = 0.5 * params.box_height;
-    const double size_w = std::max(params.box_width, 1);
-    const double size_h = std::max(params.box_height, 1);
-    const double mu = margin(o.u, half_w);
-    const double mv = margin(o.v, half_h);
-    const std::int64_t cx_lo = cell_of(o.u - half_w - mu, size_w);
-    const std::int64_t cx_hi = cell_of(o.u + half_w + mu, size_w);
-    const std::int64_t cy_lo = cell_of(o.v - half_h - mv, size_h);
-    const std::int64_t cy_hi = cell_of(o.v + half_h + mv, size_h);
-    const Cell* first = cells.data() + base;
-    const Cell* last = cells.data() + slot_begin[slot + 1];
-    const auto by_key = [](const Cell& c, std::uint64_t key) { return c.key < key; };
-    const auto key_by = [](std::uint64_t key, const Cell& c) { return key < c.key; };
-    std::uint32_t n = 0;
-    // A box spans at most 2 cells per axis (3 with the margin at a border).
-    for (std::int64_t cy = cy_lo; cy <= cy_hi; ++cy) {
-      const Cell* b = std::lower_bound(first, last, cell_key(cx_lo, cy), by_key);
-      const Cell* e = std::upper_bound(b, last, cell_key(cx_hi, cy), key_by);
-      for (const Cell* c = b; c != e; ++c) {
-        if (c->index == self) continue;
-        const Observation& q = obs[c->index - base];
-        if (in_box(q.u - o.u, q.v - o.v, params.box_width, params.box_height)) ++n;
-      }
-    }
-    return n;
+  BoxScratch scratch() {
+    const std::size_t n = caps.max_observations;
+    return BoxScratch{box_scratch.data(), box_scratch.data() + n, box_scratch.data() + 2 * n,
+                      box_scratch.data() + 3 * n};
   }
 };
 
@@ -225,7 +172,9 @@ Status PaperNetwork::build(const Window& window, const Params& params,
       q = static_cast<std::int32_t>(pairs);
       n.pair_j[pairs] = j;
       n.pair_k[pairs] = kk;
-      n.pair_cb[pairs] = baseline_cost(window.keyframe(j).centre, window.keyframe(kk).centre);
+      n.pair_cb[pairs] = (params.cost_terms & kBaselineCost)
+                             ? baseline_cost(window.keyframe(j).centre, window.keyframe(kk).centre)
+                             : 0;
       ++pairs;
     }
   }
@@ -238,28 +187,13 @@ Status PaperNetwork::build(const Window& window, const Params& params,
     return Status::kCapacityExceeded;
   }
 
-  // Per-keyframe grids, then N(p, f) for every observation of an evaluated point.
+  // N(p, f) for every keypoint, one keyframe at a time.
   for (std::uint32_t s = 0; s < k; ++s) {
-    const Observation* obs = window.observations(s);
-    const double size_w = std::max(params.box_width, 1);
-    const double size_h = std::max(params.box_height, 1);
-    for (std::uint32_t x = n.slot_begin[s]; x < n.slot_begin[s + 1]; ++x) {
-      const Observation& o = obs[x - n.slot_begin[s]];
-      n.cells[x] = {cell_key(cell_of(o.u, size_w), cell_of(o.v, size_h)), x};
-    }
-    std::sort(n.cells.begin() + n.slot_begin[s], n.cells.begin() + n.slot_begin[s + 1],
-              [](const auto& a, const auto& b) {
-                return a.key != b.key ? a.key < b.key : a.index < b.index;
-              });
-  }
-  for (std::uint32_t i = 0; i < points; ++i) {
-    if (n.point_arc[i] < 0) continue;
-    const Impl::Record* rec = n.records.data() + n.point_first[i];
-    for (std::uint32_t x = 0; x < n.point_views[i]; ++x) {
-      n.neighbours[rec[x].index] = n.count_neighbours(window, rec[x].slot, rec[x].index, params);
-    }
+    count_box_neighbours(window.observations(s), window.observation_count(s), params.box_width,
+                         params.box_height, n.scratch(), n.neighbours.data() + n.slot_begin[s]);
   }
   connectivity_costs(m, n.cm.data());
+  if (!(params.cost_terms & kConnectivityCost)) std::fill(n.cm.begin(), n.cm.begin() + m + 1, 0);
 
   // The solver network, in the documented node and arc order.
   const auto node = [](std::uint64_t x) { return static_cast<solver::NodeId>(x); };
@@ -288,7 +222,9 @@ Status PaperNetwork::build(const Window& window, const Params& params,
             n.pair_of[std::size_t{rec[x].slot} * k + rec[y].slot]);
         n.arc_point[a] = i;
         n.arc_pair[a] = q;
-        n.arc_cs[a] = spatial_cost(n.neighbours[rec[x].index], n.neighbours[rec[y].index]);
+        n.arc_cs[a] = (params.cost_terms & kSpatialCost)
+                          ? spatial_cost(n.neighbours[rec[x].index], n.neighbours[rec[y].index])
+                          : 0;
         const solver::Status s = solver.add_arc(node(1 + n.point_arc[i]),
                                                 node(1 + std::uint64_t{evaluated} + q), 1,
                                                 n.arc_cs[a]);
@@ -337,7 +273,7 @@ solver::NodeId PaperNetwork::sink() const { return impl_->sink; }
 std::size_t PaperNetwork::memory_bytes() const {
   const Impl& n = *impl_;
   const auto bytes = [](const auto& v) { return v.capacity() * sizeof(v[0]); };
-  return sizeof(PaperNetwork) + sizeof(Impl) + bytes(n.records) + bytes(n.cells) +
+  return sizeof(PaperNetwork) + sizeof(Impl) + bytes(n.records) + bytes(n.box_scratch) +
          bytes(n.neighbours) + bytes(n.slot_begin) + bytes(n.point_id) + bytes(n.point_views) +
          bytes(n.point_first) + bytes(n.point_arc) + bytes(n.pair_of) + bytes(n.pair_j) +
          bytes(n.pair_k) + bytes(n.pair_sink) + bytes(n.pair_cb) + bytes(n.arc_point) +

@@ -162,17 +162,22 @@ struct Listener {
   bool have_status = false;
   std::size_t statuses = 0;
 
-  void on_decision(const lcm::ReceiveBuffer*, const std::string&, const keepless::decision_t* d) {
-    received_ns[d->sequence] = monotonic_ns();
-    decisions[d->sequence] = *d;
+  // Plain functions for subscribeFunction: GCC's UBSan misreports the
+  // pointer-to-member call behind LCM's member-function subscribe.
+  static void on_decision(const lcm::ReceiveBuffer*, const std::string&, const keepless::decision_t* d,
+                          Listener* self) {
+    self->received_ns[d->sequence] = monotonic_ns();
+    self->decisions[d->sequence] = *d;
   }
-  void on_timing(const lcm::ReceiveBuffer*, const std::string&, const keepless::decision_timing_t* t) {
-    timings[t->sequence] = *t;
+  static void on_timing(const lcm::ReceiveBuffer*, const std::string&, const keepless::decision_timing_t* t,
+                        Listener* self) {
+    self->timings[t->sequence] = *t;
   }
-  void on_status(const lcm::ReceiveBuffer*, const std::string&, const keepless::status_t* s) {
-    status = *s;
-    have_status = true;
-    ++statuses;
+  static void on_status(const lcm::ReceiveBuffer*, const std::string&, const keepless::status_t* s,
+                        Listener* self) {
+    self->status = *s;
+    self->have_status = true;
+    ++self->statuses;
   }
 };
 
@@ -270,9 +275,9 @@ int main(int argc, char** argv) {
     return 1;
   }
   Listener heard;
-  bus.subscribe(cfg.decision_channel, &Listener::on_decision, &heard);
-  bus.subscribe(cfg.timing_channel, &Listener::on_timing, &heard);
-  bus.subscribe(cfg.status_channel, &Listener::on_status, &heard);
+  bus.subscribeFunction(cfg.decision_channel, &Listener::on_decision, &heard);
+  bus.subscribeFunction(cfg.timing_channel, &Listener::on_timing, &heard);
+  bus.subscribeFunction(cfg.status_channel, &Listener::on_status, &heard);
 
   std::printf("keepless_vo_sim: %s, %zu keyframes, seed %llu, on %s\n", source.c_str(), total,
               static_cast<unsigned long long>(cfg.seed), cfg.url.c_str());
@@ -289,6 +294,7 @@ int main(int argc, char** argv) {
   std::vector<KeyframeRecord> records;
   std::vector<double> latencies;
   std::vector<SimObservation> obs;
+  std::vector<std::uint32_t> mapped_now;
   keepless::keyframe_t msg{};
   std::vector<std::uint8_t> buffer;
   std::int64_t sequence = 0;
@@ -364,16 +370,21 @@ int main(int argc, char** argv) {
     }
 
     // Now and then the VO drops a few outliers from its map and says so.
-    if (cfg.event_every > 0 && (i + 1) % static_cast<std::size_t>(cfg.event_every) == 0 && !obs.empty()) {
+    if (cfg.event_every > 0 && (i + 1) % static_cast<std::size_t>(cfg.event_every) == 0) {
       keepless::map_event_t ev{};
       ev.sequence = ++sequence;
       ev.utime = pose.utime;
       ev.reset = false;
-      for (int k = 0; k < 5; ++k) {
-        const std::uint32_t f = obs[event_rng.below(obs.size())].point;
-        const ScenePoint& p = world.points()[f];
-        if (p.state != PointState::kMapped) continue;
-        ev.deleted_point_id.push_back(p.landmark);
+      mapped_now.clear();
+      for (const SimObservation& o : obs) {
+        if (world.points()[o.point].state == PointState::kMapped) mapped_now.push_back(o.point);
+      }
+      for (int k = 0; k < 5 && !mapped_now.empty(); ++k) {
+        const std::size_t pick = event_rng.below(mapped_now.size());
+        const std::uint32_t f = mapped_now[pick];
+        mapped_now[pick] = mapped_now.back();
+        mapped_now.pop_back();
+        ev.deleted_point_id.push_back(world.points()[f].landmark);
         world.remove(f);
         ++deleted_total;
       }

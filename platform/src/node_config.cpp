@@ -54,7 +54,7 @@ std::string node_usage() {
          "  --status-channel NAME     status_t output (default KEEPLESS_STATUS)\n"
          "  --window K                keyframes in the sliding window (default 20)\n"
          "  --max-observations N      observations per keyframe_t accepted (default 2000)\n"
-         "  --max-event-ids N         ids per list of a map_event_t accepted (default 4096)\n"
+         "  --max-event-ids N         ids per list of a map_event_t accepted (default 1024)\n"
          "  --max-pair-arcs N         solver pair-arc capacity (default 0: worst case K*N*(K-1)/2;\n"
          "                            less saves memory, a window beyond it is answered 'capacity exceeded')\n"
          "  --M N                     pair -> sink capacity (default 100)\n"

@@ -36,6 +36,8 @@ class RadixHeap {
     link(item, bucket_index(key));
   }
 
+  std::uint64_t key_of(std::int32_t item) const { return key_[item]; }
+
   // Pops an item of minimum key; among equal keys, the most recently linked.
   std::int32_t pop_min() {
     if (head_[0] < 0) {

@@ -102,14 +102,20 @@ class SparsifyCliTest : public ::testing::Test {
                                      0644);
     posix_spawn_file_actions_addopen(&actions, 2, err_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC,
                                      0644);
-    std::vector<std::string> all{binary};
+    std::vector<std::string> all;
+#ifdef KEEPLESS_TEST_LAUNCHER
+    // Cross build under qemu: the child is a target binary and needs the emulator.
+    std::istringstream launcher(KEEPLESS_TEST_LAUNCHER);
+    for (std::string word; launcher >> word;) all.push_back(word);
+#endif
+    all.push_back(binary);
     all.insert(all.end(), args.begin(), args.end());
     std::vector<char*> argv;
     for (std::string& a : all) argv.push_back(a.data());
     argv.push_back(nullptr);
     pid_t pid = 0;
     Result r;
-    const int spawned = posix_spawn(&pid, binary, &actions, nullptr, argv.data(), environ);
+    const int spawned = posix_spawn(&pid, all[0].c_str(), &actions, nullptr, argv.data(), environ);
     posix_spawn_file_actions_destroy(&actions);
     EXPECT_EQ(spawned, 0) << "cannot run " << binary;
     if (spawned != 0) return r;

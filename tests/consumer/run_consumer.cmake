@@ -10,7 +10,11 @@ endfunction()
 # A fresh prefix each run, so a missing install rule cannot hide behind an
 # earlier run's files.
 file(REMOVE_RECURSE ${PREFIX} ${CONSUMER_BUILD})
-run(${CMAKE_COMMAND} --install ${KEEPLESS_BUILD_DIR} --prefix ${PREFIX})
+execute_process(COMMAND ${CMAKE_COMMAND} --install ${KEEPLESS_BUILD_DIR} --prefix ${PREFIX}
+                RESULT_VARIABLE rc OUTPUT_QUIET)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "cmake --install ${KEEPLESS_BUILD_DIR} failed: the package needs the whole tree built")
+endif()
 
 set(args -S ${CONSUMER_SOURCE} -B ${CONSUMER_BUILD} -G ${GENERATOR}
     -DCMAKE_BUILD_TYPE=${BUILD_TYPE} -DCMAKE_PREFIX_PATH=${PREFIX})

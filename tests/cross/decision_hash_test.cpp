@@ -96,7 +96,18 @@ TEST(CrossArchitecture, FloatFedCostsMatchRecordedHash) {
     hash.add_signed(baseline_cost(a, b));
     ++checked;
   }
-  const double exact[] = {0.0, 10.0, 15.0, 40.0, 90.0, 2.5, 1.0 / 3.0, 0.1, 30.0, 23.333333333333332};
+  // On the axis these distances are exact and so is c_b (the paper's values).
+  const struct {
+    double d;
+    std::int64_t c_b;
+  } on_axis[] = {{0.0, 10}, {2.5, 8}, {10.0, 5}, {15.0, 4}, {40.0, 2}, {90.0, 1}};
+  for (const auto& e : on_axis) {
+    const double a[3] = {1.0, -2.0, 0.5};
+    const double b[3] = {1.0 + e.d, -2.0, 0.5};
+    EXPECT_EQ(baseline_cost(a, b), e.c_b) << "d = " << e.d;
+  }
+  const double exact[] = {0.0, 10.0,      15.0, 40.0, 90.0,
+                          2.5, 1.0 / 3.0, 0.1,  30.0, 23.333333333333332};
   for (double d : exact) {
     for (int step = -2; step <= 2; ++step) {
       double dd = d;
@@ -121,6 +132,10 @@ TEST(CrossArchitecture, FloatFedCostsMatchRecordedHash) {
       ++checked;
     }
     const double hu = 0.5 * box[0], hv = 0.5 * box[1];
+    // The box is closed: its edge is inside, one ulp beyond is not.
+    EXPECT_TRUE(in_box(-hu, hv, box[0], box[1]));
+    EXPECT_FALSE(in_box(std::nextafter(hu, 1e9), 0.0, box[0], box[1]));
+    EXPECT_FALSE(in_box(0.0, -std::nextafter(hv, 1e9), box[0], box[1]));
     for (double su : {-1.0, 1.0}) {
       for (double sv : {-1.0, 1.0}) {
         for (double eu : {std::nextafter(hu, 0.0), hu, std::nextafter(hu, 1e9)}) {
@@ -207,7 +222,8 @@ GeneratedWindow generate_window(SplitMix64& rng, std::uint32_t index) {
     const PointId id = 5000u * index + 3u * p + rng.below(3);
     const std::uint32_t first = rng.below(k);
     const std::uint32_t length = 1 + rng.below(k - first < 7 ? k - first : 7);
-    const std::uint32_t gap = rng.below(5) == 0 ? first + rng.below(length) : k;  // one missed keyframe
+    const std::uint32_t gap =
+        rng.below(5) == 0 ? first + rng.below(length) : k;  // one missed keyframe
     const std::uint32_t cluster = rng.below(clusters);
     const bool on_grid = rng.below(4) == 0;
     for (std::uint32_t f = first; f < first + length; ++f) {
@@ -273,9 +289,9 @@ TEST(CrossArchitecture, SparsifierDecisionsMatchRecordedHash) {
       hash.add_signed(d[i].flow);
       hash.add_signed(d[i].capacity);
       if (dump != nullptr) {
-        std::fprintf(dump, "%u %llu %s %lld %lld\n", index, static_cast<unsigned long long>(d[i].point),
-                     to_string(d[i].verdict), static_cast<long long>(d[i].flow),
-                     static_cast<long long>(d[i].capacity));
+        std::fprintf(dump, "%u %llu %s %lld %lld\n", index,
+                     static_cast<unsigned long long>(d[i].point), to_string(d[i].verdict),
+                     static_cast<long long>(d[i].flow), static_cast<long long>(d[i].capacity));
       }
     }
     hash.add_signed(s.max_flow);

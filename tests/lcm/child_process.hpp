@@ -4,7 +4,7 @@
 
 #include <fcntl.h>
 #include <signal.h>
-#include <spawn.h>
+#include <sys/prctl.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -15,23 +15,32 @@
 #include <thread>
 #include <vector>
 
-extern char** environ;
-
 namespace keepless::testing {
 
 class ChildProcess {
  public:
-  // Starts argv[0] with stdout and stderr appended to `log_path`.
+  // Starts argv[0] with stdout and stderr appended to `log_path`. The child
+  // gets SIGTERM if the test process dies first, so an aborted test leaves
+  // no node behind.
   ChildProcess(const std::vector<std::string>& argv, const std::string& log_path) : log_(log_path) {
     std::vector<char*> args;
     for (const std::string& a : argv) args.push_back(const_cast<char*>(a.c_str()));
     args.push_back(nullptr);
-    posix_spawn_file_actions_t actions;
-    posix_spawn_file_actions_init(&actions);
-    posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, log_path.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
-    posix_spawn_file_actions_adddup2(&actions, STDOUT_FILENO, STDERR_FILENO);
-    if (posix_spawn(&pid_, args[0], &actions, nullptr, args.data(), environ) != 0) pid_ = -1;
-    posix_spawn_file_actions_destroy(&actions);
+    const pid_t parent = getpid();
+    pid_ = fork();
+    if (pid_ == 0) {
+      // Only async-signal-safe calls until exec.
+      prctl(PR_SET_PDEATHSIG, SIGTERM);
+      if (getppid() != parent) _exit(126);
+      const int fd = open(log_path.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
+      if (fd >= 0) {
+        dup2(fd, STDOUT_FILENO);
+        dup2(fd, STDERR_FILENO);
+        close(fd);
+      }
+      execv(args[0], args.data());
+      _exit(127);
+    }
   }
   ~ChildProcess() { kill_now(); }
   ChildProcess(const ChildProcess&) = delete;

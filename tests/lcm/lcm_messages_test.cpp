@@ -9,6 +9,7 @@
 #include "keepless/decision_t.hpp"
 #include "keepless/decision_timing_t.hpp"
 #include "keepless/platform/message_validation.hpp"
+#include "keepless/platform/node_config.hpp"
 #include "keepless/status_t.hpp"
 #include "message_builders.hpp"
 
@@ -56,9 +57,20 @@ TEST(LcmMessages, KeyframeCountAtFixedOffset) {
   }
 }
 
-TEST(LcmMessages, KeyframeAtDefaultCapacityFitsOneDatagram) {
-  const auto bytes = kt::encode(kt::make_keyframe(1, 1, kt::id_range(0, 2000)));
-  EXPECT_LT(bytes.size(), 65000u);
+TEST(LcmMessages, InputsAtTheDefaultLimitsFitOneDatagram) {
+  const keepless::platform::NodeConfig defaults;
+  const auto kf = kt::encode(kt::make_keyframe(1, 1, kt::id_range(0, defaults.max_observations)));
+  EXPECT_LT(kf.size(), 65000u);
+  keepless::map_event_t e = kt::make_event(1);
+  const auto n = static_cast<std::int64_t>(defaults.max_event_ids);
+  e.deleted_point_id = kt::id_range(0, n);
+  e.merged_from_id = kt::id_range(n, n);
+  e.merged_into_id = kt::id_range(2 * n, n);
+  e.removed_keyframe_id = kt::id_range(0, n);
+  kt::finalize(e);
+  EXPECT_LT(kt::encode(e).size(), 65000u);
+  EXPECT_LT(kt::encode(keepless::status_t{}).size(), 65000u);
+  EXPECT_LT(kt::encode(keepless::decision_timing_t{}).size(), 65000u);
 }
 
 TEST(LcmMessages, MapEventRoundTripAndOffsets) {

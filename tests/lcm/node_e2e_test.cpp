@@ -12,6 +12,7 @@
 #include <cstdlib>
 #include <functional>
 #include <map>
+#include <sstream>
 #include <string>
 #include <thread>
 #include <vector>
@@ -24,6 +25,20 @@
 #include "reference_node.hpp"
 
 namespace kt = keepless::testing;
+
+namespace {
+// Cross builds: the node and the simulator are target binaries, which
+// qemu-user cannot exec by itself; run them through ctest's emulator.
+std::vector<std::string> target_argv(std::vector<std::string> argv) {
+#ifdef KEEPLESS_TEST_LAUNCHER
+  std::istringstream launcher(KEEPLESS_TEST_LAUNCHER);
+  std::vector<std::string> words;
+  for (std::string word; launcher >> word;) words.push_back(word);
+  argv.insert(argv.begin(), words.begin(), words.end());
+#endif
+  return argv;
+}
+}  // namespace
 
 namespace {
 
@@ -40,13 +55,15 @@ struct Message {
 struct Recorder {
   std::vector<Message> messages;
   std::size_t statuses = 0;
-  void on_message(const lcm::ReceiveBuffer* rb, const std::string& channel) {
+  // A plain function (subscribeFunction): GCC's UBSan misreports LCM's
+  // pointer-to-member call behind the member-function subscribe.
+  static void on_message(const lcm::ReceiveBuffer* rb, const std::string& channel, Recorder* self) {
     if (channel == "KEEPLESS_STATUS") {
-      ++statuses;
+      ++self->statuses;
       return;
     }
     const auto* p = static_cast<const std::uint8_t*>(rb->data);
-    messages.push_back({channel, std::vector<std::uint8_t>(p, p + rb->data_size)});
+    self->messages.push_back({channel, std::vector<std::uint8_t>(p, p + rb->data_size)});
   }
   std::vector<Message> on(const std::string& channel) const {
     std::vector<Message> out;
@@ -97,14 +114,14 @@ TEST(NodeEndToEnd, EveryKeyframeGetsOneDecisionEqualToTheLibrary) {
   lcm::LCM bus(url);
   ASSERT_TRUE(bus.good());
   Recorder rec;
-  bus.subscribe(".*", &Recorder::on_message, &rec);
+  bus.subscribeFunction(".*", &Recorder::on_message, &rec);
 
-  kt::ChildProcess node({KEEPLESS_NODE_BIN, "--url", url, "--max-keyframes", std::to_string(kKeyframes),
-                         "--status-period-ms", "100"},
+  kt::ChildProcess node(target_argv({KEEPLESS_NODE_BIN, "--url", url, "--max-keyframes", std::to_string(kKeyframes),
+                         "--status-period-ms", "100"}),
                         tmp.file("node.log"));
   ASSERT_TRUE(node.started());
-  kt::ChildProcess sim({KEEPLESS_SIM_BIN, "--url", url, "--keyframes", std::to_string(kKeyframes), "--seed", "3",
-                        "--event-every", "7", "--quiet", "--report", tmp.file("report")},
+  kt::ChildProcess sim(target_argv({KEEPLESS_SIM_BIN, "--url", url, "--keyframes", std::to_string(kKeyframes), "--seed", "3",
+                        "--event-every", "7", "--quiet", "--report", tmp.file("report")}),
                        tmp.file("sim.log"));
   ASSERT_TRUE(sim.started());
   pump_until(bus, 120000, [&] { return !sim.running(); });
@@ -158,11 +175,11 @@ TEST(NodeEndToEnd, RecordedBusReplaysToIdenticalDecisions) {
                             tmp.file("logger.log"));
     ASSERT_TRUE(logger.started());
     std::this_thread::sleep_for(std::chrono::milliseconds(500));  // subscribed before anything is sent
-    kt::ChildProcess node({KEEPLESS_NODE_BIN, "--url", url, "--max-keyframes", std::to_string(n),
-                           "--status-period-ms", "100"},
+    kt::ChildProcess node(target_argv({KEEPLESS_NODE_BIN, "--url", url, "--max-keyframes", std::to_string(n),
+                           "--status-period-ms", "100"}),
                           tmp.file("node.log"));
-    kt::ChildProcess sim({KEEPLESS_SIM_BIN, "--url", url, "--keyframes", std::to_string(n), "--scene", "room",
-                          "--event-every", "5", "--quiet"},
+    kt::ChildProcess sim(target_argv({KEEPLESS_SIM_BIN, "--url", url, "--keyframes", std::to_string(n), "--scene", "room",
+                          "--event-every", "5", "--quiet"}),
                          tmp.file("sim.log"));
     ASSERT_TRUE(sim.wait(120000)) << sim.log();
     ASSERT_EQ(sim.exit_code(), 0) << sim.log();
@@ -189,9 +206,10 @@ TEST(NodeEndToEnd, RecordedBusReplaysToIdenticalDecisions) {
   lcm::LCM bus(replay_url);
   ASSERT_TRUE(bus.good());
   Recorder replayed;
-  bus.subscribe("KEEPLESS_(DECISION|STATUS)", &Recorder::on_message, &replayed);
-  kt::ChildProcess node({KEEPLESS_NODE_BIN, "--url", replay_url, "--max-keyframes", std::to_string(n),
-                         "--status-period-ms", "100"},
+  bus.subscribeFunction("KEEPLESS_(DECISION|STATUS)", &Recorder::on_message, &replayed);
+  // The player does not wait for decisions: give the fresh node room to queue.
+  kt::ChildProcess node(target_argv({KEEPLESS_NODE_BIN, "--url", replay_url + "&recv_buf_size=4194304", "--queue", "4096",
+                         "--max-keyframes", std::to_string(n), "--status-period-ms", "100"}),
                         tmp.file("replay_node.log"));
   pump_until(bus, 10000, [&] { return replayed.statuses > 0; });
   ASSERT_GT(replayed.statuses, 0u) << "fresh node not up\n" << node.log();

@@ -74,15 +74,19 @@ class NodeOnMemq : public ::testing::Test {
     ASSERT_TRUE(node_->start());
     decisions_.clear();
     statuses_.clear();
-    bus_->subscribe(config_.decision_channel, &NodeOnMemq::on_decision, this);
-    bus_->subscribe(config_.status_channel, &NodeOnMemq::on_status, this);
+    // subscribeFunction, not the member-function subscribe: GCC's UBSan
+    // misreports LCM's pointer-to-member call in lcm-cpp-impl.hpp.
+    bus_->subscribeFunction(config_.decision_channel, &NodeOnMemq::on_decision, this);
+    bus_->subscribeFunction(config_.status_channel, &NodeOnMemq::on_status, this);
   }
 
-  void on_decision(const lcm::ReceiveBuffer*, const std::string&, const keepless::decision_t* d) {
-    decisions_.push_back(*d);
+  static void on_decision(const lcm::ReceiveBuffer*, const std::string&, const keepless::decision_t* d,
+                          NodeOnMemq* self) {
+    self->decisions_.push_back(*d);
   }
-  void on_status(const lcm::ReceiveBuffer*, const std::string&, const keepless::status_t* s) {
-    statuses_.push_back(*s);
+  static void on_status(const lcm::ReceiveBuffer*, const std::string&, const keepless::status_t* s,
+                        NodeOnMemq* self) {
+    self->statuses_.push_back(*s);
   }
 
   void pump() {

@@ -18,7 +18,8 @@ namespace {
 
 constexpr Capacity kSmall{16, 64};
 
-TestNetwork make_network(std::int32_t nodes, NodeId source, NodeId sink, std::vector<TestArc> arcs) {
+TestNetwork make_network(std::int32_t nodes, NodeId source, NodeId sink,
+                         std::vector<TestArc> arcs) {
   TestNetwork net;
   net.label = "hand-made";
   net.node_count = nodes;
@@ -28,11 +29,11 @@ TestNetwork make_network(std::int32_t nodes, NodeId source, NodeId sink, std::ve
   return net;
 }
 
-// Solves `net` in a fresh solver, checks the certificate and LEMON, and
-// returns the solver for further expectations.
+// Solves `net`, checks the certificate, maximality and LEMON's answers.
 void solve_and_certify(MinCostFlow& solver, const TestNetwork& net) {
   ASSERT_EQ(load(solver, net), Status::kOptimal);
-  ASSERT_EQ(solver.solve(net.source, net.sink), Status::kOptimal);
+  // Finite so that a solver which stops making progress fails, not hangs.
+  ASSERT_EQ(solver.solve(net.source, net.sink, Budget{1'000'000}), Status::kOptimal);
   ASSERT_TRUE(is_certified_min_cost_flow(solver, net));
   ASSERT_TRUE(is_maximum_flow(solver, net));
   EXPECT_EQ(solver.flow_value(), lemon_max_flow(net));
@@ -110,8 +111,8 @@ TEST(MinCostFlowEdgeCase, ParallelArcsFillCheapestFirst) {
 // Two routes of cost 1 share a sink arc of capacity 5: the first takes it all.
 TEST(MinCostFlowEdgeCase, EqualCostTiesGoToEarlierArcs) {
   MinCostFlow solver(kSmall);
-  const TestNetwork net = make_network(
-      5, 0, 4, {{0, 1, 5, 1}, {0, 2, 5, 1}, {1, 3, 5, 0}, {2, 3, 5, 0}, {3, 4, 5, 0}});
+  const TestNetwork net =
+      make_network(5, 0, 4, {{0, 1, 5, 1}, {0, 2, 5, 1}, {1, 3, 5, 0}, {2, 3, 5, 0}, {3, 4, 5, 0}});
   solve_and_certify(solver, net);
   EXPECT_EQ(solver.flow_value(), 5);
   EXPECT_EQ(solver.total_cost(), 5);
@@ -122,8 +123,11 @@ TEST(MinCostFlowEdgeCase, EqualCostTiesGoToEarlierArcs) {
 TEST(MinCostFlowEdgeCase, LargeCapacitiesAndCostsAreExact) {
   MinCostFlow solver(kSmall);
   constexpr Flow kBig = 1'000'000'000;
-  const TestNetwork net = make_network(
-      4, 0, 3, {{0, 1, kBig, 400'000}, {1, 3, kBig, 600'000}, {0, 2, 7, 1'000'000}, {2, 3, kBig, 1'000'000}});
+  const TestNetwork net = make_network(4, 0, 3,
+                                       {{0, 1, kBig, 400'000},
+                                        {1, 3, kBig, 600'000},
+                                        {0, 2, 7, 1'000'000},
+                                        {2, 3, kBig, 1'000'000}});
   solve_and_certify(solver, net);
   EXPECT_EQ(solver.flow_value(), kBig + 7);
   EXPECT_EQ(solver.total_cost(), kBig * 1'000'000 + 7 * 2'000'000);
@@ -242,6 +246,11 @@ TEST(MinCostFlowEdgeCase, ResetReusesTheSolverForADifferentNetwork) {
   const TestNetwork big = random_layered_network(7);
   solve_and_certify(reused, big);
   const TestNetwork small = make_network(3, 1, 2, {{1, 0, 2, 1}, {0, 2, 1, 1}, {1, 2, 1, 3}});
+  // Nothing of the previous network's result shows before the next solve.
+  ASSERT_EQ(load(reused, small), Status::kOptimal);
+  EXPECT_EQ(reused.flow_value(), 0);
+  EXPECT_EQ(reused.total_cost(), 0);
+  for (ArcId a = 0; a < reused.arc_count(); ++a) EXPECT_EQ(reused.flow(a), 0);
   solve_and_certify(reused, small);
   EXPECT_EQ(reused.flow_value(), 2);
   EXPECT_EQ(reused.total_cost(), 5);
@@ -263,7 +272,8 @@ TEST(MinCostFlowEdgeCase, ZeroOrTinyBudgetStopsWithAMinimumCostPartialFlow) {
   const std::uint64_t work = solver.stats().work_units;
   const std::vector<Flow> full = arc_flows(solver);
 
-  for (const std::uint64_t units : {std::uint64_t{0}, std::uint64_t{1}, std::uint64_t{5}, work / 3}) {
+  for (const std::uint64_t units :
+       {std::uint64_t{0}, std::uint64_t{1}, std::uint64_t{5}, work / 3}) {
     SCOPED_TRACE(units);
     ASSERT_EQ(load(solver, net), Status::kOptimal);
     ASSERT_EQ(solver.solve(0, 1, Budget{units}), Status::kBudgetExhausted);

@@ -91,7 +91,7 @@ TEST(MinCostFlowNoAlloc, CounterSeesAllocations) {
   EXPECT_EQ(counter.stop(), 1u);
 }
 
-TEST(MinCostFlowNoAlloc, ConstructionMayAllocate) {
+TEST(MinCostFlowNoAlloc, ConstructionAllocatesUpFront) {
   AllocationCounter counter;
   MinCostFlow solver(Capacity{kMaxTestNodes, kMaxTestArcs});
   EXPECT_GT(counter.stop(), 0u) << "a solver with storage must allocate it up front";
@@ -125,7 +125,8 @@ TEST(MinCostFlowNoAlloc, ResetAddArcSolveAllocateNothing) {
     unlimited[i].solve = solver.solve(net.source, net.sink);
     unlimited[i].value = solver.flow_value();
     unlimited[i].cost = solver.total_cost();
-    for (ArcId a = 0; a < solver.arc_count(); ++a) unlimited[i].cost -= solver.flow(a) * solver.cost(a);
+    for (ArcId a = 0; a < solver.arc_count(); ++a)
+      unlimited[i].cost -= solver.flow(a) * solver.cost(a);
 
     budgeted[i].load = load(solver, net);
     budgeted[i].solve = solver.solve(net.source, net.sink, Budget{solver.stats().work_units / 2});
@@ -148,7 +149,8 @@ TEST(MinCostFlowNoAlloc, ResetAddArcSolveAllocateNothing) {
     EXPECT_EQ(unlimited[i].solve, Status::kOptimal);
     EXPECT_EQ(unlimited[i].cost, 0) << "total_cost != sum(flow * cost)";
     EXPECT_EQ(budgeted[i].load, Status::kOptimal);
-    EXPECT_TRUE(budgeted[i].solve == Status::kOptimal || budgeted[i].solve == Status::kBudgetExhausted);
+    EXPECT_TRUE(budgeted[i].solve == Status::kOptimal ||
+                budgeted[i].solve == Status::kBudgetExhausted);
     EXPECT_LE(budgeted[i].value, unlimited[i].value);
   }
   const std::vector<Status> expected{Status::kCapacityExceeded, Status::kOptimal,

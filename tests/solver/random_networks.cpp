@@ -87,8 +87,8 @@ TestNetwork random_layered_network(std::uint64_t seed) {
 
   const auto frames = static_cast<std::int32_t>(rng.range(3, 7));
   const std::int32_t pairs = frames * (frames - 1) / 2;
-  const auto points =
-      static_cast<std::int32_t>(rng.range(1, std::min<std::int32_t>(40, kMaxTestNodes - 2 - pairs)));
+  const auto points = static_cast<std::int32_t>(
+      rng.range(1, std::min<std::int32_t>(40, kMaxTestNodes - 2 - pairs)));
   net.node_count = 2 + points + pairs;
   net.source = 0;
   net.sink = 1;
@@ -117,7 +117,8 @@ TestNetwork random_layered_network(std::uint64_t seed) {
       }
     }
     std::sort(frames_of_p.begin(), frames_of_p.end());
-    for (std::int32_t f = 0; f < frames; ++f) nearby[static_cast<std::size_t>(p)].push_back(rng.range(0, 40));
+    for (std::int32_t f = 0; f < frames; ++f)
+      nearby[static_cast<std::size_t>(p)].push_back(rng.range(0, 40));
     max_views = std::max(max_views, static_cast<std::int32_t>(frames_of_p.size()));
   }
 
@@ -140,9 +141,8 @@ TestNetwork random_layered_network(std::uint64_t seed) {
       for (std::size_t b = a + 1; b < frames_of_p.size(); ++b) {
         const std::int32_t j = frames_of_p[a];
         const std::int32_t k = frames_of_p[b];
-        const Cost spatial = floor_log10(density[static_cast<std::size_t>(j)] *
-                                             density[static_cast<std::size_t>(k)] +
-                                         1);
+        const Cost spatial = floor_log10(
+            density[static_cast<std::size_t>(j)] * density[static_cast<std::size_t>(k)] + 1);
         net.arcs.push_back({first_point + p, pair_node(j, k), 1, spatial});
       }
     }

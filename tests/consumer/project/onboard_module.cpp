@@ -73,10 +73,11 @@ int main() {
   }
 
   const core::Summary& s = sparsifier.summary();
-  std::printf("onboard_module: %u keyframes, %u points: kept %u, culled %u, skipped %u "
-              "(max flow %" PRId64 ", cost %" PRId64 ", %zu bytes reserved)\n",
-              s.keyframes, s.points, s.kept, s.culled, s.skipped, s.max_flow, s.total_cost,
-              sparsifier.memory_bytes());
+  std::printf(
+      "onboard_module: %u keyframes, %u points: kept %u, culled %u, skipped %u "
+      "(max flow %" PRId64 ", cost %" PRId64 ", %zu bytes reserved)\n",
+      s.keyframes, s.points, s.kept, s.culled, s.skipped, s.max_flow, s.total_cost,
+      sparsifier.memory_bytes());
   std::fprintf(stderr, "onboard_module: decided in %.1f us\n", elapsed_ns / 1e3);
 
   // The contract an integrator relies on: one decision per distinct point in
@@ -97,7 +98,8 @@ int main() {
   const std::uint32_t culled = count[static_cast<int>(core::Verdict::kCull)];
   const std::uint32_t skipped = count[static_cast<int>(core::Verdict::kSkip)];
   const bool consistent = sparsifier.decision_count() == s.points && kept == s.kept &&
-                          culled == s.culled && skipped == s.skipped && s.points == window.distinct_points();
+                          culled == s.culled && skipped == s.skipped &&
+                          s.points == window.distinct_points();
   if (!consistent || s.kept == 0 || s.culled == 0) {
     std::printf("onboard_module: inconsistent decisions\n");
     return 1;
@@ -131,7 +133,8 @@ int main() {
   const int encoded = message.encode(buffer.data(), 0, static_cast<int>(buffer.size()));
   keepless::decision_t decoded;
   if (encoded != static_cast<int>(buffer.size()) ||
-      decoded.decode(buffer.data(), 0, encoded) != encoded || decoded.num_culled != message.num_culled ||
+      decoded.decode(buffer.data(), 0, encoded) != encoded ||
+      decoded.num_culled != message.num_culled ||
       decoded.culled_point_id != message.culled_point_id) {
     std::printf("onboard_module: decision_t did not round-trip\n");
     return 1;

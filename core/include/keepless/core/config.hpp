@@ -17,6 +17,9 @@ struct Capacities {
   std::uint32_t max_pair_arcs = 131072;    // point -> keyframe-pair arcs
 };
 
+// Bits of Params::cost_terms.
+enum CostTerm : std::uint8_t { kConnectivityCost = 1, kSpatialCost = 2, kBaselineCost = 4 };
+
 // The paper's section III-B parameters.
 struct Params {
   std::int64_t pair_capacity = 100;  // M
@@ -24,8 +27,8 @@ struct Params {
   std::int32_t box_width = 64;       // spatial-diversity box, pixels (closed, centred)
   std::int32_t box_height = 48;
   // Which costs the network uses (the paper's ablation); the default, all
-  // three, is the paper's method. Bit 0 c_c, bit 1 c_s, bit 2 c_b.
-  std::uint8_t cost_terms = 7;
+  // three, is the paper's method. A term switched off costs 0 on its arcs.
+  std::uint8_t cost_terms = kConnectivityCost | kSpatialCost | kBaselineCost;
 };
 
 }  // namespace keepless::core

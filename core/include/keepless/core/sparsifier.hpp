@@ -1,6 +1,12 @@
 #pragma once
 // The decision path: window -> network -> solve -> decisions, in storage
-// sized once from Capacities. run() allocates nothing.
+// sized once from Capacities. run() and update() allocate nothing.
+//
+// run() builds the network and solves it from nothing. update() (with
+// SolveMode::kIncremental) keeps the network and the solver's flow and
+// potentials between calls: it edits what changed since the previous window
+// and re-optimises from there, then restores the canonical tie-break; its
+// decisions, flows and cost equal run()'s on the same window.
 
 #include <cstddef>
 #include <cstdint>
@@ -8,6 +14,7 @@
 
 #include "keepless/core/config.hpp"
 #include "keepless/core/decision.hpp"
+#include "keepless/core/incremental_network.hpp"
 #include "keepless/core/network.hpp"
 #include "keepless/core/status.hpp"
 #include "keepless/core/window.hpp"
@@ -15,9 +22,22 @@
 
 namespace keepless::core {
 
+enum class SolveMode : std::uint8_t {
+  kFromScratch,  // run() only; update() behaves as run()
+  kIncremental,  // also holds the incremental network (about the size of the window again)
+};
+
+// Where a run() or update() spent its time, when a clock is set.
+struct StageTimes {
+  std::uint64_t network_ns = 0;  // build (run) or in-place update (update)
+  std::uint64_t solve_ns = 0;    // solve; for update, warm re-solve and tie-break restoration
+  std::uint64_t decide_ns = 0;   // verdicts and summary
+};
+
 class Sparsifier {
  public:
-  Sparsifier(const Capacities& capacities, const Params& params);
+  Sparsifier(const Capacities& capacities, const Params& params,
+             SolveMode mode = SolveMode::kFromScratch);
   ~Sparsifier();
   Sparsifier(const Sparsifier&) = delete;
   Sparsifier& operator=(const Sparsifier&) = delete;
@@ -29,13 +49,27 @@ class Sparsifier {
   // every evaluated point (nothing is culled on an unfinished solve).
   [[nodiscard]] Status run(const Window& window, const solver::Budget& budget = {});
 
+  // The same decisions as run(window), incrementally: the network is edited
+  // and the solver resumes from the previous call's flow and potentials,
+  // including a call that ran out of budget (the next one carries on). The
+  // budget covers the re-optimisation and the tie-break restoration; on
+  // kBudgetExhausted every evaluated point is kept. A call to run() in
+  // between makes the next update() start from nothing.
+  [[nodiscard]] Status update(const Window& window, const solver::Budget& budget = {});
+
+  // Times the stages of each run()/update() on `clock` (null: not timed).
+  void set_clock(const solver::Clock* clock);
+  const StageTimes& stage_times() const;
+
   const Summary& summary() const;
   // One per distinct window point, ascending point id.
   std::uint32_t decision_count() const;
   const PointDecision* decisions() const;
 
   const Params& params() const;
-  const PaperNetwork& network() const;
+  const PaperNetwork& network() const;                  // after run()
+  const IncrementalNetwork* incremental_network() const;  // after update(); null without kIncremental
+  SolveMode mode() const;
   const solver::MinCostFlow& solver() const;
   std::size_t memory_bytes() const;
 

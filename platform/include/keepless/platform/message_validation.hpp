@@ -36,7 +36,7 @@ const char* to_string(RejectReason r);
 
 struct MessageLimits {
   std::uint32_t max_observations = 2000;  // per keyframe_t
-  std::uint32_t max_event_ids = 4096;     // per list of a map_event_t
+  std::uint32_t max_event_ids = 1024;     // per list of a map_event_t
 };
 
 // Wire layout (LCM encodes big-endian; the 8-byte fingerprint comes first).

@@ -21,7 +21,7 @@ struct NodeConfig {
 
   std::uint32_t window = 20;               // K: keyframes in the window (ORB-SLAM2-sized local map)
   std::uint32_t max_observations = 2000;   // per keyframe_t; larger messages are refused unread
-  std::uint32_t max_event_ids = 4096;      // per list of a map_event_t
+  std::uint32_t max_event_ids = 1024;      // per list of a map_event_t
   std::uint32_t max_pair_arcs = 0;         // point -> pair arcs; 0: the worst case of K full keyframes
 
   core::Params params;  // M, theta, box

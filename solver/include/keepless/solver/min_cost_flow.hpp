@@ -1,17 +1,26 @@
 #pragma once
 // Min-cost max-flow by successive shortest paths with node potentials
-// (primal-dual): each round runs one Dijkstra on reduced costs, from the sink
-// backwards with a radix heap, then one Dinic blocking flow over the
-// zero-reduced-cost arcs, so a round carries every shortest path at once.
+// (primal-dual): each phase runs one Dijkstra on reduced costs, forwards from
+// the source with a radix heap, then one Dinic blocking flow over the
+// zero-reduced-cost arcs, so a phase carries every shortest path at once.
 //
 // Generic: any directed network with integer capacities in [0, 2^31) and
 // costs in [0, 2^30], with (nodes + 1)^2 * (max cost + 1) <= 2^62 (labels are
 // 64-bit). All storage is sized by the constructor; nothing allocates
-// afterwards. Deterministic: the result is a pure function of the arc
-// sequence (adjacency is visited in insertion order; no hashing, no floats).
+// afterwards. Deterministic: the result is a pure function of the calls made
+// (adjacency is visited in a fixed order; no hashing, no floats).
 // Tie-break: among equal-cost shortest paths, the blocking flow serves each
 // node's arcs in insertion order, so earlier arcs win ties (the paper's
 // network inserts points by ascending id; see core/network.hpp).
+//
+// Incremental use: after a solve, arcs may be edited in place (set_arc,
+// replace_arc) and solve_warm() re-optimises from the previous flow and
+// potentials: arcs whose reduced cost became negative are saturated, arcs
+// carrying flow at a positive reduced cost are emptied, the resulting
+// excesses and deficits are routed along shortest paths, and the flow is
+// then augmented to maximum. The result is a minimum-cost maximum flow, but
+// among equal-cost optima it may differ from solve()'s; canonicalize() then
+// selects one optimum by a rule that does not depend on the history.
 
 #include <cstddef>
 #include <cstdint>
@@ -32,16 +41,37 @@ struct Capacity {
   std::int32_t max_arcs = 0;  // user arcs; the residual graph holds twice as many
 };
 
-// Deterministic work limit: one unit per arc scanned, checked after every
-// augmentation and every round.
+// A monotonic clock for deadlines, injected so that tests can drive time.
+class Clock {
+ public:
+  virtual ~Clock() = default;
+  virtual std::uint64_t now_ns() const = 0;
+};
+
+// std::chrono::steady_clock (CLOCK_MONOTONIC on Linux).
+class SteadyClock final : public Clock {
+ public:
+  std::uint64_t now_ns() const override;
+};
+
+// How much a solve may do. Work units are deterministic (one per residual
+// arc scanned), so a work budget reproduces exactly; the deadline is read
+// from `clock` (absolute, in that clock's nanoseconds). Both are checked
+// before every phase, after every augmentation, and every few hundred arcs
+// inside a search; a stop leaves a valid state (see solve()).
 struct Budget {
   std::uint64_t work_units = std::numeric_limits<std::uint64_t>::max();
+  const Clock* clock = nullptr;  // no deadline when null
+  std::uint64_t deadline_ns = std::numeric_limits<std::uint64_t>::max();
 };
 
 struct SolveStats {
-  std::uint64_t phases = 0;        // Dijkstra runs that reached the sink
+  std::uint64_t phases = 0;        // Dijkstra runs that reached a target
   std::uint64_t augmentations = 0; // augmenting paths pushed
   std::uint64_t work_units = 0;    // arcs scanned
+  std::uint64_t repaired_arcs = 0; // solve_warm: arcs saturated or emptied by the repair
+  std::uint64_t canonical_swaps = 0;  // canonicalize: zero-cost cycles pushed
+  bool warm = false;               // solve_warm reused the previous state
 };
 
 class MinCostFlow {
@@ -58,9 +88,46 @@ class MinCostFlow {
   // Appends an arc; its id is the number of arcs added before it.
   [[nodiscard]] Status add_arc(NodeId from, NodeId to, Flow capacity, Cost cost);
 
-  // Maximum flow from source to sink at minimum cost. kBudgetExhausted leaves
-  // a valid (feasible, cost-optimal for its value) but not maximum flow.
+  // Edits for solve_warm. set_arc changes an arc's data and keeps its flow
+  // (clipped to the new capacity by the next solve); replace_arc gives slot
+  // `a` new end points and data and zero flow (capacity 0 retires an arc).
+  [[nodiscard]] Status set_arc(ArcId a, Flow capacity, Cost cost);
+  [[nodiscard]] Status replace_arc(ArcId a, NodeId from, NodeId to, Flow capacity, Cost cost);
+  // Tells solve_warm that node v now stands for something new, so its old
+  // potential is no guide: it is re-estimated from its neighbours.
+  [[nodiscard]] Status renew_node(NodeId v);
+
+  // The tie-break order: the blocking flow serves these arcs first at their
+  // tails, in this order, and every other arc after them in id order (by
+  // default, id order alone). A network whose arc ids do not follow its
+  // preferred order (e.g. recycled ids) states it here. Copied; takes effect
+  // at the next solve. kInvalidInput for an id out of range or a repeat.
+  [[nodiscard]] Status set_tie_order(const ArcId* order, std::int32_t count);
+
+  // Maximum flow from source to sink at minimum cost, from zero flow.
+  // kBudgetExhausted leaves a valid (feasible, cost-optimal for its value)
+  // but not maximum flow, from which solve_warm() can resume.
   [[nodiscard]] Status solve(NodeId source, NodeId sink, const Budget& budget = {});
+
+  // The same optimum, re-optimised from the state of the previous solve
+  // (same source and sink) after the edits made since; falls back to solve()
+  // when there is no usable state. kBudgetExhausted may stop while excesses
+  // from the repair are still being routed: then balanced() is false (the
+  // flow respects capacities and the potential certificate but not
+  // conservation at some nodes); the next solve_warm() continues.
+  [[nodiscard]] Status solve_warm(NodeId source, NodeId sink, const Budget& budget = {});
+
+  // After an optimal solve: among all minimum-cost maximum flows, moves to
+  // the one whose flows on `order` are lexicographically greatest (first
+  // arc's flow as large as possible, then the second's, ...), by pushing
+  // flow around zero-reduced-cost cycles. Cost and value are unchanged.
+  // Listing the source's arcs makes the result a function of the network
+  // alone, whatever path solve or solve_warm took (for networks whose
+  // optimum is determined by the source arcs' flows, like the paper's).
+  // kBudgetExhausted leaves an optimal but possibly non-canonical flow;
+  // kInvalidInput if the last solve did not finish or an id is out of range.
+  [[nodiscard]] Status canonicalize(const ArcId* order, std::int32_t count,
+                                    const Budget& budget = {});
 
   std::int32_t node_count() const;
   std::int32_t arc_count() const;
@@ -68,9 +135,10 @@ class MinCostFlow {
   NodeId head(ArcId a) const;
   Flow capacity(ArcId a) const;
   Cost cost(ArcId a) const;
-  Flow flow(ArcId a) const;  // 0 until solve() has run on the current arcs
-  Flow flow_value() const;
+  Flow flow(ArcId a) const;  // as of the last solve; 0 for arcs added or replaced since
+  Flow flow_value() const;   // net flow out of the source
   Cost total_cost() const;
+  bool balanced() const;     // conservation holds at every node but source and sink
   // Dual certificate: every arc with residual capacity has
   // cost + potential(tail) - potential(head) >= 0.
   Cost potential(NodeId v) const;

@@ -1,0 +1,192 @@
+#include "lcm_mode.hpp"
+
+#ifdef KEEPLESS_HAVE_LCM
+
+#include <lcm/lcm-cpp.hpp>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <vector>
+
+#include "keepless/decision_t.hpp"
+#include "keepless/keyframe_t.hpp"
+#include "keepless/status_t.hpp"
+#include "stream.hpp"
+
+extern char** environ;
+
+namespace keepless::perf {
+namespace {
+
+std::uint64_t now_ns() {
+  return static_cast<std::uint64_t>(std::chrono::duration_cast<std::chrono::nanoseconds>(
+                                        std::chrono::steady_clock::now().time_since_epoch())
+                                        .count());
+}
+
+struct Listener {
+  std::int64_t last_sequence = 0;
+  std::uint64_t last_arrival = 0;
+  bool status_seen = false;
+  void on_decision(const lcm::ReceiveBuffer*, const std::string&, const keepless::decision_t* d) {
+    last_sequence = d->sequence;
+    last_arrival = now_ns();
+  }
+  void on_status(const lcm::ReceiveBuffer*, const std::string&, const keepless::status_t*) {
+    status_seen = true;
+  }
+};
+
+double nearest_rank(std::vector<double> v, double p) {
+  if (v.empty()) return 0;
+  std::sort(v.begin(), v.end());
+  const auto rank = static_cast<std::size_t>(std::ceil(p * static_cast<double>(v.size())));
+  return v[std::min(v.size(), std::max<std::size_t>(rank, 1)) - 1];
+}
+
+}  // namespace
+
+bool run_lcm_mode(const char* argv0, const KeyframeStream& stream, std::uint32_t warmup,
+                  LcmResult* out, std::string* error) {
+  std::string dir = argv0;
+  const std::size_t slash = dir.rfind('/');
+  dir = slash == std::string::npos ? "." : dir.substr(0, slash);
+  const std::string node = dir + "/keepless_node";
+  if (access(node.c_str(), X_OK) != 0) {
+    *error = "no executable " + node;
+    return false;
+  }
+  const int port = 7700 + static_cast<int>(getpid() % 1000);
+  const std::string url = "udpm://239.255.76.67:" + std::to_string(port) + "?ttl=0";
+  std::uint32_t per_frame = 1;
+  for (const auto& o : stream.observations) per_frame = std::max<std::uint32_t>(per_frame, static_cast<std::uint32_t>(o.size()));
+  const core::Capacities need = window_needs(stream);
+  const std::vector<std::string> args = {
+      node, "--url", url, "--window", std::to_string(stream.window), "--max-observations",
+      std::to_string(per_frame), "--max-pair-arcs", std::to_string(need.max_pair_arcs + 1),
+      "--status-period-ms", "200", "--quiet"};
+  std::vector<char*> argv;
+  for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+  argv.push_back(nullptr);
+  pid_t pid = 0;
+  if (posix_spawn(&pid, node.c_str(), nullptr, nullptr, argv.data(), environ) != 0) {
+    *error = "cannot start " + node;
+    return false;
+  }
+  const auto stop = [pid]() {
+    kill(pid, SIGTERM);
+    int status = 0;
+    waitpid(pid, &status, 0);
+  };
+
+  lcm::LCM bus(url);
+  if (!bus.good()) {
+    stop();
+    *error = "cannot open " + url;
+    return false;
+  }
+  Listener listener;
+  bus.subscribe("KEEPLESS_DECISION", &Listener::on_decision, &listener);
+  bus.subscribe("KEEPLESS_STATUS", &Listener::on_status, &listener);
+  const std::uint64_t give_up = now_ns() + 10'000'000'000ull;
+  while (!listener.status_seen && now_ns() < give_up) bus.handleTimeout(100);
+  if (!listener.status_seen) {
+    stop();
+    *error = "keepless_node sent no status within 10 s";
+    return false;
+  }
+
+  std::vector<double> latencies;
+  keepless::keyframe_t msg{};
+  for (std::size_t k = 0; k < stream.keyframes.size(); ++k) {
+    const core::Keyframe& kf = stream.keyframes[k];
+    const auto& obs = stream.observations[k];
+    msg.sequence = static_cast<std::int64_t>(k) + 1;
+    msg.utime = (static_cast<std::int64_t>(k) + 1) * 100'000;
+    msg.keyframe_id = static_cast<std::int64_t>(kf.id);
+    std::copy(kf.centre, kf.centre + 3, msg.centre);
+    std::copy(kf.orientation, kf.orientation + 4, msg.orientation);
+    msg.image_width = 640;
+    msg.image_height = 480;
+    msg.num_observations = static_cast<std::int32_t>(obs.size());
+    msg.point_id.resize(obs.size());
+    msg.u.resize(obs.size());
+    msg.v.resize(obs.size());
+    for (std::size_t i = 0; i < obs.size(); ++i) {
+      msg.point_id[i] = static_cast<std::int64_t>(obs[i].point);
+      msg.u[i] = static_cast<float>(obs[i].u);
+      msg.v[i] = static_cast<float>(obs[i].v);
+    }
+    const std::uint64_t sent = now_ns();
+    bus.publish("KEEPLESS_KEYFRAME", &msg);
+    const std::uint64_t deadline = sent + 2'000'000'000ull;
+    while (listener.last_sequence < msg.sequence && now_ns() < deadline) bus.handleTimeout(50);
+    if (k < warmup) continue;
+    if (listener.last_sequence >= msg.sequence) {
+      latencies.push_back(static_cast<double>(listener.last_arrival - sent) * 1e-6);
+    } else {
+      ++out->lost;
+    }
+  }
+  stop();
+  out->decisions = static_cast<std::uint32_t>(latencies.size());
+  out->p50_ms = nearest_rank(latencies, 0.5);
+  out->p90_ms = nearest_rank(latencies, 0.9);
+  out->p99_ms = nearest_rank(latencies, 0.99);
+  out->max_ms = latencies.empty() ? 0 : *std::max_element(latencies.begin(), latencies.end());
+  return true;
+}
+
+bool read_lcm_log(const std::string& path, KeyframeStream* out, std::string* error) {
+  lcm::LogFile log(path, "r");
+  if (!log.good()) {
+    *error = "cannot read LCM log " + path;
+    return false;
+  }
+  out->workload = "log";
+  out->window = 20;
+  keepless::keyframe_t msg;
+  for (const lcm::LogEvent* e = log.readNextEvent(); e != nullptr; e = log.readNextEvent()) {
+    if (e->channel != "KEEPLESS_KEYFRAME") continue;
+    if (msg.decode(e->data, 0, e->datalen) < 0) continue;
+    core::Keyframe kf;
+    kf.id = static_cast<core::KeyframeId>(msg.keyframe_id);
+    std::copy(msg.centre, msg.centre + 3, kf.centre);
+    std::copy(msg.orientation, msg.orientation + 4, kf.orientation);
+    std::vector<core::Observation> obs(static_cast<std::size_t>(msg.num_observations));
+    for (std::size_t i = 0; i < obs.size(); ++i) {
+      obs[i] = {static_cast<core::PointId>(msg.point_id[i]), msg.u[i], msg.v[i]};
+    }
+    out->keyframes.push_back(kf);
+    out->observations.push_back(std::move(obs));
+  }
+  if (out->keyframes.empty()) {
+    *error = "no keyframe_t on KEEPLESS_KEYFRAME in " + path;
+    return false;
+  }
+  return true;
+}
+
+}  // namespace keepless::perf
+
+#else
+
+namespace keepless::perf {
+
+bool run_lcm_mode(const char*, const KeyframeStream&, std::uint32_t, LcmResult*, std::string* error) {
+  *error = "built without LCM";
+  return false;
+}
+bool read_lcm_log(const std::string&, KeyframeStream*, std::string* error) {
+  *error = "built without LCM";
+  return false;
+}
+
+}  // namespace keepless::perf
+
+#endif

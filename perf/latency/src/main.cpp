@@ -1,0 +1,511 @@
+// keepless_latency: replays a deterministic keyframe stream through the
+// decision path (ingest -> network update -> solve -> decide -> publish) and
+// reports each stage's latency histogram and the end-to-end one, decisions
+// whose budget ran out, heap allocations after warm-up (a counting global
+// operator new, replaced for this binary), and the fixed footprint. On
+// sampled windows of the same run it times the from-scratch solvers (ours,
+// LEMON's NetworkSimplex and CostScaling after Preflow, the per-pair closed
+// form) and checks that every path decides the same. With --lcm it measures
+// keyframe-published -> decision-received across keepless_node on loopback.
+// The last stdout line is one JSON object.
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <new>
+#include <string>
+#include <vector>
+
+#include "compare.hpp"
+#include "keepless/core/closed_form.hpp"
+#include "keepless/core/sparsifier.hpp"
+#include "keepless/platform/cpu_pinning.hpp"
+#include "lcm_mode.hpp"
+#include "publish.hpp"
+#include "stream.hpp"
+#include "synthetic_window.hpp"
+
+// --- allocation counter -------------------------------------------------------
+
+namespace {
+std::atomic<bool> g_counting{false};
+std::atomic<std::uint64_t> g_allocations{0};
+
+void* counted(std::size_t size) {
+  if (g_counting.load(std::memory_order_relaxed)) g_allocations.fetch_add(1, std::memory_order_relaxed);
+  if (void* p = std::malloc(size == 0 ? 1 : size)) return p;
+  throw std::bad_alloc();
+}
+void* counted_aligned(std::size_t size, std::align_val_t align) {
+  if (g_counting.load(std::memory_order_relaxed)) g_allocations.fetch_add(1, std::memory_order_relaxed);
+  const auto a = static_cast<std::size_t>(align);
+  const std::size_t rounded = (size + a - 1) / a * a;
+  if (void* p = std::aligned_alloc(a, rounded == 0 ? a : rounded)) return p;
+  throw std::bad_alloc();
+}
+}  // namespace
+
+void* operator new(std::size_t size) { return counted(size); }
+void* operator new[](std::size_t size) { return counted(size); }
+void* operator new(std::size_t size, const std::nothrow_t&) noexcept {
+  try {
+    return counted(size);
+  } catch (...) {
+    return nullptr;
+  }
+}
+void* operator new[](std::size_t size, const std::nothrow_t&) noexcept {
+  try {
+    return counted(size);
+  } catch (...) {
+    return nullptr;
+  }
+}
+void* operator new(std::size_t size, std::align_val_t a) { return counted_aligned(size, a); }
+void* operator new[](std::size_t size, std::align_val_t a) { return counted_aligned(size, a); }
+void operator delete(void* p) noexcept { std::free(p); }
+void operator delete[](void* p) noexcept { std::free(p); }
+void operator delete(void* p, std::size_t) noexcept { std::free(p); }
+void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
+void operator delete(void* p, std::align_val_t) noexcept { std::free(p); }
+void operator delete[](void* p, std::align_val_t) noexcept { std::free(p); }
+void operator delete(void* p, std::size_t, std::align_val_t) noexcept { std::free(p); }
+void operator delete[](void* p, std::size_t, std::align_val_t) noexcept { std::free(p); }
+
+namespace keepless::perf {
+namespace {
+
+constexpr double kNodeDefaultBudgetMs = 5.0;  // the node's default latency target
+
+struct Options {
+  std::string workload = "orbslam";
+  std::uint32_t keyframes = 0;  // measured decisions; 0: the workload's default
+  std::uint32_t warmup = 0;     // extra decisions before measuring; 0: K
+  std::uint64_t seed = 1;
+  std::string cpus;
+  bool mlock = false;
+  double budget_ms = kNodeDefaultBudgetMs;  // 0: unlimited
+  double budget_fraction = 0;               // > 0: budget = fraction * calibrated median
+  std::uint32_t compare = 25;               // sampled windows for the from-scratch comparisons
+  std::uint32_t reps = 3;                   // timing repetitions per sampled window (min kept)
+  bool lcm = false;
+  std::string log;
+};
+
+void usage() {
+  std::fprintf(stderr,
+               "usage: keepless_latency [--workload small|orbslam|large|map] [--keyframes N]\n"
+               "         [--warmup N] [--seed S] [--cpus LIST] [--mlock] [--budget-ms MS]\n"
+               "         [--budget-fraction F] [--compare WINDOWS] [--reps R] [--lcm] [--log FILE]\n"
+               "  --keyframes N       decisions measured after warm-up (default: 1000; map: 3)\n"
+               "  --budget-ms MS      solve deadline per decision, from keyframe arrival\n"
+               "                      (default %.1f, the node's; 0: none)\n"
+               "  --budget-fraction F run once without a budget, then again with F x its median\n"
+               "  --compare W         windows sampled for the from-scratch solvers (0: none)\n"
+               "  --lcm               also measure published -> received through keepless_node\n"
+               "  --log FILE          replay the keyframe_t messages of an LCM log instead\n",
+               kNodeDefaultBudgetMs);
+}
+
+bool parse(int argc, char** argv, Options* o) {
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    const auto value = [&](const char** out) {
+      if (i + 1 >= argc) return false;
+      *out = argv[++i];
+      return true;
+    };
+    const char* v = nullptr;
+    char* end = nullptr;
+    if (a == "--mlock") {
+      o->mlock = true;
+    } else if (a == "--lcm") {
+      o->lcm = true;
+    } else if (a == "--help" || a == "-h") {
+      return false;
+    } else if (!value(&v)) {
+      std::fprintf(stderr, "keepless_latency: %s needs a value\n", a.c_str());
+      return false;
+    } else if (a == "--workload") {
+      o->workload = v;
+    } else if (a == "--cpus") {
+      o->cpus = v;
+    } else if (a == "--log") {
+      o->log = v;
+    } else if (a == "--budget-ms" || a == "--budget-fraction") {
+      const double x = std::strtod(v, &end);
+      if (end == v || *end != '\0' || !std::isfinite(x) || x < 0) {
+        std::fprintf(stderr, "keepless_latency: bad %s '%s'\n", a.c_str(), v);
+        return false;
+      }
+      (a == "--budget-ms" ? o->budget_ms : o->budget_fraction) = x;
+    } else if (a == "--keyframes" || a == "--warmup" || a == "--seed" || a == "--compare" || a == "--reps") {
+      const unsigned long long x = std::strtoull(v, &end, 10);
+      if (end == v || *end != '\0' || v[0] == '-') {
+        std::fprintf(stderr, "keepless_latency: bad %s '%s'\n", a.c_str(), v);
+        return false;
+      }
+      if (a == "--seed") {
+        o->seed = x;
+      } else {
+        std::uint32_t& t = a == "--keyframes" ? o->keyframes
+                           : a == "--warmup"  ? o->warmup
+                           : a == "--compare" ? o->compare
+                                              : o->reps;
+        t = static_cast<std::uint32_t>(std::min<unsigned long long>(x, 1u << 30));
+      }
+    } else {
+      std::fprintf(stderr, "keepless_latency: unknown flag %s\n", a.c_str());
+      return false;
+    }
+  }
+  return true;
+}
+
+double ms(std::uint64_t ns) { return static_cast<double>(ns) * 1e-6; }
+
+// Nearest-rank percentile of a sorted sample.
+std::uint64_t percentile(const std::vector<std::uint64_t>& sorted, double p) {
+  if (sorted.empty()) return 0;
+  const auto rank = static_cast<std::size_t>(std::ceil(p * static_cast<double>(sorted.size())));
+  return sorted[std::min(sorted.size(), std::max<std::size_t>(rank, 1)) - 1];
+}
+
+double median_ms(std::vector<std::uint64_t> v) {
+  std::sort(v.begin(), v.end());
+  return ms(percentile(v, 0.5));
+}
+
+struct Histogram {
+  const char* name;
+  std::vector<std::uint64_t> ns;
+  double p(double q) const {
+    std::vector<std::uint64_t> s = ns;
+    std::sort(s.begin(), s.end());
+    return ms(percentile(s, q));
+  }
+  double max() const { return ns.empty() ? 0 : ms(*std::max_element(ns.begin(), ns.end())); }
+};
+
+struct Replay {
+  // Per measured decision.
+  Histogram ingest{"ingest", {}}, network{"network", {}}, solve{"solve", {}}, decide{"decide", {}},
+      publish{"publish", {}}, e2e{"end-to-end", {}};
+  std::uint32_t decisions = 0, exhausted = 0, late = 0, mismatches = 0, failures = 0;
+  std::uint64_t allocations = 0;
+  std::size_t footprint = 0;
+  core::Capacities caps{};
+  // Sampled windows.
+  std::vector<std::uint64_t> ours, lemon_ns, lemon_cs, closed, incremental, slide_scratch, slide_incremental;
+  std::uint32_t compared = 0, lemon_checked = 0, cost_mismatches = 0, lemon_decision_mismatches = 0,
+                closed_mismatches = 0;
+  double points_mean = 0, arcs_mean = 0;
+};
+
+// Same verdicts and flows; an unfinished incremental decision must keep every
+// point the full solve evaluates (nothing culled).
+bool agrees(const core::Sparsifier& inc, core::Status status, const core::Sparsifier& ref) {
+  if (inc.decision_count() != ref.decision_count()) return false;
+  for (std::uint32_t i = 0; i < ref.decision_count(); ++i) {
+    const core::PointDecision& a = inc.decisions()[i];
+    const core::PointDecision& b = ref.decisions()[i];
+    if (a.point != b.point) return false;
+    if (status == core::Status::kBudgetExhausted) {
+      if (a.verdict == core::Verdict::kCull || (b.verdict == core::Verdict::kSkip) != (a.verdict == core::Verdict::kSkip)) {
+        return false;
+      }
+    } else if (a.verdict != b.verdict || a.flow != b.flow) {
+      return false;
+    }
+  }
+  return status == core::Status::kBudgetExhausted ||
+         (inc.summary().total_cost == ref.summary().total_cost &&
+          inc.summary().max_flow == ref.summary().max_flow);
+}
+
+void compare_window(const core::Sparsifier& scratch, const core::Capacities& caps, const Options& o,
+                    const solver::Clock& clock, Replay* r) {
+  ArcList net;
+  network_arcs(scratch, &net);
+  solver::MinCostFlow mcf(core::PaperNetwork::solver_capacity(caps));
+  std::uint64_t best = ~0ull, best_ns = ~0ull, best_closed = ~0ull, best_slide = ~0ull;
+  solver::Flow value = 0, v2 = 0;
+  solver::Cost cost = 0, c2 = 0;
+  for (std::uint32_t k = 0; k < std::max(o.reps, 1u); ++k) {
+    best = std::min(best, time_ours(net, clock, mcf, &value, &cost));
+  }
+  const solver::Cost expected = scratch.summary().total_cost;
+  if (value != scratch.summary().max_flow || cost != expected) ++r->cost_mismatches;
+  r->ours.push_back(best);
+  if (have_lemon()) {
+    for (std::uint32_t k = 0; k < std::max(o.reps, 1u); ++k) {
+      best_ns = std::min(best_ns, time_lemon_network_simplex(net, clock, &v2, &c2));
+    }
+    if (v2 != value || c2 != expected) ++r->cost_mismatches;
+    r->lemon_ns.push_back(best_ns);
+    r->lemon_cs.push_back(time_lemon_cost_scaling(net, clock, &v2, &c2));
+    if (v2 != value || c2 != expected) ++r->cost_mismatches;
+    std::vector<solver::Flow> flows;
+    if (lemon_canonical_flows(net, value, &flows)) {
+      ++r->lemon_checked;
+      std::uint32_t e = 0;
+      for (std::uint32_t i = 0; i < scratch.decision_count(); ++i) {
+        const core::PointDecision& d = scratch.decisions()[i];
+        if (d.verdict == core::Verdict::kSkip) continue;
+        const core::Verdict lemon = core::decide(flows[e], d.capacity, scratch.params().theta);
+        if (flows[e] != d.flow || lemon != d.verdict) {
+          ++r->lemon_decision_mismatches;
+          break;
+        }
+        ++e;
+      }
+    }
+  }
+  core::ClosedForm closed(caps);
+  for (std::uint32_t k = 0; k < std::max(o.reps, 1u); ++k) {
+    const std::uint64_t t0 = clock.now_ns();
+    closed.solve(scratch.network(), scratch.params());
+    best_closed = std::min(best_closed, clock.now_ns() - t0);
+  }
+  r->closed.push_back(best_closed);
+  for (std::uint32_t i = 0; i < scratch.decision_count(); ++i) {
+    if (closed.point_flow(i) != scratch.decisions()[i].flow) {
+      ++r->closed_mismatches;
+      break;
+    }
+  }
+  (void)best_slide;
+  ++r->compared;
+}
+
+// One pass over the stream. budget_ns == 0: no deadline.
+bool replay(const KeyframeStream& stream, std::uint32_t warmup, std::uint64_t budget_ns,
+            const Options& o, bool compare, Replay* r) {
+  const core::Capacities caps = window_needs(stream);
+  r->caps = caps;
+  const core::Params params;
+  core::Window window(caps);
+  core::Sparsifier inc(caps, params, core::SolveMode::kIncremental);
+  core::Sparsifier scratch(caps, params);
+  DecisionEncoder encoder(caps);
+  solver::SteadyClock clock;
+  inc.set_clock(&clock);
+  scratch.set_clock(&clock);
+  r->footprint = window.memory_bytes() + inc.memory_bytes() + encoder.memory_bytes();
+
+  const auto total = static_cast<std::uint32_t>(stream.keyframes.size());
+  const std::uint32_t measured = total > warmup ? total - warmup : 0;
+  for (Histogram* h : {&r->ingest, &r->network, &r->solve, &r->decide, &r->publish, &r->e2e}) {
+    h->ns.clear();
+    h->ns.reserve(measured);
+  }
+  const std::uint32_t stride = compare && o.compare > 0 ? std::max<std::uint32_t>(1, measured / o.compare) : 0;
+  double points = 0, arcs = 0;
+  for (std::uint32_t k = 0; k < total; ++k) {
+    const bool measuring = k >= warmup;
+    const core::Keyframe& kf = stream.keyframes[k];
+    const std::vector<core::Observation>& obs = stream.observations[k];
+    g_counting = measuring;
+    // --- the decision path ---
+    const std::uint64_t t0 = clock.now_ns();  // the keyframe arrives
+    if (window.keyframe_count() == stream.window) {
+      if (window.remove_keyframe(window.keyframe(0).id) != core::Status::kOk) return false;
+    }
+    const core::Status added =
+        window.add_keyframe(kf, obs.data(), static_cast<std::uint32_t>(obs.size()));
+    const std::uint64_t t1 = clock.now_ns();
+    solver::Budget budget;
+    if (budget_ns > 0) {
+      budget.clock = &clock;
+      budget.deadline_ns = t0 + budget_ns;
+    }
+    const core::Status status = inc.update(window, budget);
+    const std::uint64_t t2 = clock.now_ns();
+    encoder.encode(k + 1, window, inc, status);
+    const std::uint64_t t3 = clock.now_ns();
+    g_counting = false;
+    // --- outside the path: bookkeeping and checks ---
+    if (added != core::Status::kOk ||
+        (status != core::Status::kOk && status != core::Status::kBudgetExhausted)) {
+      std::fprintf(stderr, "keepless_latency: keyframe %u: %s / %s\n", k, core::to_string(added),
+                   core::to_string(status));
+      ++r->failures;
+      continue;
+    }
+    if (!measuring) continue;
+    const core::StageTimes& st = inc.stage_times();
+    r->ingest.ns.push_back(t1 - t0);
+    r->network.ns.push_back(st.network_ns);
+    r->solve.ns.push_back(st.solve_ns);
+    r->decide.ns.push_back(st.decide_ns);
+    r->publish.ns.push_back(t3 - t2);
+    r->e2e.ns.push_back(t3 - t0);
+    ++r->decisions;
+    r->exhausted += status == core::Status::kBudgetExhausted;
+    r->late += budget_ns > 0 && t3 - t0 > budget_ns;
+    points += inc.summary().points;
+    arcs += inc.summary().arcs;
+
+    const std::uint64_t s0 = clock.now_ns();
+    if (scratch.run(window) != core::Status::kOk || !agrees(inc, status, scratch)) ++r->mismatches;
+    const std::uint64_t s1 = clock.now_ns();
+    if (stride > 0 && (k - warmup) % stride == stride / 2 && r->compared < o.compare) {
+      if (status == core::Status::kOk) {
+        r->incremental.push_back(st.solve_ns);
+        r->slide_incremental.push_back(st.network_ns + st.solve_ns + st.decide_ns);
+        r->slide_scratch.push_back(s1 - s0);
+        compare_window(scratch, caps, o, clock, r);
+      }
+    }
+  }
+  r->allocations = g_allocations.load();
+  r->points_mean = r->decisions > 0 ? points / r->decisions : 0;
+  r->arcs_mean = r->decisions > 0 ? arcs / r->decisions : 0;
+  return true;
+}
+
+}  // namespace
+}  // namespace keepless::perf
+
+int main(int argc, char** argv) {
+  using namespace keepless;
+  using namespace keepless::perf;
+  Options o;
+  if (!parse(argc, argv, &o)) {
+    usage();
+    return 2;
+  }
+  std::string granted = platform::current_cpus();
+  std::string pin_note = "not requested";
+  if (!o.cpus.empty()) {
+    const platform::PinResult pin = platform::pin_to_cpus(o.cpus);
+    granted = pin.granted;
+    pin_note = pin.ok ? "ok" : "refused: " + pin.error;
+  }
+  std::string lock_note = "not requested";
+  if (o.mlock) {
+    const platform::LockResult lock = platform::lock_memory();
+    lock_note = lock.ok ? "ok" : "refused: " + lock.error;
+  }
+
+  KeyframeStream stream;
+  std::string source = "synthetic";
+  if (!o.log.empty()) {
+    std::string error;
+    if (!read_lcm_log(o.log, &stream, &error)) {
+      std::fprintf(stderr, "keepless_latency: %s\n", error.c_str());
+      return 2;
+    }
+    source = "log " + o.log;
+    o.workload = "log";
+  } else {
+    const std::uint32_t measured = o.keyframes > 0 ? o.keyframes : (o.workload == "map" ? 3 : 1000);
+    SyntheticSpec spec;
+    if (!workload_spec(o.workload, &spec)) {
+      std::fprintf(stderr, "keepless_latency: unknown workload '%s'\n", o.workload.c_str());
+      usage();
+      return 2;
+    }
+    const std::uint32_t k = spec.keyframes;
+    const std::uint32_t warmup = o.warmup > 0 ? o.warmup : k;
+    if (!make_stream(o.workload, k - 1 + warmup + measured, o.seed, &stream)) return 2;
+    o.warmup = k - 1 + warmup;
+  }
+  if (!o.log.empty() && o.warmup == 0) o.warmup = stream.window;
+
+  std::printf("keepless_latency: workload %s (%s), window %u keyframes, %zu keyframes, seed %llu\n",
+              o.workload.c_str(), source.c_str(), stream.window, stream.keyframes.size(),
+              static_cast<unsigned long long>(o.seed));
+  std::printf("cpus: requested %s, granted %s (%s); mlock: %s\n", o.cpus.empty() ? "-" : o.cpus.c_str(),
+              granted.c_str(), pin_note.c_str(), lock_note.c_str());
+
+  double budget_ms = o.budget_ms;
+  Replay calibration;
+  if (o.budget_fraction > 0) {
+    if (!replay(stream, o.warmup, 0, o, false, &calibration)) return 1;
+    budget_ms = o.budget_fraction * calibration.e2e.p(0.5);
+    std::printf("calibration: end-to-end median %.3f ms without a budget -> budget %.3f ms\n",
+                calibration.e2e.p(0.5), budget_ms);
+  }
+  Replay r;
+  const auto budget_ns = static_cast<std::uint64_t>(budget_ms * 1e6);
+  if (!replay(stream, o.warmup, budget_ns, o, true, &r)) return 1;
+
+  std::printf("capacities: %u keyframes, %u points, %u observations, %u pair arcs; footprint %zu bytes;"
+              " publish as %s\n",
+              r.caps.max_keyframes, r.caps.max_points, r.caps.max_observations, r.caps.max_pair_arcs,
+              r.footprint, DecisionEncoder::format());
+  std::printf("windows: %.0f points, %.0f arcs on average; %u decisions measured after %u warm-up\n",
+              r.points_mean, r.arcs_mean, r.decisions, o.warmup);
+  if (budget_ns > 0) {
+    std::printf("budget: %.3f ms per decision from keyframe arrival; exhausted %u, later than the budget %u\n",
+                budget_ms, r.exhausted, r.late);
+  } else {
+    std::printf("budget: none\n");
+  }
+  std::printf("%-12s %9s %9s %9s %9s %9s  (ms)\n", "stage", "p50", "p90", "p99", "p99.9", "max");
+  for (const Histogram* h : {&r.ingest, &r.network, &r.solve, &r.decide, &r.publish, &r.e2e}) {
+    std::printf("%-12s %9.3f %9.3f %9.3f %9.3f %9.3f\n", h->name, h->p(0.5), h->p(0.9), h->p(0.99),
+                h->p(0.999), h->max());
+  }
+  const double ours = median_ms(r.ours), lemon_ns = median_ms(r.lemon_ns), lemon_cs = median_ms(r.lemon_cs),
+               closed = median_ms(r.closed), inc = median_ms(r.incremental);
+  const auto ratio = [](double a, double b) { return b > 0 ? a / b : 0.0; };
+  if (r.compared > 0) {
+    std::printf("from scratch on %u sampled windows (median of per-window best of %u, ms):\n", r.compared,
+                std::max(o.reps, 1u));
+    std::printf("  ours %.3f | LEMON NetworkSimplex %.3f (%.1fx ours) | LEMON CostScaling %.3f (%.1fx ours)"
+                " | closed form %.3f (ours %.2fx it)\n",
+                ours, lemon_ns, ratio(lemon_ns, ours), lemon_cs, ratio(lemon_cs, ours), closed,
+                ratio(ours, closed));
+    std::printf("  incremental solve %.3f (scratch solve %.2fx it); slide incl. network: scratch %.3f,"
+                " incremental %.3f (%.2fx)\n",
+                inc, ratio(ours, inc), median_ms(r.slide_scratch), median_ms(r.slide_incremental),
+                ratio(median_ms(r.slide_scratch), median_ms(r.slide_incremental)));
+  }
+  const bool identical = r.mismatches == 0 && r.cost_mismatches == 0 && r.lemon_decision_mismatches == 0 &&
+                         r.closed_mismatches == 0 && r.failures == 0 && r.decisions > 0;
+  std::printf("identical decisions: %s (%u windows incremental vs run(); %u LEMON canonical, %u closed form;"
+              " cost mismatches %u)\n",
+              identical ? "true" : "false", r.decisions, r.lemon_checked, r.compared, r.cost_mismatches);
+  std::printf("heap allocations after warm-up: %llu\n", static_cast<unsigned long long>(r.allocations));
+
+  LcmResult lcm;
+  if (o.lcm) {
+    std::string error;
+    if (!run_lcm_mode(argv[0], stream, o.warmup, &lcm, &error)) {
+      std::fprintf(stderr, "keepless_latency: --lcm: %s\n", error.c_str());
+    } else {
+      std::printf("over LCM (keepless_node on loopback, published -> decision received): %u decisions,"
+                  " p50 %.3f p90 %.3f p99 %.3f max %.3f ms, %u lost\n",
+                  lcm.decisions, lcm.p50_ms, lcm.p90_ms, lcm.p99_ms, lcm.max_ms, lcm.lost);
+    }
+  }
+
+  std::printf(
+      "{\"workload\":\"%s\",\"window\":%u,\"decisions\":%u,\"cpus\":\"%s\",\"mlock\":%s,"
+      "\"e2e_p50_ms\":%.4f,\"e2e_p90_ms\":%.4f,\"e2e_p99_ms\":%.4f,\"e2e_p999_ms\":%.4f,\"e2e_max_ms\":%.4f,"
+      "\"ingest_p50_ms\":%.4f,\"ingest_p99_ms\":%.4f,\"network_p50_ms\":%.4f,\"network_p99_ms\":%.4f,"
+      "\"solve_p50_ms\":%.4f,\"solve_p99_ms\":%.4f,\"decide_p50_ms\":%.4f,\"decide_p99_ms\":%.4f,"
+      "\"publish_p50_ms\":%.4f,\"publish_p99_ms\":%.4f,"
+      "\"budget_ms\":%.4f,\"budget_exhausted\":%u,\"late_decisions\":%u,"
+      "\"allocations_after_warmup\":%llu,\"footprint_bytes\":%zu,"
+      "\"compared_windows\":%u,\"ours_scratch_median_ms\":%.4f,\"incremental_median_ms\":%.4f,"
+      "\"lemon_ns_median_ms\":%.4f,\"lemon_cs_median_ms\":%.4f,\"closed_form_median_ms\":%.4f,"
+      "\"lemon_ns_over_ours\":%.3f,\"ours_over_closed_form\":%.3f,\"scratch_over_incremental\":%.3f,"
+      "\"slide_scratch_median_ms\":%.4f,\"slide_incremental_median_ms\":%.4f,"
+      "\"lcm_decisions\":%u,\"lcm_p50_ms\":%.4f,\"lcm_p99_ms\":%.4f,\"lcm_max_ms\":%.4f,"
+      "\"identical_decisions\":%s}\n",
+      o.workload.c_str(), stream.window, r.decisions, granted.c_str(), o.mlock ? "true" : "false",
+      r.e2e.p(0.5), r.e2e.p(0.9), r.e2e.p(0.99), r.e2e.p(0.999), r.e2e.max(), r.ingest.p(0.5), r.ingest.p(0.99),
+      r.network.p(0.5), r.network.p(0.99), r.solve.p(0.5), r.solve.p(0.99), r.decide.p(0.5), r.decide.p(0.99),
+      r.publish.p(0.5), r.publish.p(0.99), budget_ms, r.exhausted, r.late,
+      static_cast<unsigned long long>(r.allocations), r.footprint, r.compared, ours, inc, lemon_ns, lemon_cs,
+      closed, ratio(lemon_ns, ours), ratio(ours, closed), ratio(ours, inc), median_ms(r.slide_scratch),
+      median_ms(r.slide_incremental), lcm.decisions, lcm.p50_ms, lcm.p99_ms, lcm.max_ms,
+      identical ? "true" : "false");
+  return identical ? 0 : 1;
+}

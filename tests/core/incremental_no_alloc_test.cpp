@@ -1,0 +1,140 @@
+// The incremental decision path allocates nothing after construction: a
+// counting global operator new (replaced for this binary only) sees zero
+// calls across sliding windows, point drops, resets, budget stops and
+// capacity errors handled by Sparsifier::update.
+
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <cstdlib>
+#include <new>
+#include <vector>
+
+#include "keepless/core/closed_form.hpp"
+#include "keepless/core/sparsifier.hpp"
+#include "random_window.hpp"
+
+namespace {
+std::atomic<bool> g_counting{false};
+std::atomic<std::uint64_t> g_allocations{0};
+
+void* counted(std::size_t size) {
+  if (g_counting.load(std::memory_order_relaxed)) g_allocations.fetch_add(1, std::memory_order_relaxed);
+  if (void* p = std::malloc(size == 0 ? 1 : size)) return p;
+  throw std::bad_alloc();
+}
+void* counted_aligned(std::size_t size, std::align_val_t align) {
+  if (g_counting.load(std::memory_order_relaxed)) g_allocations.fetch_add(1, std::memory_order_relaxed);
+  const auto a = static_cast<std::size_t>(align);
+  const std::size_t rounded = (size + a - 1) / a * a;
+  if (void* p = std::aligned_alloc(a, rounded == 0 ? a : rounded)) return p;
+  throw std::bad_alloc();
+}
+}  // namespace
+
+void* operator new(std::size_t size) { return counted(size); }
+void* operator new[](std::size_t size) { return counted(size); }
+void* operator new(std::size_t size, const std::nothrow_t&) noexcept {
+  try {
+    return counted(size);
+  } catch (...) {
+    return nullptr;
+  }
+}
+void* operator new[](std::size_t size, const std::nothrow_t&) noexcept {
+  try {
+    return counted(size);
+  } catch (...) {
+    return nullptr;
+  }
+}
+void* operator new(std::size_t size, std::align_val_t a) { return counted_aligned(size, a); }
+void* operator new[](std::size_t size, std::align_val_t a) { return counted_aligned(size, a); }
+void operator delete(void* p) noexcept { std::free(p); }
+void operator delete[](void* p) noexcept { std::free(p); }
+void operator delete(void* p, std::size_t) noexcept { std::free(p); }
+void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
+void operator delete(void* p, std::align_val_t) noexcept { std::free(p); }
+void operator delete[](void* p, std::align_val_t) noexcept { std::free(p); }
+void operator delete(void* p, std::size_t, std::align_val_t) noexcept { std::free(p); }
+void operator delete[](void* p, std::size_t, std::align_val_t) noexcept { std::free(p); }
+
+namespace keepless::core {
+namespace {
+
+struct Prepared {
+  Keyframe keyframe;
+  std::vector<Observation> observations;
+};
+
+TEST(IncrementalZeroAllocation, UpdateAllocatesNothing) {
+  const Capacities caps{8, 1024, 4096, 16384};
+  // Every keyframe of every stream is prepared before counting starts.
+  std::vector<std::vector<Prepared>> streams;
+  for (std::uint64_t seed = 1; seed <= 6; ++seed) {
+    test::Rng rng(seed);
+    std::vector<Prepared> frames;
+    std::uint64_t next_id = 100;
+    std::vector<std::pair<PointId, std::pair<double, double>>> tracks;
+    for (std::uint32_t k = 0; k < 40; ++k) {
+      Prepared p;
+      p.keyframe.id = 1 + k;
+      p.keyframe.centre[0] = static_cast<double>(rng.between(-5, 5));
+      std::vector<std::pair<PointId, std::pair<double, double>>> kept;
+      for (const auto& t : tracks) {
+        if (rng.chance(80)) kept.push_back(t);
+      }
+      tracks = kept;
+      const auto fresh = rng.between(10, 40);
+      for (std::int64_t i = 0; i < fresh; ++i) {
+        tracks.push_back({next_id++, {8.0 * static_cast<double>(rng.between(0, 80)),
+                                      6.0 * static_cast<double>(rng.between(0, 80))}});
+      }
+      for (const auto& t : tracks) p.observations.push_back({t.first, t.second.first, t.second.second});
+      frames.push_back(p);
+    }
+    streams.push_back(frames);
+  }
+  const auto add = [](Window& w, const Prepared& p) {
+    return w.add_keyframe(p.keyframe, p.observations.data(),
+                          static_cast<std::uint32_t>(p.observations.size()));
+  };
+
+  Window window(caps);
+  Sparsifier sparsifier(caps, Params{}, SolveMode::kIncremental);
+  // Warm-up: one stream's first window.
+  for (std::size_t i = 0; i < 4; ++i) ASSERT_EQ(add(window, streams[0][i]), Status::kOk);
+  ASSERT_EQ(sparsifier.update(window), Status::kOk);
+  window.clear();
+
+  std::uint64_t updates = 0, ok = 0, stopped = 0;
+  solver::SteadyClock clock;
+  g_allocations = 0;
+  g_counting = true;
+  for (const auto& frames : streams) {
+    for (std::size_t i = 0; i < frames.size(); ++i) {
+      if (window.keyframe_count() == 6) (void)window.remove_keyframe(window.keyframe(0).id);
+      (void)add(window, frames[i]);
+      solver::Budget budget;
+      if (i % 5 == 3) budget.work_units = 10;  // stops, then the next call resumes
+      if (i % 7 == 4) {
+        budget.clock = &clock;
+        budget.deadline_ns = 0;
+      }
+      const Status s = sparsifier.update(window, budget);
+      ok += s == Status::kOk;
+      stopped += s == Status::kBudgetExhausted;
+      ++updates;
+    }
+    window.clear();
+    (void)sparsifier.update(window);
+  }
+  g_counting = false;
+  EXPECT_EQ(g_allocations.load(), 0u);
+  EXPECT_GT(updates, 200u);
+  EXPECT_GT(ok, 100u);
+  EXPECT_GT(stopped, 20u);
+}
+
+}  // namespace
+}  // namespace keepless::core

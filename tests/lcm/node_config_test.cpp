@@ -1,0 +1,117 @@
+// keepless_node's flags and derived capacities, and the latency histogram
+// behind its status percentiles.
+
+#include <gtest/gtest.h>
+
+#include <string>
+#include <vector>
+
+#include "keepless/platform/latency_histogram.hpp"
+#include "keepless/platform/node_config.hpp"
+
+using keepless::platform::LatencyHistogram;
+using keepless::platform::NodeConfig;
+using keepless::platform::ParseResult;
+
+namespace {
+
+ParseResult parse(std::vector<std::string> args, NodeConfig& c, std::string& error) {
+  args.insert(args.begin(), "keepless_node");
+  std::vector<const char*> argv;
+  for (const auto& a : args) argv.push_back(a.c_str());
+  return keepless::platform::parse_node_arguments(static_cast<int>(argv.size()), argv.data(), c, error);
+}
+
+TEST(NodeConfig, DefaultsMatchTheDocumentedOnes) {
+  NodeConfig c;
+  std::string error;
+  ASSERT_EQ(parse({}, c, error), ParseResult::kOk);
+  EXPECT_EQ(c.url, "udpm://239.255.76.67:7667?ttl=0");
+  EXPECT_EQ(c.keyframe_channel, "KEEPLESS_KEYFRAME");
+  EXPECT_EQ(c.decision_channel, "KEEPLESS_DECISION");
+  EXPECT_EQ(c.window, 20u);
+  EXPECT_EQ(c.params.pair_capacity, 100);
+  EXPECT_EQ(c.params.theta, 0.5);
+}
+
+TEST(NodeConfig, ParsesEveryFlag) {
+  NodeConfig c;
+  std::string error;
+  ASSERT_EQ(parse({"--url", "memq://", "--keyframe-channel=KF", "--event-channel", "EV", "--decision-channel", "DE",
+                   "--timing-channel", "TI", "--status-channel", "ST", "--window", "7", "--max-observations", "300",
+                   "--max-event-ids", "9", "--max-pair-arcs", "5000", "--M", "50", "--theta", "0.25", "--box",
+                   "32x16", "--budget-work", "1000", "--cpus", "0,1", "--mlock", "--queue", "64",
+                   "--status-period-ms", "250", "--max-keyframes", "12", "--quiet"},
+                  c, error),
+            ParseResult::kOk)
+      << error;
+  EXPECT_EQ(c.url, "memq://");
+  EXPECT_EQ(c.keyframe_channel, "KF");
+  EXPECT_EQ(c.event_channel, "EV");
+  EXPECT_EQ(c.decision_channel, "DE");
+  EXPECT_EQ(c.timing_channel, "TI");
+  EXPECT_EQ(c.status_channel, "ST");
+  EXPECT_EQ(c.window, 7u);
+  EXPECT_EQ(c.max_observations, 300u);
+  EXPECT_EQ(c.max_event_ids, 9u);
+  EXPECT_EQ(c.max_pair_arcs, 5000u);
+  EXPECT_EQ(c.params.pair_capacity, 50);
+  EXPECT_EQ(c.params.theta, 0.25);
+  EXPECT_EQ(c.params.box_width, 32);
+  EXPECT_EQ(c.params.box_height, 16);
+  EXPECT_EQ(c.budget_work_units, 1000u);
+  EXPECT_EQ(c.cpus, "0,1");
+  EXPECT_TRUE(c.mlock);
+  EXPECT_EQ(c.queue_capacity, 64u);
+  EXPECT_EQ(c.status_period_ms, 250u);
+  EXPECT_EQ(c.max_keyframes, 12u);
+  EXPECT_TRUE(c.quiet);
+}
+
+TEST(NodeConfig, RejectsBadValues) {
+  for (const std::vector<std::string>& bad :
+       {std::vector<std::string>{"--window", "1"}, {"--window", "x"}, {"--theta", "1.5"}, {"--theta", "nan"},
+        {"--M", "0"}, {"--box", "64"}, {"--max-observations", "-3"}, {"--bogus"}, {"--url"},
+        {"--window", "256", "--max-observations", "1000000"}}) {
+    NodeConfig c;
+    std::string error;
+    EXPECT_EQ(parse(bad, c, error), ParseResult::kError) << bad[0];
+    EXPECT_FALSE(error.empty());
+  }
+  NodeConfig c;
+  std::string error;
+  EXPECT_EQ(parse({"--help"}, c, error), ParseResult::kHelp);
+}
+
+TEST(NodeConfig, CapacitiesCoverTheWorstCaseWindow) {
+  NodeConfig c;
+  c.window = 10;
+  c.max_observations = 100;
+  const keepless::core::Capacities caps = keepless::platform::window_capacities(c);
+  EXPECT_EQ(caps.max_keyframes, 10u);
+  EXPECT_EQ(caps.max_observations, 1000u);
+  EXPECT_EQ(caps.max_points, 1000u);
+  EXPECT_EQ(caps.max_pair_arcs, 100u * 10u * 9u / 2u);  // 100 points each in all 10 keyframes
+  c.max_pair_arcs = 77;
+  EXPECT_EQ(keepless::platform::window_capacities(c).max_pair_arcs, 77u);
+}
+
+TEST(LatencyHistogram, QuantilesWithinOneSixteenth) {
+  LatencyHistogram h;
+  EXPECT_EQ(h.quantile(0.5), 0u);
+  for (std::uint64_t v = 1; v <= 10000; ++v) h.record(v * 1000);  // 1 us .. 10 ms
+  EXPECT_EQ(h.count(), 10000u);
+  EXPECT_EQ(h.max(), 10000000u);
+  const double p50 = static_cast<double>(h.quantile(0.5)), p99 = static_cast<double>(h.quantile(0.99));
+  EXPECT_GE(p50, 5000000.0);
+  EXPECT_LE(p50, 5000000.0 * (1 + 1.0 / 16));
+  EXPECT_GE(p99, 9900000.0);
+  EXPECT_LE(p99, 9900000.0 * (1 + 1.0 / 16));
+  EXPECT_EQ(h.quantile(1.0), 10000000u);
+  h.record(3);
+  EXPECT_EQ(h.quantile(0.0), 3u);  // small values are exact
+  h.clear();
+  EXPECT_EQ(h.count(), 0u);
+}
+
+}  // namespace
