@@ -52,7 +52,7 @@ if [ "$have_logger" = 1 ]; then
   lcm-logger -q -f --lcm-url="$URL" "$REPORT/bus.lcmlog" >"$REPORT/logger.log" 2>&1 &
   LOGGER=$!; PIDS+=("$LOGGER")
 fi
-"$NODE" --url "$URL" --max-keyframes "$KEYFRAMES" --status-period-ms 200 2>"$REPORT/node.log" &
+"$NODE" --latency-target-ms 0 --url "$URL" --max-keyframes "$KEYFRAMES" --status-period-ms 200 2>"$REPORT/node.log" &
 NODE_PID=$!; PIDS+=("$NODE_PID")
 sleep 0.5  # let the logger subscribe; the simulator itself waits for the node's status
 
@@ -76,7 +76,7 @@ if [ "$REPLAY" = 1 ] && [ "$have_logger" = 1 ]; then
   lcm-logger -q -f --channel=KEEPLESS_DECISION --lcm-url="$REPLAY_URL" "$REPORT/replay.lcmlog" >>"$REPORT/logger.log" 2>&1 &
   RLOGGER=$!; PIDS+=("$RLOGGER")
   # The player does not wait for decisions: give the fresh node room to queue.
-  "$NODE" --url "$REPLAY_URL&recv_buf_size=4194304" --queue 4096 --max-keyframes "$KEYFRAMES" --quiet \
+  "$NODE" --latency-target-ms 0 --url "$REPLAY_URL&recv_buf_size=4194304" --queue 4096 --max-keyframes "$KEYFRAMES" --quiet \
     2>"$REPORT/replay_node.log" &
   RNODE=$!; PIDS+=("$RNODE")
   sleep 0.5

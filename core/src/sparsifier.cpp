@@ -32,6 +32,7 @@ struct Sparsifier::Impl {
   solver::MinCostFlow solver;  // shared: run() resets it, update() keeps it
   bool solver_incremental = false;  // the solver holds the incremental network
   bool resume = false;              // the last update stopped for budget: carry on from its state
+  bool resumed = false;             // the last update was such a resumption
   std::vector<PointDecision> decisions;  // [max_points]
   std::uint32_t count = 0;
   Summary summary;
@@ -124,7 +125,7 @@ Status Sparsifier::update(const Window& window, const solver::Budget& budget) {
   IncrementalNetwork& net = *s.incremental;
   if (!s.solver_incremental) {  // run() used the solver since
     net.clear();
-    s.resume = false;
+    s.resume = s.resumed = false;
   }
   s.solver_incremental = true;
   const std::uint64_t t0 = s.now();
@@ -139,10 +140,13 @@ Status Sparsifier::update(const Window& window, const solver::Budget& budget) {
   // directly. Only after a stop for budget does the next call re-optimise
   // from the flow and potentials left behind (keeping the progress made);
   // that can land on another optimum among ties, so canonicalize() then
-  // moves to the one run() finds.
+  // moves to the one run() finds. A slide's repair from that state costs
+  // more than a fresh solve, so if the resumption runs out too, the next
+  // call starts afresh: sustained overload cannot lock the path into it.
   const auto evaluated = static_cast<std::int32_t>(net.evaluated_count());
   Status result = from_solver(s.solver.set_tie_order(net.canonical_order(), evaluated));
-  if (result == Status::kOk && !s.resume) {
+  const bool warm = s.resume && !s.resumed;
+  if (result == Status::kOk && !warm) {
     result = from_solver(s.solver.solve(net.source(), net.sink(), budget));
   } else if (result == Status::kOk) {
     result = from_solver(s.solver.solve_warm(net.source(), net.sink(), budget));
@@ -155,6 +159,7 @@ Status Sparsifier::update(const Window& window, const solver::Budget& budget) {
     }
   }
   s.resume = result == Status::kBudgetExhausted;
+  s.resumed = warm;
   const std::uint64_t t2 = s.now();
   if (result != Status::kOk && result != Status::kBudgetExhausted) {
     net.clear();

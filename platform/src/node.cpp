@@ -174,6 +174,10 @@ struct Node::Impl {
     order.last_utime = kf.utime;
     const std::uint64_t t2 = monotonic_ns();
 
+    if (config.latency_target_ms > 0) {
+      budget.clock = &clock;
+      budget.deadline_ns = t0 + static_cast<std::uint64_t>(config.latency_target_ms * 1e6);
+    }
     const core::Status run = sparsifier.run(sliding.window(), budget);
     const std::uint64_t t3 = monotonic_ns();
     decision.sequence = kf.sequence;
@@ -338,6 +342,10 @@ struct Node::Impl {
   MessageLimits limits;
   SlidingWindow sliding;
   core::Sparsifier sparsifier;
+  // The solver reads the deadline on the node's own clock (CLOCK_MONOTONIC).
+  struct MonotonicClock final : solver::Clock {
+    std::uint64_t now_ns() const override { return monotonic_ns(); }
+  } clock;
   solver::Budget budget;
   keepless::keyframe_t kf{};
   keepless::map_event_t event{};

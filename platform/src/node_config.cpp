@@ -61,6 +61,7 @@ std::string node_usage() {
          "  --theta X                 keep iff flow > X * n(n-1)/2 (default 0.5)\n"
          "  --box WxH                 spatial-diversity box in pixels (default 64x48)\n"
          "  --budget-work N           solver work units per decision (default unlimited)\n"
+         "  --latency-target-ms X     solve deadline from keyframe arrival (default 5; 0 = none)\n"
          "  --cpus LIST               pin to these CPUs, e.g. 0,1 or 2-3 (reported if refused)\n"
          "  --mlock                   lock memory with mlockall (reported if refused)\n"
          "  --queue N                 messages LCM queues per input channel while the node is busy\n"
@@ -141,6 +142,10 @@ ParseResult parse_node_arguments(int argc, const char* const* argv, NodeConfig& 
     } else if (flag == "--budget-work") {
       if (!parse_u64(value, 1, std::numeric_limits<std::uint64_t>::max(), n)) return bad("expected an integer >= 1");
       config.budget_work_units = n;
+    } else if (flag == "--latency-target-ms") {
+      double t = 0;
+      if (!parse_double(value, t) || t < 0 || t > 60000) return bad("expected milliseconds in [0, 60000]");
+      config.latency_target_ms = t;
     } else if (flag == "--cpus") {
       if (value.empty()) return bad("empty CPU list");
       config.cpus = value;

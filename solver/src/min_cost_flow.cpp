@@ -94,6 +94,8 @@ struct MinCostFlow::Impl {
   // Residual graph.
   std::vector<std::int32_t> first_out;  // [max_nodes + 1]
   std::vector<std::int32_t> first_rev;  // [max_nodes] start of a node's reverse records
+  std::vector<std::int32_t> block_end;  // [max_nodes] end of a node's block (blocks are not in id order)
+  std::int32_t records = 0;
   std::vector<std::int32_t> nflow;      // [max_nodes] length of a node's flow list
   std::vector<Residual> res;            // [2 * max_arcs]
   std::vector<std::int32_t> rev;        // [2 * max_arcs] position of each record's partner
@@ -132,6 +134,8 @@ struct MinCostFlow::Impl {
   std::int32_t passed = 0;  // pending entries relaxed this phase: [pend_begin, pend_begin + passed)
   bool lazy = false;        // the source is a search source and its arcs are lazy
   bool backward = false;    // this run's source-to-sink phases search from the sink
+  bool marked = false;      // cand_bits lists the source's admissible arcs (sink-side search)
+  std::int32_t offer_count = 0;  // sink-side search: the source's arcs that offered its best label
   NodeId virtual_item = 0;
 
   // State between calls.
@@ -165,6 +169,7 @@ struct MinCostFlow::Impl {
     is_recosted.resize(m);
     first_out.resize(n + 1);
     first_rev.resize(n);
+    block_end.resize(n);
     nflow.resize(n);
     res.resize(2 * m);
     rev.resize(2 * m);
@@ -199,7 +204,7 @@ struct MinCostFlow::Impl {
   std::size_t bytes() const {
     const auto bytes = [](const auto& v) { return v.capacity() * sizeof(v[0]); };
     return bytes(arc_tail) + bytes(arc_head) + bytes(arc_cap) + bytes(arc_cost) + bytes(arc_flow) +
-           bytes(arc_pos) + bytes(tie_order) + bytes(in_tie_order) + bytes(recosted) + bytes(is_recosted) + bytes(first_out) + bytes(first_rev) + bytes(nflow) + bytes(res) + bytes(rev) +
+           bytes(arc_pos) + bytes(tie_order) + bytes(in_tie_order) + bytes(recosted) + bytes(is_recosted) + bytes(first_out) + bytes(first_rev) + bytes(block_end) + bytes(nflow) + bytes(res) + bytes(rev) +
            bytes(flist) + bytes(fpos) + bytes(fixed) + bytes(pot) + bytes(estimate) + bytes(key) +
            bytes(level) + bytes(cur) + bytes(fill) + bytes(path_arc) + bytes(path_node) +
            bytes(touched) + bytes(sources) + bytes(imbalanced) + bytes(excess) + bytes(origin) + bytes(served) + bytes(seen) +
@@ -244,22 +249,46 @@ struct MinCostFlow::Impl {
 
   // --- layout -----------------------------------------------------------------
 
-  // Counts degrees and the largest cost of the arcs to lay out.
+  // Counts degrees and the largest cost of the arcs to lay out, and places
+  // the node blocks in order of first appearance along the layout's arc
+  // sequence (tie order first, then ids): the blocks the blocking flow visits
+  // in turn (the source's heads, in tie order) sit next to each other even
+  // when node ids are recycled.
   Cost count_degrees() {
     std::fill(fill.begin(), fill.begin() + nodes, 0);  // out-degree
     std::fill(cur.begin(), cur.begin() + nodes, 0);   // in-degree
+    if (++visit_epoch == 0) {
+      std::fill(visit.begin(), visit.begin() + nodes, 0u);
+      visit_epoch = 1;
+    }
     Cost max_cost = 0;
-    for (ArcId a = 0; a < arcs; ++a) {
-      if (!active(a)) continue;
-      ++fill[arc_tail[a]];
-      ++cur[arc_head[a]];
+    std::int32_t placed = 0;
+    for (std::int32_t k = 0; k < tie_count + arcs; ++k) {
+      const ArcId a = k < tie_count ? tie_order[k] : k - tie_count;
+      if ((k >= tie_count && in_tie_order[a] != 0) || !active(a)) continue;
+      const NodeId u = arc_tail[a], v = arc_head[a];
+      ++fill[u];
+      ++cur[v];
       max_cost = std::max<Cost>(max_cost, arc_cost[a]);
+      if (visit[u] != visit_epoch) {
+        visit[u] = visit_epoch;
+        touched[placed++] = u;
+      }
+      if (visit[v] != visit_epoch) {
+        visit[v] = visit_epoch;
+        touched[placed++] = v;
+      }
     }
-    first_out[0] = 0;
-    for (NodeId v = 0; v < nodes; ++v) {
-      first_rev[v] = first_out[v] + fill[v];
-      first_out[v + 1] = first_rev[v] + cur[v];
+    for (NodeId v = 0; v < nodes; ++v) first_out[v] = first_rev[v] = block_end[v] = 0;
+    std::int32_t at = 0;
+    for (std::int32_t k = 0; k < placed; ++k) {
+      const NodeId v = touched[k];
+      first_out[v] = at;
+      first_rev[v] = at + fill[v];
+      block_end[v] = first_rev[v] + cur[v];
+      at = block_end[v];
     }
+    records = at;
     return max_cost;
   }
 
@@ -312,7 +341,7 @@ struct MinCostFlow::Impl {
     }
     imbalanced_count = 0;
     for (NodeId v = 0; v < nodes; ++v) {
-      seen[v] = first_out[v + 1] > first_out[v];
+      seen[v] = block_end[v] > first_out[v];
       renewed[v] = 0;
       if (v != src && v != snk && excess[v] != 0) imbalanced[imbalanced_count++] = v;
     }
@@ -444,7 +473,7 @@ struct MinCostFlow::Impl {
   // First scan position >= p of node u: the source visits only its tight
   // and relaxed arcs (the others cannot be admissible, see lazy_queue).
   std::int32_t next_position(NodeId u, std::int32_t p) const {
-    if (!lazy || u != src || p >= first_rev[u]) return p;
+    if (!(lazy || (backward && marked)) || u != src || p >= first_rev[u]) return p;
     const std::int32_t lo = first_out[u];
     const std::int32_t b = p - lo;
     std::int32_t w = b >> 6;
@@ -584,6 +613,8 @@ struct MinCostFlow::Impl {
   Search shortest_paths_to_sink(Meter& meter) {
     heap.clear();
     touched_count = 0;
+    offer_count = 0;
+    marked = true;
     key[snk] = 0;
     touched[touched_count++] = snk;
     heap.push(snk, 0);
@@ -599,16 +630,34 @@ struct MinCostFlow::Impl {
         break;
       }
       const Cost pv = pot[v];
-      const std::int32_t end = first_out[v + 1];
+      const std::int32_t end = block_end[v];
       for (std::int32_t i = first_out[v]; i < end; ++i) {
         const Residual& a = res[i];  // its partner a.head -> v is the arc searched
         if (a.rev_cap == 0 || level[a.head] >= 0) continue;
         relax(a.head, kv, pot[a.head] - a.cost - pv, v);
+        if (a.head == src && key[src] <= kv + (static_cast<std::uint64_t>(pot[src] - a.cost - pv) << shift) + 1) {
+          // Remember the arcs that offer the source its best label so far:
+          // at the end, those offering the final one are its admissible arcs.
+          if (offer_count < static_cast<std::int32_t>(pending.size())) {
+            pending[offer_count++] = Pending{static_cast<Cost>(kv + (static_cast<std::uint64_t>(pot[src] - a.cost - pv) << shift) + 1), rev[i]};
+          } else {
+            marked = false;  // too many to list: the blocking flow scans them all
+          }
+        }
       }
       stats.work_units += static_cast<std::uint64_t>(end - first_out[v]);
       if (meter.exhausted(kScanStride)) return Search::kExhausted;
     }
     if (!reached) return Search::kNone;
+    if (marked) {
+      std::fill(cand_bits.begin(), cand_bits.begin() + source_words(), 0);
+      const std::int32_t lo = first_out[src];
+      for (std::int32_t k = 0; k < offer_count; ++k) {
+        if (static_cast<std::uint64_t>(pending[k].w) != key[src]) continue;
+        const std::int32_t b = pending[k].pos - lo;
+        cand_bits[b >> 6] |= std::uint64_t{1} << (b & 63);
+      }
+    }
     const auto d = static_cast<Cost>(last_key >> shift);
     for (std::int32_t k = 0; k < touched_count; ++k) {
       const NodeId v = touched[k];
@@ -724,7 +773,7 @@ struct MinCostFlow::Impl {
       std::int32_t found = -1;
       if (depth < kLocalDepth) {
         const Cost pu = pot[u];
-        const std::int32_t end = forward ? first_rev[u] + nflow[u] : first_out[u + 1];
+        const std::int32_t end = forward ? first_rev[u] + nflow[u] : block_end[u];
         std::int32_t p = cur[u];
         const std::int32_t start = p;
         for (; p < end; ++p) {
@@ -791,6 +840,7 @@ struct MinCostFlow::Impl {
   Status run(Mode m, Meter& meter) {
     mode = m;
     backward = false;
+    marked = false;
     lazy_begin();
     const Status status = run_phases(m, meter);
     lazy = false;
@@ -822,7 +872,7 @@ struct MinCostFlow::Impl {
       // residual graph will keep doing so: the rest of the run searches
       // from the sink (only source-to-sink phases have a single target).
       const bool turn = m == Mode::kMaxFlow && !backward &&
-                        stats.work_units - before > static_cast<std::uint64_t>(first_out[nodes]) / 4;
+                        stats.work_units - before > static_cast<std::uint64_t>(records) / 4;
       if (found != Search::kFound) {
         clear_labels();
         return found == Search::kExhausted ? Status::kBudgetExhausted : Status::kOptimal;
@@ -959,8 +1009,8 @@ struct MinCostFlow::Impl {
       const std::int32_t fl = std::min(arc_flow[a], arc_cap[a]);
       const Cost rc = arc_cost[a] + pot[u] - pot[v];
       if (!((rc < 0 && fl < arc_cap[a]) || (rc > 0 && fl > 0))) continue;
-      const std::int32_t deg_u = first_out[u + 1] - first_out[u];
-      const std::int32_t deg_v = first_out[v + 1] - first_out[v];
+      const std::int32_t deg_u = block_end[u] - first_out[u];
+      const std::int32_t deg_v = block_end[v] - first_out[v];
       if (deg_v <= deg_u) {
         pot[v] += rc;
       } else {
@@ -972,6 +1022,23 @@ struct MinCostFlow::Impl {
 
   Status solve_scratch(NodeId s, NodeId t, const Budget& budget) {
     clear_recosted();
+    if (budget.clock != nullptr && budget.clock->now_ns() >= budget.deadline_ns) {
+      // Too late to start: the zero flow, at zero potentials, is valid and
+      // certified (costs are >= 0), and a later solve_warm can start from it.
+      src = s;
+      snk = t;
+      stats = {};
+      std::fill(arc_flow.begin(), arc_flow.begin() + arcs, 0);
+      std::fill(pot.begin(), pot.begin() + nodes, 0);
+      value = 0;
+      cost_total = 0;
+      imbalanced_count = 0;
+      is_balanced = true;
+      laid_out = false;
+      have_state = true;
+      optimal = false;
+      return Status::kBudgetExhausted;
+    }
     const std::uint64_t base = set_label_base();
     src = s;
     snk = t;
@@ -1008,7 +1075,7 @@ struct MinCostFlow::Impl {
       Cost lo = 0, hi = 0;
       bool first = true;
       for (NodeId v = 0; v < nodes; ++v) {
-        if (first_out[v + 1] == first_out[v]) continue;
+        if (block_end[v] == first_out[v]) continue;
         lo = first ? pot[v] : std::min(lo, pot[v]);
         hi = first ? pot[v] : std::max(hi, pot[v]);
         first = false;
@@ -1041,7 +1108,7 @@ struct MinCostFlow::Impl {
   void estimate_potentials() {
     std::int32_t fresh_count = 0;
     for (NodeId v = 0; v < nodes; ++v) {
-      const bool fresh = (!seen[v] || renewed[v]) && first_out[v + 1] > first_out[v];
+      const bool fresh = (!seen[v] || renewed[v]) && block_end[v] > first_out[v];
       fill[v] = fresh ? 1 : 0;
       fresh_count += fresh ? 1 : 0;
     }

@@ -40,7 +40,7 @@ TEST(NodeConfig, ParsesEveryFlag) {
   ASSERT_EQ(parse({"--url", "memq://", "--keyframe-channel=KF", "--event-channel", "EV", "--decision-channel", "DE",
                    "--timing-channel", "TI", "--status-channel", "ST", "--window", "7", "--max-observations", "300",
                    "--max-event-ids", "9", "--max-pair-arcs", "5000", "--M", "50", "--theta", "0.25", "--box",
-                   "32x16", "--budget-work", "1000", "--cpus", "0,1", "--mlock", "--queue", "64",
+                   "32x16", "--budget-work", "1000", "--latency-target-ms", "2.5", "--cpus", "0,1", "--mlock", "--queue", "64",
                    "--status-period-ms", "250", "--max-keyframes", "12", "--quiet"},
                   c, error),
             ParseResult::kOk)
@@ -55,6 +55,7 @@ TEST(NodeConfig, ParsesEveryFlag) {
   EXPECT_EQ(c.max_observations, 300u);
   EXPECT_EQ(c.max_event_ids, 9u);
   EXPECT_EQ(c.max_pair_arcs, 5000u);
+  EXPECT_EQ(c.latency_target_ms, 2.5);
   EXPECT_EQ(c.params.pair_capacity, 50);
   EXPECT_EQ(c.params.theta, 0.25);
   EXPECT_EQ(c.params.box_width, 32);

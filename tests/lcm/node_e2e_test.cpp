@@ -116,7 +116,7 @@ TEST(NodeEndToEnd, EveryKeyframeGetsOneDecisionEqualToTheLibrary) {
   Recorder rec;
   bus.subscribeFunction(".*", &Recorder::on_message, &rec);
 
-  kt::ChildProcess node(target_argv({KEEPLESS_NODE_BIN, "--url", url, "--max-keyframes", std::to_string(kKeyframes),
+  kt::ChildProcess node(target_argv({KEEPLESS_NODE_BIN, "--latency-target-ms", "0", "--url", url, "--max-keyframes", std::to_string(kKeyframes),
                          "--status-period-ms", "100"}),
                         tmp.file("node.log"));
   ASSERT_TRUE(node.started());
@@ -175,7 +175,7 @@ TEST(NodeEndToEnd, RecordedBusReplaysToIdenticalDecisions) {
                             tmp.file("logger.log"));
     ASSERT_TRUE(logger.started());
     std::this_thread::sleep_for(std::chrono::milliseconds(500));  // subscribed before anything is sent
-    kt::ChildProcess node(target_argv({KEEPLESS_NODE_BIN, "--url", url, "--max-keyframes", std::to_string(n),
+    kt::ChildProcess node(target_argv({KEEPLESS_NODE_BIN, "--latency-target-ms", "0", "--url", url, "--max-keyframes", std::to_string(n),
                            "--status-period-ms", "100"}),
                           tmp.file("node.log"));
     kt::ChildProcess sim(target_argv({KEEPLESS_SIM_BIN, "--url", url, "--keyframes", std::to_string(n), "--scene", "room",
@@ -208,7 +208,7 @@ TEST(NodeEndToEnd, RecordedBusReplaysToIdenticalDecisions) {
   Recorder replayed;
   bus.subscribeFunction("KEEPLESS_(DECISION|STATUS)", &Recorder::on_message, &replayed);
   // The player does not wait for decisions: give the fresh node room to queue.
-  kt::ChildProcess node(target_argv({KEEPLESS_NODE_BIN, "--url", replay_url + "&recv_buf_size=4194304", "--queue", "4096",
+  kt::ChildProcess node(target_argv({KEEPLESS_NODE_BIN, "--latency-target-ms", "0", "--url", replay_url + "&recv_buf_size=4194304", "--queue", "4096",
                          "--max-keyframes", std::to_string(n), "--status-period-ms", "100"}),
                         tmp.file("replay_node.log"));
   pump_until(bus, 10000, [&] { return replayed.statuses > 0; });

@@ -67,6 +67,7 @@ namespace kt = keepless::testing;
 
 TEST(NodeZeroAllocation, SteadyStateReceivePathAllocatesNothing) {
   keepless::platform::NodeConfig c;
+  c.latency_target_ms = 0;
   c.url = "memq://";
   c.window = 5;
   c.max_observations = 128;

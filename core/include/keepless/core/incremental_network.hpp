@@ -13,9 +13,11 @@
 // points and pairs take recycled ids, and so do arcs.
 //
 // The ids do not follow point order, so the solver's insertion-order
-// tie-break does not apply: canonicalize() over canonical_order() (the
-// source arcs by ascending point id) selects the optimum that PaperNetwork's
-// from-scratch solve finds (ties to the smaller point id).
+// tie-break does not apply by itself: canonical_order() lists the source
+// arcs by ascending point id, the order PaperNetwork inserts them in. Given
+// to MinCostFlow::set_tie_order, a solve finds PaperNetwork's optimum (ties
+// to the smaller point id); given to canonicalize(), it moves any other
+// optimum (e.g. after solve_warm) there.
 //
 // All storage is sized from Capacities at construction; update() allocates
 // nothing.

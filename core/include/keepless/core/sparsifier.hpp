@@ -3,10 +3,12 @@
 // sized once from Capacities. run() and update() allocate nothing.
 //
 // run() builds the network and solves it from nothing. update() (with
-// SolveMode::kIncremental) keeps the network and the solver's flow and
-// potentials between calls: it edits what changed since the previous window
-// and re-optimises from there, then restores the canonical tie-break; its
-// decisions, flows and cost equal run()'s on the same window.
+// SolveMode::kIncremental) keeps the network between calls and edits only
+// what changed since the previous window (IncrementalNetwork), then solves it
+// in the canonical tie-break order; after a stop for budget, the next call
+// resumes from the flow and potentials left behind (solve_warm) and restores
+// the tie-break (canonicalize). Its decisions, flows and cost equal run()'s
+// on the same window.
 
 #include <cstddef>
 #include <cstdint>
@@ -50,9 +52,10 @@ class Sparsifier {
   [[nodiscard]] Status run(const Window& window, const solver::Budget& budget = {});
 
   // The same decisions as run(window), incrementally: the network is edited
-  // and the solver resumes from the previous call's flow and potentials,
-  // including a call that ran out of budget (the next one carries on). The
-  // budget covers the re-optimisation and the tie-break restoration; on
+  // in place, and a call after one that ran out of budget carries on from
+  // its state (once: if that runs out too, the next call starts afresh, so
+  // sustained overload cannot lock it into slow repairs). The budget covers
+  // the solve and the tie-break restoration, not the network update; on
   // kBudgetExhausted every evaluated point is kept. A call to run() in
   // between makes the next update() start from nothing.
   [[nodiscard]] Status update(const Window& window, const solver::Budget& budget = {});

@@ -26,6 +26,10 @@ struct NodeConfig {
 
   core::Params params;  // M, theta, box
   std::uint64_t budget_work_units = std::numeric_limits<std::uint64_t>::max();
+  // Deadline per decision, from the keyframe's arrival; 0: none. A deadline
+  // that fires makes that decision depend on timing (it culls nothing), so
+  // byte-for-byte replays run with 0.
+  double latency_target_ms = 5.0;
 
   std::string cpus;  // e.g. "0,1"; empty: leave affinity alone
   bool mlock = false;

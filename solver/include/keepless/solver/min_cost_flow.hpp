@@ -1,26 +1,35 @@
 #pragma once
 // Min-cost max-flow by successive shortest paths with node potentials
-// (primal-dual): each phase runs one Dijkstra on reduced costs, forwards from
-// the source with a radix heap, then one Dinic blocking flow over the
-// zero-reduced-cost arcs, so a phase carries every shortest path at once.
+// (primal-dual): each phase runs one Dijkstra on reduced costs with a radix
+// heap, then one Dinic blocking flow over the zero-reduced-cost arcs, so a
+// phase carries every shortest path at once. The search runs forwards from
+// the source, merging the source's arcs in lazily by reduced cost (in the
+// paper's network the expensive part of a path is its source arc, so a phase
+// touches only the points still worth it); once a phase has to scan more
+// than a quarter of the residual graph, the rest of the solve searches from
+// the sink instead, whose blocking flow then never meets a dead end. Either
+// way the flows are the same.
 //
 // Generic: any directed network with integer capacities in [0, 2^31) and
-// costs in [0, 2^30], with (nodes + 1)^2 * (max cost + 1) <= 2^62 (labels are
+// costs in [0, 2^30], accepted when 4 (nodes + 2)^2 (max cost + 1) <= 2^62 (labels are
 // 64-bit). All storage is sized by the constructor; nothing allocates
 // afterwards. Deterministic: the result is a pure function of the calls made
 // (adjacency is visited in a fixed order; no hashing, no floats).
 // Tie-break: among equal-cost shortest paths, the blocking flow serves each
-// node's arcs in insertion order, so earlier arcs win ties (the paper's
-// network inserts points by ascending id; see core/network.hpp).
+// node's arcs in insertion order (or the order given to set_tie_order), so
+// earlier arcs win ties (the paper's network inserts points by ascending id;
+// see core/network.hpp).
 //
 // Incremental use: after a solve, arcs may be edited in place (set_arc,
 // replace_arc) and solve_warm() re-optimises from the previous flow and
-// potentials: arcs whose reduced cost became negative are saturated, arcs
-// carrying flow at a positive reduced cost are emptied, the resulting
-// excesses and deficits are routed along shortest paths, and the flow is
-// then augmented to maximum. The result is a minimum-cost maximum flow, but
-// among equal-cost optima it may differ from solve()'s; canonicalize() then
-// selects one optimum by a rule that does not depend on the history.
+// potentials: potentials absorb cost changes where they can, arcs whose
+// reduced cost became negative are saturated, arcs carrying flow at a
+// positive reduced cost are emptied, the resulting excesses and deficits are
+// routed (first along short zero-cost paths, then along shortest paths),
+// and the flow is then augmented to maximum. The result is a minimum-cost
+// maximum flow, but among equal-cost optima it may differ from solve()'s;
+// canonicalize() then selects one optimum by a rule that does not depend on
+// the history.
 
 #include <cstddef>
 #include <cstdint>
@@ -56,9 +65,13 @@ class SteadyClock final : public Clock {
 
 // How much a solve may do. Work units are deterministic (one per residual
 // arc scanned), so a work budget reproduces exactly; the deadline is read
-// from `clock` (absolute, in that clock's nanoseconds). Both are checked
-// before every phase, after every augmentation, and every few hundred arcs
-// inside a search; a stop leaves a valid state (see solve()).
+// from `clock` (absolute, in that clock's nanoseconds). Work is compared
+// before every phase, after every augmentation and after every node a search
+// scans; the clock is read before every phase, every 1024 work units inside
+// a search, and after an augmentation once 64 units have passed since the
+// last read (a read costs more than a short augmentation). A solve() whose
+// deadline has passed returns at once. A stop leaves a valid state (see
+// solve()).
 struct Budget {
   std::uint64_t work_units = std::numeric_limits<std::uint64_t>::max();
   const Clock* clock = nullptr;  // no deadline when null
