@@ -5,59 +5,12 @@
 
 #include <gtest/gtest.h>
 
-#include <atomic>
-#include <cstdlib>
-#include <new>
 #include <vector>
 
 #include "keepless/core/closed_form.hpp"
+#include "counting_new.hpp"  // this binary's only inclusion
 #include "keepless/core/sparsifier.hpp"
 #include "random_window.hpp"
-
-namespace {
-std::atomic<bool> g_counting{false};
-std::atomic<std::uint64_t> g_allocations{0};
-
-void* counted(std::size_t size) {
-  if (g_counting.load(std::memory_order_relaxed)) g_allocations.fetch_add(1, std::memory_order_relaxed);
-  if (void* p = std::malloc(size == 0 ? 1 : size)) return p;
-  throw std::bad_alloc();
-}
-void* counted_aligned(std::size_t size, std::align_val_t align) {
-  if (g_counting.load(std::memory_order_relaxed)) g_allocations.fetch_add(1, std::memory_order_relaxed);
-  const auto a = static_cast<std::size_t>(align);
-  const std::size_t rounded = (size + a - 1) / a * a;
-  if (void* p = std::aligned_alloc(a, rounded == 0 ? a : rounded)) return p;
-  throw std::bad_alloc();
-}
-}  // namespace
-
-void* operator new(std::size_t size) { return counted(size); }
-void* operator new[](std::size_t size) { return counted(size); }
-void* operator new(std::size_t size, const std::nothrow_t&) noexcept {
-  try {
-    return counted(size);
-  } catch (...) {
-    return nullptr;
-  }
-}
-void* operator new[](std::size_t size, const std::nothrow_t&) noexcept {
-  try {
-    return counted(size);
-  } catch (...) {
-    return nullptr;
-  }
-}
-void* operator new(std::size_t size, std::align_val_t a) { return counted_aligned(size, a); }
-void* operator new[](std::size_t size, std::align_val_t a) { return counted_aligned(size, a); }
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete[](void* p) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t) noexcept { std::free(p); }
-void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
-void operator delete(void* p, std::align_val_t) noexcept { std::free(p); }
-void operator delete[](void* p, std::align_val_t) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t, std::align_val_t) noexcept { std::free(p); }
-void operator delete[](void* p, std::size_t, std::align_val_t) noexcept { std::free(p); }
 
 namespace keepless::core {
 namespace {
@@ -109,8 +62,7 @@ TEST(IncrementalZeroAllocation, UpdateAllocatesNothing) {
 
   std::uint64_t updates = 0, ok = 0, stopped = 0;
   solver::SteadyClock clock;
-  g_allocations = 0;
-  g_counting = true;
+  test::AllocationCounter counter;
   for (const auto& frames : streams) {
     for (std::size_t i = 0; i < frames.size(); ++i) {
       if (window.keyframe_count() == 6) (void)window.remove_keyframe(window.keyframe(0).id);
@@ -129,8 +81,7 @@ TEST(IncrementalZeroAllocation, UpdateAllocatesNothing) {
     window.clear();
     (void)sparsifier.update(window);
   }
-  g_counting = false;
-  EXPECT_EQ(g_allocations.load(), 0u);
+  EXPECT_EQ(counter.stop(), 0u);
   EXPECT_GT(updates, 200u);
   EXPECT_GT(ok, 100u);
   EXPECT_GT(stopped, 20u);

@@ -4,59 +4,12 @@
 
 #include <gtest/gtest.h>
 
-#include <atomic>
-#include <cstdlib>
-#include <new>
 #include <vector>
 
 #include "keepless/core/closed_form.hpp"
+#include "counting_new.hpp"  // this binary's only inclusion
 #include "keepless/core/sparsifier.hpp"
 #include "random_window.hpp"
-
-namespace {
-std::atomic<bool> g_counting{false};
-std::atomic<std::uint64_t> g_allocations{0};
-
-void* counted(std::size_t size) {
-  if (g_counting.load(std::memory_order_relaxed)) g_allocations.fetch_add(1, std::memory_order_relaxed);
-  if (void* p = std::malloc(size == 0 ? 1 : size)) return p;
-  throw std::bad_alloc();
-}
-void* counted_aligned(std::size_t size, std::align_val_t align) {
-  if (g_counting.load(std::memory_order_relaxed)) g_allocations.fetch_add(1, std::memory_order_relaxed);
-  const auto a = static_cast<std::size_t>(align);
-  const std::size_t rounded = (size + a - 1) / a * a;
-  if (void* p = std::aligned_alloc(a, rounded == 0 ? a : rounded)) return p;
-  throw std::bad_alloc();
-}
-}  // namespace
-
-void* operator new(std::size_t size) { return counted(size); }
-void* operator new[](std::size_t size) { return counted(size); }
-void* operator new(std::size_t size, const std::nothrow_t&) noexcept {
-  try {
-    return counted(size);
-  } catch (...) {
-    return nullptr;
-  }
-}
-void* operator new[](std::size_t size, const std::nothrow_t&) noexcept {
-  try {
-    return counted(size);
-  } catch (...) {
-    return nullptr;
-  }
-}
-void* operator new(std::size_t size, std::align_val_t a) { return counted_aligned(size, a); }
-void* operator new[](std::size_t size, std::align_val_t a) { return counted_aligned(size, a); }
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete[](void* p) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t) noexcept { std::free(p); }
-void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
-void operator delete(void* p, std::align_val_t) noexcept { std::free(p); }
-void operator delete[](void* p, std::align_val_t) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t, std::align_val_t) noexcept { std::free(p); }
-void operator delete[](void* p, std::size_t, std::align_val_t) noexcept { std::free(p); }
 
 namespace keepless::core {
 namespace {
@@ -67,12 +20,11 @@ struct Prepared {
 };
 
 TEST(ZeroAllocation, CounterSeesAllocations) {
-  g_allocations = 0;
-  g_counting = true;
+  test::AllocationCounter counter;
   auto* p = new std::vector<int>(10);
-  g_counting = false;
+  const std::uint64_t allocations = counter.stop();
   delete p;
-  EXPECT_EQ(g_allocations.load(), 2u);  // the vector and its buffer
+  EXPECT_EQ(allocations, 2u);  // the vector and its buffer
 }
 
 TEST(ZeroAllocation, DecisionPathAllocatesNothing) {
@@ -107,8 +59,7 @@ TEST(ZeroAllocation, DecisionPathAllocatesNothing) {
 
   std::uint64_t runs = 0, kept = 0, removals = 0;
   std::uint32_t statuses_ok = 0;
-  g_allocations = 0;
-  g_counting = true;
+  test::AllocationCounter counter;
   for (const auto& frames : windows) {
     for (std::size_t i = 0; i < frames.size(); ++i) {
       // Slide: keep at most 6 keyframes, dropping the oldest.
@@ -139,8 +90,7 @@ TEST(ZeroAllocation, DecisionPathAllocatesNothing) {
       ++removals;
     }
   }
-  g_counting = false;
-  EXPECT_EQ(g_allocations.load(), 0u);
+  EXPECT_EQ(counter.stop(), 0u);
   EXPECT_EQ(statuses_ok, 2 * runs + 2 * windows.size() + removals);
   EXPECT_GT(runs, 100u);
   EXPECT_GT(kept, 0u);

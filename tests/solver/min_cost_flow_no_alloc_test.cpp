@@ -4,83 +4,16 @@
 
 #include <gtest/gtest.h>
 
-#include <cstdlib>
-#include <new>
 #include <vector>
 
+#include "counting_new.hpp"  // this binary's only inclusion
 #include "keepless/solver/min_cost_flow.hpp"
 #include "random_networks.hpp"
 
-namespace {
-
-// Counts allocations only while armed, so gtest's own bookkeeping outside the
-// measured region does not register.
-bool g_armed = false;
-std::size_t g_allocations = 0;
-
-void* counted_alloc(std::size_t size) {
-  if (g_armed) ++g_allocations;
-  if (void* p = std::malloc(size == 0 ? 1 : size)) return p;
-  throw std::bad_alloc();
-}
-
-void* counted_aligned_alloc(std::size_t size, std::align_val_t align) {
-  if (g_armed) ++g_allocations;
-  void* p = nullptr;
-  const auto alignment = static_cast<std::size_t>(align);
-  if (posix_memalign(&p, alignment < sizeof(void*) ? sizeof(void*) : alignment,
-                     size == 0 ? 1 : size) == 0) {
-    return p;
-  }
-  throw std::bad_alloc();
-}
-
-class AllocationCounter {
- public:
-  AllocationCounter() {
-    g_allocations = 0;
-    g_armed = true;
-  }
-  ~AllocationCounter() { g_armed = false; }
-  AllocationCounter(const AllocationCounter&) = delete;
-  AllocationCounter& operator=(const AllocationCounter&) = delete;
-  std::size_t stop() {
-    g_armed = false;
-    return g_allocations;
-  }
-};
-
-}  // namespace
-
-void* operator new(std::size_t size) { return counted_alloc(size); }
-void* operator new[](std::size_t size) { return counted_alloc(size); }
-void* operator new(std::size_t size, const std::nothrow_t&) noexcept {
-  try {
-    return counted_alloc(size);
-  } catch (...) {
-    return nullptr;
-  }
-}
-void* operator new[](std::size_t size, const std::nothrow_t&) noexcept {
-  return operator new(size, std::nothrow);
-}
-void* operator new(std::size_t size, std::align_val_t align) {
-  return counted_aligned_alloc(size, align);
-}
-void* operator new[](std::size_t size, std::align_val_t align) {
-  return counted_aligned_alloc(size, align);
-}
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete[](void* p) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t) noexcept { std::free(p); }
-void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
-void operator delete(void* p, std::align_val_t) noexcept { std::free(p); }
-void operator delete[](void* p, std::align_val_t) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t, std::align_val_t) noexcept { std::free(p); }
-void operator delete[](void* p, std::size_t, std::align_val_t) noexcept { std::free(p); }
-
 namespace keepless::solver::test {
 namespace {
+
+using keepless::test::AllocationCounter;
 
 // The counter must see allocations, or a zero below would prove nothing.
 TEST(MinCostFlowNoAlloc, CounterSeesAllocations) {
@@ -140,7 +73,7 @@ TEST(MinCostFlowNoAlloc, ResetAddArcSolveAllocateNothing) {
   rejected.push_back(solver.solve(1, 1));
   MinCostFlow moved(std::move(solver));
   rejected.push_back(moved.solve(0, 2));
-  const std::size_t allocations = counter.stop();
+  const std::uint64_t allocations = counter.stop();
 
   EXPECT_EQ(allocations, 0u);
   for (std::size_t i = 0; i < networks.size(); ++i) {

@@ -203,8 +203,8 @@ std::string markdown_tables(const EvalSummary& s) {
       o << " " << f(pct(r.mps, in.original.mps), 2) << " | " << f(pct(r.kfs, in.original.kfs), 2) << " |";
     o << "\n";
   }
-  // Table II: relative differences per M.
-  o << "\n### Table II: per M, relative to the original run (as the paper's Table II; ATE differences, lower than original in bold)\n\n| Sequence |";
+  // Table III: relative differences per M.
+  o << "\n### Table III: per M, relative to the original run (as the paper's Table III; ATE differences, lower than original in bold)\n\n| Sequence |";
   for (std::size_t i = 0; i < s.Ms.size(); ++i) o << " MP % (M=" << s.Ms[i] << ") | KF % | BA time % | time % | ΔATE_r (°) | ΔATE (m) |";
   o << "\n|---|";
   for (std::size_t i = 0; i < s.Ms.size(); ++i) o << "---:|---:|---:|---:|---:|---:|";
@@ -230,8 +230,8 @@ std::string markdown_tables(const EvalSummary& s) {
         << bold_if(a[4] < 0, fs(a[4], 5)) << " | " << bold_if(a[5] < 0, fs(a[5], 5)) << " |";
     o << "\n";
   }
-  // Table III: absolute values, KITTI-shaped.
-  o << "\n### Table III: absolute values (as the paper's Table III)\n\n| Sequence | #MPs | #KFs | time (s) | BA (s) | ATE_r (°) | ATE (m) |";
+  // Tables II/IV: absolute values, KITTI-shaped.
+  o << "\n### Table II/IV: absolute values (as the paper's Tables II and IV)\n\n| Sequence | #MPs | #KFs | time (s) | BA (s) | ATE_r (°) | ATE (m) |";
   for (auto M : s.Ms) o << " MP % (M=" << M << ") | KF % | time % | ATE_r (°) | ATE (m) |";
   o << "\n|---|---:|---:|---:|---:|---:|---:|";
   for (std::size_t i = 0; i < s.Ms.size(); ++i) o << "---:|---:|---:|---:|---:|";
@@ -246,8 +246,8 @@ std::string markdown_tables(const EvalSummary& s) {
         << bold_if(r.ate_m < g.ate_m, f(r.ate_m, 5)) << " |";
     o << "\n";
   }
-  // Table IV: comparison with ANMS (and random) per group, at equal count.
-  o << "\n### Table IV: comparison at equal point count, per trajectory group (as the paper's Table IV; lowest ATE in bold)\n\n"
+  // Table V: comparison with ANMS (and random) per group, at equal count.
+  o << "\n### Table V: comparison at equal point count, per trajectory group (as the paper's Table V; lowest ATE in bold)\n\n"
        "| Group | inputs | #MPs | #KFs | time (s) | ATE (m) | ANMS MP % | KF % | time (s) | connect. | ATE (m) "
        "| random MP % | KF % | time (s) | connect. | ATE (m) | ours MP % | KF % | time (s) | connect. | ATE (m) |\n"
        "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
@@ -286,12 +286,12 @@ std::string markdown_tables(const EvalSummary& s) {
         << bold_if(a[v][4] == best, f(a[v][4], 5)) << " |";
     o << "\n";
   }
-  // Table V: ablation.
+  // Table VI: ablation.
   bool any_ablation = false;
   for (const auto& in : ins) any_ablation |= !in.ablation.empty();
   if (any_ablation) {
-    o << "\n### Table V: cost ablation at M=" << (ins.empty() ? 100 : ins[0].op_M)
-      << " (as the paper's Table V; C connections per point, F mean keyframe span per point, S % of a 64x48 grid occupied)\n\n"
+    o << "\n### Table VI: cost ablation at M=" << (ins.empty() ? 100 : ins[0].op_M)
+      << " (as the paper's Table VI; C connections per point, F mean keyframe span per point, S % of a 64x48 grid occupied)\n\n"
          "| Sequence | all C | F | S | ATE (m) | c_c C | F | S | ATE (m) | c_c+c_b C | F | S | ATE (m) | c_c+c_s C | F | S | ATE (m) |\n"
          "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
     for (const auto& in : ins) {

@@ -10,16 +10,15 @@
 // The last stdout line is one JSON object.
 
 #include <algorithm>
-#include <atomic>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
-#include <new>
 #include <string>
 #include <vector>
 
 #include "compare.hpp"
+#include "counting_new.hpp"  // this binary's only inclusion
 #include "keepless/core/closed_form.hpp"
 #include "keepless/core/sparsifier.hpp"
 #include "keepless/platform/cpu_pinning.hpp"
@@ -27,53 +26,6 @@
 #include "publish.hpp"
 #include "stream.hpp"
 #include "synthetic_window.hpp"
-
-// --- allocation counter -------------------------------------------------------
-
-namespace {
-std::atomic<bool> g_counting{false};
-std::atomic<std::uint64_t> g_allocations{0};
-
-void* counted(std::size_t size) {
-  if (g_counting.load(std::memory_order_relaxed)) g_allocations.fetch_add(1, std::memory_order_relaxed);
-  if (void* p = std::malloc(size == 0 ? 1 : size)) return p;
-  throw std::bad_alloc();
-}
-void* counted_aligned(std::size_t size, std::align_val_t align) {
-  if (g_counting.load(std::memory_order_relaxed)) g_allocations.fetch_add(1, std::memory_order_relaxed);
-  const auto a = static_cast<std::size_t>(align);
-  const std::size_t rounded = (size + a - 1) / a * a;
-  if (void* p = std::aligned_alloc(a, rounded == 0 ? a : rounded)) return p;
-  throw std::bad_alloc();
-}
-}  // namespace
-
-void* operator new(std::size_t size) { return counted(size); }
-void* operator new[](std::size_t size) { return counted(size); }
-void* operator new(std::size_t size, const std::nothrow_t&) noexcept {
-  try {
-    return counted(size);
-  } catch (...) {
-    return nullptr;
-  }
-}
-void* operator new[](std::size_t size, const std::nothrow_t&) noexcept {
-  try {
-    return counted(size);
-  } catch (...) {
-    return nullptr;
-  }
-}
-void* operator new(std::size_t size, std::align_val_t a) { return counted_aligned(size, a); }
-void* operator new[](std::size_t size, std::align_val_t a) { return counted_aligned(size, a); }
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete[](void* p) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t) noexcept { std::free(p); }
-void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
-void operator delete(void* p, std::align_val_t) noexcept { std::free(p); }
-void operator delete[](void* p, std::align_val_t) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t, std::align_val_t) noexcept { std::free(p); }
-void operator delete[](void* p, std::size_t, std::align_val_t) noexcept { std::free(p); }
 
 namespace keepless::perf {
 namespace {
@@ -305,11 +257,13 @@ bool replay(const KeyframeStream& stream, std::uint32_t warmup, std::uint64_t bu
   }
   const std::uint32_t stride = compare && o.compare > 0 ? std::max<std::uint32_t>(1, measured / o.compare) : 0;
   double points = 0, arcs = 0;
+  test::AllocationCounter counter;  // armed only around the measured decision path
+  counter.pause();
   for (std::uint32_t k = 0; k < total; ++k) {
     const bool measuring = k >= warmup;
     const core::Keyframe& kf = stream.keyframes[k];
     const std::vector<core::Observation>& obs = stream.observations[k];
-    g_counting = measuring;
+    if (measuring) counter.resume();
     // --- the decision path ---
     const std::uint64_t t0 = clock.now_ns();  // the keyframe arrives
     if (window.keyframe_count() == stream.window) {
@@ -329,7 +283,7 @@ bool replay(const KeyframeStream& stream, std::uint32_t warmup, std::uint64_t bu
     const std::uint64_t t2 = clock.now_ns();
     encoder.encode(k + 1, window, inc, status);
     const std::uint64_t t3 = clock.now_ns();
-    g_counting = false;
+    counter.pause();
     // --- outside the path: bookkeeping and checks ---
     if (added != core::Status::kOk ||
         (status != core::Status::kOk && status != core::Status::kBudgetExhausted)) {
@@ -364,7 +318,7 @@ bool replay(const KeyframeStream& stream, std::uint32_t warmup, std::uint64_t bu
       }
     }
   }
-  r->allocations = g_allocations.load();
+  r->allocations = counter.count();
   r->points_mean = r->decisions > 0 ? points / r->decisions : 0;
   r->arcs_mean = r->decisions > 0 ? arcs / r->decisions : 0;
   return true;
