@@ -7,30 +7,10 @@
 
 #include "box_neighbours.hpp"
 #include "keepless/core/costs.hpp"
+#include "id_hash.hpp"
+#include "solver_status.hpp"
 
 namespace keepless::core {
-
-namespace {
-
-// splitmix64 finaliser: a fixed, platform-independent hash of a point id.
-std::uint64_t mix(std::uint64_t x) {
-  x += 0x9e3779b97f4a7c15ULL;
-  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ULL;
-  x = (x ^ (x >> 27)) * 0x94d049bb133111ebULL;
-  return x ^ (x >> 31);
-}
-
-Status from_solver(solver::Status s) {
-  switch (s) {
-    case solver::Status::kOptimal: return Status::kOk;
-    case solver::Status::kBudgetExhausted: return Status::kBudgetExhausted;
-    case solver::Status::kInvalidInput: return Status::kInvalidArgument;
-    case solver::Status::kCapacityExceeded: return Status::kCapacityExceeded;
-  }
-  return Status::kInvalidArgument;
-}
-
-}  // namespace
 
 struct IncrementalNetwork::Impl {
   struct Frame {

@@ -7,6 +7,7 @@
 
 #include "box_neighbours.hpp"
 #include "keepless/core/costs.hpp"
+#include "solver_status.hpp"
 
 namespace keepless::core {
 
@@ -15,16 +16,6 @@ namespace {
 std::int32_t saturate_i32(std::uint64_t x) {
   const auto max = static_cast<std::uint64_t>(std::numeric_limits<std::int32_t>::max());
   return static_cast<std::int32_t>(std::min(x, max));
-}
-
-Status from_solver(solver::Status s) {
-  switch (s) {
-    case solver::Status::kOptimal: return Status::kOk;
-    case solver::Status::kBudgetExhausted: return Status::kBudgetExhausted;
-    case solver::Status::kInvalidInput: return Status::kInvalidArgument;
-    case solver::Status::kCapacityExceeded: return Status::kCapacityExceeded;
-  }
-  return Status::kInvalidArgument;
 }
 
 }  // namespace

@@ -4,19 +4,11 @@
 #include <memory>
 #include <vector>
 
+#include "solver_status.hpp"
+
 namespace keepless::core {
 
 namespace {
-
-Status from_solver(solver::Status s) {
-  switch (s) {
-    case solver::Status::kOptimal: return Status::kOk;
-    case solver::Status::kBudgetExhausted: return Status::kBudgetExhausted;
-    case solver::Status::kInvalidInput: return Status::kInvalidArgument;
-    case solver::Status::kCapacityExceeded: return Status::kCapacityExceeded;
-  }
-  return Status::kInvalidArgument;
-}
 
 solver::Capacity larger(solver::Capacity a, solver::Capacity b) {
   return {std::max(a.max_nodes, b.max_nodes), std::max(a.max_arcs, b.max_arcs)};

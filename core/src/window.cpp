@@ -5,17 +5,11 @@
 #include <cstring>
 #include <vector>
 
+#include "id_hash.hpp"
+
 namespace keepless::core {
 
 namespace {
-
-// splitmix64 finaliser: a fixed, platform-independent hash of a point id.
-std::uint64_t mix(std::uint64_t x) {
-  x += 0x9e3779b97f4a7c15ULL;
-  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ULL;
-  x = (x ^ (x >> 27)) * 0x94d049bb133111ebULL;
-  return x ^ (x >> 31);
-}
 
 bool finite(const double* x, int n) {
   for (int i = 0; i < n; ++i) {
