@@ -1,0 +1,191 @@
+#include <algorithm>
+
+#include "min_cost_flow_impl.hpp"
+
+namespace keepless::solver {
+
+using namespace detail;
+
+// Dinic blocking flow on the level graph, from each source in turn. The
+// DFS serves each node's forward arcs in arc id order, so earlier arcs win
+// ties. Returns false if the budget ran out.
+bool MinCostFlow::Impl::blocking_flow(std::int32_t source_count, Meter& meter) {
+  for (std::int32_t k = 0; k < touched_count; ++k) {
+    const NodeId v = touched[k];
+    cur[v] = next_position(v, first_out[v]);
+  }
+  for (std::int32_t k = 0; k < source_count; ++k) {
+    const NodeId x = sources[k];
+    if (level[x] < 0) continue;
+    std::int64_t supply = supply_of(x);
+    std::int32_t depth = 0;
+    path_node[0] = x;
+    NodeId u = x;
+    while (supply > 0) {
+      if (depth > 0 && is_target(u)) {
+        std::int64_t f = std::min(supply, need_of(u));
+        for (std::int32_t j = 0; j < depth; ++j) f = std::min<std::int64_t>(f, res[path_arc[j]].cap);
+        const auto f32 = static_cast<std::int32_t>(f);
+        std::int32_t retreat = depth;
+        for (std::int32_t j = 0; j < depth; ++j) {
+          push(path_arc[j], f32);
+          if (res[path_arc[j]].cap == 0 && retreat == depth) retreat = j;
+        }
+        if (mode != Mode::kMaxFlow) {
+          if (x != src && x != snk) excess[x] -= f;
+          if (u != src && u != snk) excess[u] += f;
+        }
+        if (supply != kUnlimited) supply -= f;
+        ++stats.augmentations;
+        if (meter.exhausted(kAugmentStride)) return false;
+        depth = retreat;  // resume at the tail of the first saturated arc
+        u = path_node[depth];
+        continue;
+      }
+      const std::int32_t want = backward ? level[u] - 1 : level[u] + 1;
+      const Cost pu = pot[u];
+      const std::int32_t fr = first_rev[u];
+      const std::int32_t end = fr + nflow[u];
+      std::int32_t found = -1;
+      std::int32_t p = cur[u];
+      std::uint64_t scanned = 1;
+      for (; p < end; p = next_position(u, p + 1), ++scanned) {
+        const std::int32_t i = p < fr ? p : flist[p];
+        const Residual& a = res[i];
+        if (a.cap > 0 && level[a.head] == want && a.cost + pu == pot[a.head]) {
+          found = i;
+          break;
+        }
+      }
+      stats.work_units += scanned;
+      cur[u] = p;
+      if (found >= 0) {
+        path_arc[depth] = found;
+        u = res[found].head;
+        path_node[++depth] = u;
+        continue;
+      }
+      level[u] = -1;  // dead end: prune it for the rest of this blocking flow
+      if (depth == 0) break;
+      u = path_node[--depth];
+      cur[u] = next_position(u, cur[u] + 1);
+    }
+  }
+  return true;
+}
+
+// Phases of one mode until nothing is left to route.
+Status MinCostFlow::Impl::run(Mode m, Meter& meter) {
+  mode = m;
+  backward = false;
+  marked = false;
+  lazy_begin();
+  const Status status = run_phases(m, meter);
+  lazy = false;
+  return status;
+}
+
+Status MinCostFlow::Impl::run_phases(Mode m, Meter& meter) {
+  for (;;) {
+    if (meter.exhausted(0)) return Status::kBudgetExhausted;
+    std::int32_t count = 0;
+    if (m == Mode::kExcess) {
+      for (std::int32_t k = 0; k < imbalanced_count; ++k) {
+        if (excess[imbalanced[k]] > 0) sources[count++] = imbalanced[k];
+      }
+    } else if (m == Mode::kDeficit) {
+      bool any = false;
+      for (std::int32_t k = 0; k < imbalanced_count && !any; ++k) any = excess[imbalanced[k]] < 0;
+      if (any) {
+        sources[count++] = std::min(src, snk);
+        sources[count++] = std::max(src, snk);
+      }
+    } else {
+      sources[count++] = src;
+    }
+    if (count == 0) return Status::kOptimal;
+    const std::uint64_t before = stats.work_units;
+    const Search found = backward ? shortest_paths_to_sink(meter) : shortest_paths(count, meter);
+    // A forward search that had to scan more than a quarter of the
+    // residual graph will keep doing so: the rest of the run searches
+    // from the sink (only source-to-sink phases have a single target).
+    const bool turn = m == Mode::kMaxFlow && !backward &&
+                      stats.work_units - before > static_cast<std::uint64_t>(records) / 4;
+    if (found != Search::kFound) {
+      clear_labels();
+      return found == Search::kExhausted ? Status::kBudgetExhausted : Status::kOptimal;
+    }
+    ++stats.phases;
+    const bool done = blocking_flow(count, meter);
+    clear_labels();
+    if (!done) return Status::kBudgetExhausted;
+    if (lazy) lazy_end_phase();
+    if (turn) {
+      backward = true;
+      lazy = false;  // the source's lazy order is not kept up from here
+    }
+  }
+}
+
+// Reads flows, cost and value back from the residual graph.
+void MinCostFlow::Impl::finish() {
+  value = 0;
+  cost_total = 0;
+  for (ArcId a = 0; a < arcs; ++a) {
+    const std::int32_t f = arc_pos[a] >= 0 ? arc_cap[a] - res[arc_pos[a]].cap : 0;
+    arc_flow[a] = f;
+    cost_total += Cost{f} * arc_cost[a];
+    if (arc_tail[a] == src) value += f;
+    if (arc_head[a] == src) value -= f;
+  }
+  std::int32_t kept = 0;
+  for (std::int32_t k = 0; k < imbalanced_count; ++k) {
+    if (excess[imbalanced[k]] != 0) imbalanced[kept++] = imbalanced[k];
+  }
+  imbalanced_count = kept;
+  is_balanced = kept == 0;
+}
+
+Status MinCostFlow::Impl::solve_scratch(NodeId s, NodeId t, const Budget& budget) {
+  clear_recosted();
+  if (budget.clock != nullptr && budget.clock->now_ns() >= budget.deadline_ns) {
+    // Too late to start: the zero flow, at zero potentials, is valid and
+    // certified (costs are >= 0), and a later solve_warm can start from it.
+    src = s;
+    snk = t;
+    stats = {};
+    std::fill(arc_flow.begin(), arc_flow.begin() + arcs, 0);
+    std::fill(pot.begin(), pot.begin() + nodes, 0);
+    value = 0;
+    cost_total = 0;
+    imbalanced_count = 0;
+    is_balanced = true;
+    laid_out = false;
+    have_state = true;
+    optimal = false;
+    return Status::kBudgetExhausted;
+  }
+  const std::uint64_t base = set_label_base();
+  src = s;
+  snk = t;
+  stats = {};
+  overflow = false;
+  const Cost max_cost = count_degrees();
+  // Distances stay below nodes * max cost.
+  if (base > kLabelLimit / base / static_cast<std::uint64_t>(max_cost + 1)) {
+    laid_out = false;
+    have_state = false;
+    return Status::kInvalidInput;
+  }
+  std::fill(pot.begin(), pot.begin() + nodes, 0);
+  std::fill(arc_flow.begin(), arc_flow.begin() + arcs, 0);
+  lay_out(false);
+  Meter meter(budget, stats);
+  const Status status = run(Mode::kMaxFlow, meter);
+  finish();
+  have_state = true;
+  optimal = status == Status::kOptimal;
+  return status;
+}
+
+}  // namespace keepless::solver
