@@ -7,6 +7,7 @@
 
 #include "box_neighbours.hpp"
 #include "keepless/core/costs.hpp"
+#include "keepless/core/network.hpp"
 #include "id_hash.hpp"
 #include "solver_status.hpp"
 
@@ -653,16 +654,7 @@ IncrementalNetwork::~IncrementalNetwork() = default;
 solver::Capacity IncrementalNetwork::solver_capacity(const Capacities& c) {
   // Retirements come before additions within an update, so the live ids
   // never exceed what PaperNetwork needs for the larger of two windows.
-  const std::uint64_t k = c.max_keyframes;
-  const std::uint64_t q = k * (k > 0 ? k - 1 : 0) / 2;
-  const auto cap = [](std::uint64_t x) {
-    return static_cast<std::int32_t>(
-        std::min<std::uint64_t>(x, static_cast<std::uint64_t>(std::numeric_limits<std::int32_t>::max())));
-  };
-  solver::Capacity room;
-  room.max_nodes = cap(2 + std::uint64_t{c.max_points} + q);
-  room.max_arcs = cap(std::uint64_t{c.max_points} + c.max_pair_arcs + q);
-  return room;
+  return PaperNetwork::solver_capacity(c);
 }
 
 Status IncrementalNetwork::update(const Window& window, const Params& params,
