@@ -30,7 +30,7 @@ struct PaperNetwork::Impl {
   Capacities caps;
   // Scratch over observations.
   std::vector<Record> records;
-  std::vector<std::uint32_t> box_scratch;  // count_box_neighbours, [4 * max_observations + 1]
+  BoxCounter box;  // N(p, f), one keyframe at a time
   std::vector<std::uint32_t> neighbours;  // N(p, f) by flattened index
   std::vector<std::uint32_t> slot_begin;  // [max_keyframes + 1]
   // Points, ascending id.
@@ -51,11 +51,10 @@ struct PaperNetwork::Impl {
   std::uint32_t points = 0, evaluated = 0, pairs = 0, arcs = 0, m = 0;
   solver::NodeId sink = 1;
 
-  explicit Impl(const Capacities& c) : caps(c) {
+  explicit Impl(const Capacities& c) : caps(c), box(c.max_observations) {
     const std::size_t k = c.max_keyframes;
     const std::size_t q = k * (k - (k > 0 ? 1 : 0)) / 2;
     records.resize(c.max_observations);
-    box_scratch.resize(BoxScratch::kWordsPerObservation * std::size_t{c.max_observations} + 1);
     neighbours.resize(c.max_observations);
     slot_begin.resize(k + 1);
     point_id.resize(c.max_points);
@@ -76,12 +75,6 @@ struct PaperNetwork::Impl {
   void clear() {
     points = evaluated = pairs = arcs = m = 0;
     sink = 1;
-  }
-
-  BoxScratch scratch() {
-    const std::size_t n = caps.max_observations;
-    return BoxScratch{box_scratch.data(), box_scratch.data() + n, box_scratch.data() + 2 * n,
-                      box_scratch.data() + 3 * n};
   }
 };
 
@@ -180,8 +173,8 @@ Status PaperNetwork::build(const Window& window, const Params& params,
 
   // N(p, f) for every keypoint, one keyframe at a time.
   for (std::uint32_t s = 0; s < k; ++s) {
-    count_box_neighbours(window.observations(s), window.observation_count(s), params.box_width,
-                         params.box_height, n.scratch(), n.neighbours.data() + n.slot_begin[s]);
+    n.box.count(window.observations(s), window.observation_count(s), params.box_width,
+                params.box_height, n.neighbours.data() + n.slot_begin[s]);
   }
   connectivity_costs(m, n.cm.data());
   if (!(params.cost_terms & kConnectivityCost)) std::fill(n.cm.begin(), n.cm.begin() + m + 1, 0);
@@ -264,7 +257,7 @@ solver::NodeId PaperNetwork::sink() const { return impl_->sink; }
 std::size_t PaperNetwork::memory_bytes() const {
   const Impl& n = *impl_;
   const auto bytes = [](const auto& v) { return v.capacity() * sizeof(v[0]); };
-  return sizeof(PaperNetwork) + sizeof(Impl) + bytes(n.records) + bytes(n.box_scratch) +
+  return sizeof(PaperNetwork) + sizeof(Impl) + bytes(n.records) + n.box.memory_bytes() +
          bytes(n.neighbours) + bytes(n.slot_begin) + bytes(n.point_id) + bytes(n.point_views) +
          bytes(n.point_first) + bytes(n.point_arc) + bytes(n.pair_of) + bytes(n.pair_j) +
          bytes(n.pair_k) + bytes(n.pair_sink) + bytes(n.pair_cb) + bytes(n.arc_point) +

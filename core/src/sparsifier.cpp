@@ -1,5 +1,6 @@
 #include "keepless/core/sparsifier.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <memory>
 #include <vector>
@@ -14,6 +15,20 @@ solver::Capacity larger(solver::Capacity a, solver::Capacity b) {
   return {std::max(a.max_nodes, b.max_nodes), std::max(a.max_arcs, b.max_arcs)};
 }
 
+// The shorter of the last two durations of a stage: one outlier cannot make
+// every later call plan for it.
+class RecentDuration {
+ public:
+  void add(std::uint64_t ns) {
+    last_[1] = last_[0];
+    last_[0] = ns;
+  }
+  std::uint64_t expected() const { return std::min(last_[0], last_[1]); }
+
+ private:
+  std::uint64_t last_[2] = {0, 0};
+};
+
 }  // namespace
 
 struct Sparsifier::Impl {
@@ -25,6 +40,12 @@ struct Sparsifier::Impl {
   bool solver_incremental = false;  // the solver holds the incremental network
   bool resume = false;              // the last update stopped for budget: carry on from its state
   bool resumed = false;             // the last update was such a resumption
+  bool deferred = false;            // the last update left the network for later
+  // What update() expects its network update and its deciding to take, on
+  // the budget's clock, to plan against a deadline.
+  // The solve counts only when it finished: a stopped one says nothing of
+  // what a whole one needs.
+  RecentDuration network_time, solve_time, decide_time;
   std::vector<PointDecision> decisions;  // [max_points]
   std::uint32_t count = 0;
   Summary summary;
@@ -94,6 +115,7 @@ Status Sparsifier::run(const Window& window, const solver::Budget& budget) {
   Impl& s = *impl_;
   s.count = 0;
   s.summary = Summary{};
+  s.deferred = false;
   if (Status v = validate(s.params); v != Status::kOk) return v;
   s.solver_incremental = false;  // build() resets the solver
   const std::uint64_t t0 = s.now();
@@ -113,6 +135,7 @@ Status Sparsifier::update(const Window& window, const solver::Budget& budget) {
   if (!s.incremental) return run(window, budget);
   s.count = 0;
   s.summary = Summary{};
+  s.deferred = false;
   if (Status v = validate(s.params); v != Status::kOk) return v;
   IncrementalNetwork& net = *s.incremental;
   if (!s.solver_incremental) {  // run() used the solver since
@@ -121,11 +144,37 @@ Status Sparsifier::update(const Window& window, const solver::Budget& budget) {
   }
   s.solver_incremental = true;
   const std::uint64_t t0 = s.now();
+  // Planning against the deadline: deciding needs its usual time after the
+  // solve, so the solver's deadline is that much earlier; and if there is
+  // not time to update the network, solve and decide as usual, the call
+  // answers at once, keeping every point, and leaves the network as it is
+  // (the next call catches up with everything since: the diff is against
+  // the network, not against the previous window).
+  const solver::Clock* deadline_clock = budget.clock;
+  const std::uint64_t u0 = deadline_clock != nullptr ? deadline_clock->now_ns() : 0;
+  const std::uint64_t decide_ns = s.decide_time.expected();
+  s.deferred = deadline_clock != nullptr &&
+               (u0 >= budget.deadline_ns ||
+                budget.deadline_ns - u0 <
+                    s.network_time.expected() + s.solve_time.expected() + decide_ns);
+  if (s.deferred) {
+    s.summary.keyframes = window.keyframe_count();
+    s.summary.points = window.distinct_points();
+    s.summary.kept = s.summary.points;
+    s.times = StageTimes{0, 0, s.now() - t0};
+    return Status::kBudgetExhausted;
+  }
   if (Status u = net.update(window, s.params, s.solver); u != Status::kOk) {
     net.clear();
     return u;
   }
   const std::uint64_t t1 = s.now();
+  solver::Budget solve_budget = budget;
+  const std::uint64_t u1 = deadline_clock != nullptr ? deadline_clock->now_ns() : 0;
+  if (deadline_clock != nullptr) {
+    s.network_time.add(u1 - u0);
+    solve_budget.deadline_ns = budget.deadline_ns > decide_ns ? budget.deadline_ns - decide_ns : 0;
+  }
   // The network's arc ids are recycled, so the solver is told the order
   // its tie-break must follow: source arcs by ascending point id, as in
   // PaperNetwork. A solve from zero flow in that order finds run()'s optimum
@@ -139,12 +188,12 @@ Status Sparsifier::update(const Window& window, const solver::Budget& budget) {
   Status result = from_solver(s.solver.set_tie_order(net.canonical_order(), evaluated));
   const bool warm = s.resume && !s.resumed;
   if (result == Status::kOk && !warm) {
-    result = from_solver(s.solver.solve(net.source(), net.sink(), budget));
+    result = from_solver(s.solver.solve(net.source(), net.sink(), solve_budget));
   } else if (result == Status::kOk) {
-    result = from_solver(s.solver.solve_warm(net.source(), net.sink(), budget));
+    result = from_solver(s.solver.solve_warm(net.source(), net.sink(), solve_budget));
     if (result == Status::kOk) {
       // The rest of the work budget (the clock's deadline is absolute).
-      solver::Budget rest = budget;
+      solver::Budget rest = solve_budget;
       const std::uint64_t used = s.solver.stats().work_units;
       rest.work_units = budget.work_units > used ? budget.work_units - used : 0;
       result = from_solver(s.solver.canonicalize(net.canonical_order(), evaluated, rest));
@@ -152,19 +201,25 @@ Status Sparsifier::update(const Window& window, const solver::Budget& budget) {
   }
   s.resume = result == Status::kBudgetExhausted;
   s.resumed = warm;
+  if (deadline_clock != nullptr && result == Status::kOk) {
+    s.solve_time.add(deadline_clock->now_ns() - u1);
+  }
   const std::uint64_t t2 = s.now();
   if (result != Status::kOk && result != Status::kBudgetExhausted) {
     net.clear();
     return result;
   }
+  const std::uint64_t d0 = deadline_clock != nullptr ? deadline_clock->now_ns() : 0;
   s.summary.keyframes = window.keyframe_count();
   s.decide_all(net, result == Status::kOk);
+  if (deadline_clock != nullptr) s.decide_time.add(deadline_clock->now_ns() - d0);
   s.times = StageTimes{t1 - t0, t2 - t1, s.now() - t2};
   return result;
 }
 
 void Sparsifier::set_clock(const solver::Clock* clock) { impl_->clock = clock; }
 const StageTimes& Sparsifier::stage_times() const { return impl_->times; }
+bool Sparsifier::deferred() const { return impl_->deferred; }
 const Summary& Sparsifier::summary() const { return impl_->summary; }
 std::uint32_t Sparsifier::decision_count() const { return impl_->count; }
 const PointDecision* Sparsifier::decisions() const { return impl_->decisions.data(); }

@@ -1,11 +1,12 @@
 #include "keepless/core/window.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstring>
 #include <vector>
 
-#include "id_hash.hpp"
+#include "id_table.hpp"
 
 namespace keepless::core {
 
@@ -18,85 +19,43 @@ bool finite(const double* x, int n) {
   return true;
 }
 
+// Keyframe stamps, unique in the process (see Window::keyframe_stamp); 64
+// bits do not wrap in any process's life.
+std::atomic<std::uint64_t> next_stamp{1};
+
 }  // namespace
 
 struct Window::Impl {
-  // Distinct points with the number of window keyframes observing each: open
-  // addressing with linear probing, load <= 1/2, backward-shift deletion (no
-  // tombstones, so probe lengths never degrade as the window slides).
-  struct Slot {
-    PointId point;
-    std::uint32_t views;  // 0 = empty
-  };
-
   Capacities caps;
-  std::vector<Keyframe> keyframes;           // [max_keyframes], insertion order
-  std::vector<std::uint32_t> obs_begin;      // [max_keyframes]
-  std::vector<std::uint32_t> obs_count;      // [max_keyframes]
-  std::vector<Observation> pool;             // [max_observations], contiguous in slot order
-  std::vector<PointId> scratch;              // [max_observations], duplicate check
-  std::vector<Slot> table;                   // power of two >= 2 * max_points
-  std::uint64_t mask = 0;
-  std::uint32_t count = 0;    // keyframes
-  std::uint32_t total = 0;    // observations
-  std::uint32_t distinct = 0; // points
+  std::vector<Keyframe> keyframes;       // [max_keyframes], insertion order
+  std::vector<std::uint64_t> stamps;     // [max_keyframes]
+  std::vector<std::uint32_t> obs_begin;  // [max_keyframes]
+  std::vector<std::uint32_t> obs_count;  // [max_keyframes]
+  std::vector<Observation> pool;         // [max_observations], contiguous in slot order
+  std::vector<PointId> scratch;          // [max_observations], duplicate check
+  IdTable views;                         // distinct point -> keyframes observing it
+  std::uint32_t count = 0;               // keyframes
+  std::uint32_t total = 0;               // observations
 
-  explicit Impl(const Capacities& c) : caps(c) {
+  explicit Impl(const Capacities& c) : caps(c), views(c.max_points) {
     keyframes.resize(c.max_keyframes);
+    stamps.resize(c.max_keyframes);
     obs_begin.resize(c.max_keyframes);
     obs_count.resize(c.max_keyframes);
     pool.resize(c.max_observations);
     scratch.resize(c.max_observations);
-    std::uint64_t size = 2;
-    while (size < 2ULL * c.max_points) size <<= 1;
-    table.assign(size, Slot{0, 0});
-    mask = size - 1;
   }
 
-  // Index of `point` or of the empty slot where it would go. The table is never
-  // full (load <= 1/2), so the probe ends within table.size() steps.
-  std::uint64_t probe(PointId point) const {
-    std::uint64_t i = mix(point) & mask;
-    for (std::uint64_t step = 0; step <= mask; ++step) {
-      if (table[i].views == 0 || table[i].point == point) return i;
-      i = (i + 1) & mask;
-    }
-    return i;  // unreachable while load <= 1/2
-  }
+  bool contains(PointId point) const { return views.find(point) != nullptr; }
 
-  bool contains(PointId point) const { return table[probe(point)].views != 0; }
-
+  // Callers check the point capacity first, so the insertion cannot fail.
   void add_view(PointId point) {
-    Slot& s = table[probe(point)];
-    if (s.views == 0) {
-      s.point = point;
-      ++distinct;
-    }
-    ++s.views;
+    if (std::uint32_t* v = views.insert(point, 0)) ++*v;
   }
 
   void remove_view(PointId point) {
-    std::uint64_t i = probe(point);
-    if (table[i].views == 0) return;  // not present: cannot happen
-    if (--table[i].views != 0) return;
-    --distinct;
-    // Backward-shift deletion: pull later members of the cluster into the hole
-    // when their home position allows it.
-    std::uint64_t hole = i;
-    std::uint64_t j = i;
-    for (std::uint64_t step = 0; step <= mask; ++step) {
-      j = (j + 1) & mask;
-      if (table[j].views == 0) break;
-      const std::uint64_t home = mix(table[j].point) & mask;
-      // Move j into the hole unless its home lies cyclically in (hole, j].
-      const bool home_between =
-          hole <= j ? (hole < home && home <= j) : (hole < home || home <= j);
-      if (!home_between) {
-        table[hole] = table[j];
-        hole = j;
-      }
-    }
-    table[hole].views = 0;
+    std::uint32_t* v = views.find(point);
+    if (v != nullptr && --*v == 0) views.erase(point);
   }
 };
 
@@ -105,6 +64,17 @@ Window::~Window() = default;
 
 Status Window::add_keyframe(const Keyframe& keyframe, const Observation* observations,
                             std::uint32_t count) {
+  return add(keyframe, observations, count, 0);
+}
+
+Status Window::copy_keyframe(const Window& from, std::uint32_t slot) {
+  if (slot >= from.keyframe_count()) return Status::kInvalidArgument;
+  return add(from.keyframe(slot), from.observations(slot), from.observation_count(slot),
+             from.keyframe_stamp(slot));
+}
+
+Status Window::add(const Keyframe& keyframe, const Observation* observations, std::uint32_t count,
+                   std::uint64_t stamp) {
   Impl& w = *impl_;
   // Validate everything first; commit only when nothing can fail.
   if (w.count >= w.caps.max_keyframes) return Status::kCapacityExceeded;
@@ -128,10 +98,11 @@ Status Window::add_keyframe(const Keyframe& keyframe, const Observation* observa
     if (i > 0 && ids[i] == ids[i - 1]) return Status::kDuplicateObservation;
     if (!w.contains(ids[i])) ++fresh;
   }
-  if (fresh > w.caps.max_points - w.distinct) return Status::kCapacityExceeded;
+  if (fresh > w.caps.max_points - w.views.size()) return Status::kCapacityExceeded;
 
   const std::uint32_t slot = w.count;
   w.keyframes[slot] = keyframe;
+  w.stamps[slot] = stamp != 0 ? stamp : next_stamp.fetch_add(1, std::memory_order_relaxed);
   w.obs_begin[slot] = w.total;
   w.obs_count[slot] = count;
   if (count > 0) std::memcpy(w.pool.data() + w.total, observations, count * sizeof(Observation));
@@ -156,6 +127,7 @@ Status Window::remove_keyframe(KeyframeId id) {
   }
   for (std::uint32_t s = slot; s + 1 < w.count; ++s) {
     w.keyframes[s] = w.keyframes[s + 1];
+    w.stamps[s] = w.stamps[s + 1];
     w.obs_begin[s] = w.obs_begin[s + 1] - n;
     w.obs_count[s] = w.obs_count[s + 1];
   }
@@ -166,10 +138,9 @@ Status Window::remove_keyframe(KeyframeId id) {
 
 void Window::clear() {
   Impl& w = *impl_;
-  std::fill(w.table.begin(), w.table.end(), Impl::Slot{0, 0});
+  w.views.clear();
   w.count = 0;
   w.total = 0;
-  w.distinct = 0;
 }
 
 std::uint32_t Window::keyframe_count() const { return impl_->count; }
@@ -179,7 +150,8 @@ const Observation* Window::observations(std::uint32_t slot) const {
 }
 std::uint32_t Window::observation_count(std::uint32_t slot) const { return impl_->obs_count[slot]; }
 std::uint32_t Window::total_observations() const { return impl_->total; }
-std::uint32_t Window::distinct_points() const { return impl_->distinct; }
+std::uint32_t Window::distinct_points() const { return impl_->views.size(); }
+std::uint64_t Window::keyframe_stamp(std::uint32_t slot) const { return impl_->stamps[slot]; }
 
 std::int32_t Window::find_keyframe(KeyframeId id) const {
   for (std::uint32_t s = 0; s < impl_->count; ++s) {
@@ -193,9 +165,10 @@ const Capacities& Window::capacities() const { return impl_->caps; }
 std::size_t Window::memory_bytes() const {
   const Impl& w = *impl_;
   return sizeof(Window) + sizeof(Impl) + w.keyframes.capacity() * sizeof(Keyframe) +
+         w.stamps.capacity() * sizeof(std::uint64_t) +
          (w.obs_begin.capacity() + w.obs_count.capacity()) * sizeof(std::uint32_t) +
          w.pool.capacity() * sizeof(Observation) + w.scratch.capacity() * sizeof(PointId) +
-         w.table.capacity() * sizeof(Impl::Slot);
+         w.views.memory_bytes();
 }
 
 }  // namespace keepless::core

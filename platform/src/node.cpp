@@ -13,6 +13,7 @@
 #include "keepless/decision_timing_t.hpp"
 #include "keepless/keyframe_t.hpp"
 #include "keepless/map_event_t.hpp"
+#include "keepless/platform/decision_message.hpp"
 #include "keepless/platform/monotonic_clock.hpp"
 #include "keepless/platform/sliding_window.hpp"
 #include "keepless/status_t.hpp"
@@ -44,7 +45,9 @@ struct Node::Impl {
         config(c),
         capacities(window_capacities(c)),
         sliding(capacities, c.max_observations, c.max_event_ids),
-        sparsifier(capacities, c.params) {
+        // Incremental: each keyframe edits the previous window's network in
+        // place; the decisions are run()'s, bit for bit.
+        sparsifier(capacities, c.params, core::SolveMode::kIncremental) {
     limits.max_observations = c.max_observations;
     limits.max_event_ids = c.max_event_ids;
     budget.work_units = c.budget_work_units;
@@ -57,16 +60,9 @@ struct Node::Impl {
     event.merged_from_id.reserve(c.max_event_ids);
     event.merged_into_id.reserve(c.max_event_ids);
     event.removed_keyframe_id.reserve(c.max_event_ids);
-    decision.window_keyframe_id.reserve(capacities.max_keyframes);
-    decision.culled_point_id.reserve(capacities.max_points);
+    max_decision = reserve_decision(decision, capacities);
     observations.resize(c.max_observations);
     id_scratch.resize(std::max<std::size_t>(c.max_observations, 2 * std::size_t{c.max_event_ids}));
-    culled.resize(capacities.max_points);
-
-    decision.num_window_keyframes = 0;
-    decision.num_culled = 0;
-    max_decision = static_cast<std::size_t>(decision.getEncodedSize()) +
-                   8 * (std::size_t{capacities.max_keyframes} + capacities.max_points);
     out.resize(max_decision);
     start_ns = monotonic_ns();
     next_status_ns = start_ns;
@@ -87,23 +83,7 @@ struct Node::Impl {
     }
   }
 
-  void fill_window_ids() {
-    const core::Window& w = sliding.window();
-    const std::uint32_t k = w.keyframe_count();
-    decision.window_keyframe_id.resize(k);
-    for (std::uint32_t i = 0; i < k; ++i) {
-      decision.window_keyframe_id[i] = static_cast<std::int64_t>(w.keyframe(i).id);
-    }
-    decision.num_window_keyframes = static_cast<std::int32_t>(k);
-  }
-
-  void clear_counts() {
-    decision.points = decision.evaluated = decision.kept = decision.culled = decision.skipped = 0;
-    decision.pairs = 0;
-    decision.max_flow = decision.total_cost = 0;
-    decision.num_culled = 0;
-    decision.culled_point_id.resize(0);
-  }
+  DecisionRequest request() const { return {kf.sequence, kf.keyframe_id, kf.utime}; }
 
   // Publishes `decision`; returns its encoded size (0 on encode failure).
   std::size_t publish_decision() {
@@ -119,15 +99,8 @@ struct Node::Impl {
   }
 
   void answer_rejected(RejectReason r) {
-    decision.sequence = kf.sequence;
-    decision.keyframe_id = kf.keyframe_id;
-    decision.utime = kf.utime;
-    decision.status = r == RejectReason::kWindowCapacity ? keepless::decision_t::STATUS_CAPACITY_EXCEEDED
-                                                         : keepless::decision_t::STATUS_REJECTED_INPUT;
-    decision.reject_reason = static_cast<std::int8_t>(r);
     if (r == RejectReason::kWindowCapacity) ++counters.capacity_exceeded;
-    clear_counts();
-    fill_window_ids();
+    fill_rejected_decision(decision, request(), sliding.window(), r);
     publish_decision();
   }
 
@@ -178,52 +151,25 @@ struct Node::Impl {
       budget.clock = &clock;
       budget.deadline_ns = t0 + static_cast<std::uint64_t>(config.latency_target_ms * 1e6);
     }
-    const core::Status run = sparsifier.run(sliding.window(), budget);
+    // After a budget stop, update() resumes from the state left behind.
+    const core::Status run = sparsifier.update(sliding.window(), budget);
     const std::uint64_t t3 = monotonic_ns();
-    decision.sequence = kf.sequence;
-    decision.keyframe_id = kf.keyframe_id;
-    decision.utime = kf.utime;
-    decision.reject_reason = -1;
-    clear_counts();
-    std::uint32_t n_culled = 0;
-    if (run == core::Status::kOk || run == core::Status::kBudgetExhausted) {
-      const core::Summary& sum = sparsifier.summary();
-      decision.status = run == core::Status::kOk ? keepless::decision_t::STATUS_OPTIMAL
-                                                 : keepless::decision_t::STATUS_BUDGET_EXHAUSTED;
-      if (run == core::Status::kBudgetExhausted) ++counters.budget_exhaustions;
-      decision.points = static_cast<std::int32_t>(sum.points);
-      decision.evaluated = static_cast<std::int32_t>(sum.evaluated);
-      decision.kept = static_cast<std::int32_t>(sum.kept);
-      decision.culled = static_cast<std::int32_t>(sum.culled);
-      decision.skipped = static_cast<std::int32_t>(sum.skipped);
-      decision.pairs = static_cast<std::int32_t>(sum.pairs);
-      decision.max_flow = sum.max_flow;
-      decision.total_cost = sum.total_cost;
-      const core::PointDecision* d = sparsifier.decisions();
-      const std::uint32_t count = sparsifier.decision_count();
-      for (std::uint32_t i = 0; i < count && n_culled < culled.size(); ++i) {
-        if (d[i].verdict == core::Verdict::kCull) culled[n_culled++] = d[i].point;
-      }
-      decision.culled_point_id.resize(n_culled);
-      for (std::uint32_t i = 0; i < n_culled; ++i) {
-        decision.culled_point_id[i] = static_cast<std::int64_t>(culled[i]);
-      }
-      decision.num_culled = static_cast<std::int32_t>(n_culled);
-    } else {
-      decision.status = run == core::Status::kCapacityExceeded ? keepless::decision_t::STATUS_CAPACITY_EXCEEDED
-                                                               : keepless::decision_t::STATUS_REJECTED_INPUT;
-      if (run == core::Status::kCapacityExceeded) ++counters.capacity_exceeded;
+    const std::uint32_t n_culled = fill_decision(decision, request(), sliding.window(), sparsifier, run);
+    if (run == core::Status::kBudgetExhausted) ++counters.budget_exhaustions;
+    if (run == core::Status::kCapacityExceeded) ++counters.capacity_exceeded;
+    if (run != core::Status::kOk && run != core::Status::kBudgetExhausted) {
       std::fprintf(stderr, "keepless_node: sparsifier failed on keyframe seq %lld: %s (nothing culled)\n",
                    static_cast<long long>(kf.sequence), core::to_string(run));
     }
-    fill_window_ids();
     publish_decision();
     counters.points_culled += n_culled;
     finish_timing(t0, t1, t2, t3, sparsifier.solver().stats().work_units, sparsifier.solver().stats().phases);
 
     // The VO deletes culled points; so does the window, off the latency path.
+    // The ids are the decision's own (int64 and uint64 may alias).
     if (n_culled > 0) {
-      const core::Status s = sliding.drop_points(culled.data(), n_culled);
+      const auto* culled = reinterpret_cast<const core::PointId*>(decision.culled_point_id.data());
+      const core::Status s = sliding.drop_points(culled, n_culled);
       if (s != core::Status::kOk) {
         std::fprintf(stderr, "keepless_node: dropping culled points failed: %s\n", core::to_string(s));
       }
@@ -322,7 +268,6 @@ struct Node::Impl {
   std::size_t memory_bytes() const {
     return sliding.memory_bytes() + sparsifier.memory_bytes() + out.size() + small.size() +
            observations.size() * sizeof(core::Observation) + id_scratch.size() * sizeof(std::uint64_t) +
-           culled.size() * sizeof(core::PointId) +
            (kf.point_id.capacity() * 16) +
            (event.deleted_point_id.capacity() + event.merged_from_id.capacity() +
             event.merged_into_id.capacity() + event.removed_keyframe_id.capacity()) * 8 +
@@ -354,7 +299,6 @@ struct Node::Impl {
   keepless::status_t status{};
   std::vector<core::Observation> observations;
   std::vector<std::uint64_t> id_scratch;
-  std::vector<core::PointId> culled;
   std::vector<std::uint8_t> out;
   std::array<std::uint8_t, 1024> small{};
   std::size_t max_decision = 0;

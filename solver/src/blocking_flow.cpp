@@ -49,13 +49,34 @@ bool MinCostFlow::Impl::blocking_flow(std::int32_t source_count, Meter& meter) {
       std::int32_t found = -1;
       std::int32_t p = cur[u];
       std::uint64_t scanned = 1;
-      for (; p < end; p = next_position(u, p + 1), ++scanned) {
-        const std::int32_t i = p < fr ? p : flist[p];
-        const Residual& a = res[i];
-        if (a.cap > 0 && level[a.head] == want && a.cost + pu == pot[a.head]) {
-          found = i;
-          break;
+      const auto admissible = [&](const Residual& a) {
+        return a.cap > 0 && level[a.head] == want && a.cost + pu == pot[a.head];
+      };
+      if (u == src && (lazy || (backward && marked))) {
+        for (; p < end; p = next_position(u, p + 1), ++scanned) {  // the listed source arcs only
+          const std::int32_t i = record_at(u, p);
+          if (admissible(res[i])) {
+            found = i;
+            break;
+          }
         }
+      } else {
+        const std::int32_t start = p;
+        for (; p < fr; ++p) {
+          if (admissible(res[p])) {
+            found = p;
+            break;
+          }
+        }
+        if (found < 0) {
+          for (; p < end; ++p) {
+            if (admissible(res[flist[p]])) {
+              found = flist[p];
+              break;
+            }
+          }
+        }
+        scanned += static_cast<std::uint64_t>(p - start);
       }
       stats.work_units += scanned;
       cur[u] = p;
@@ -127,17 +148,18 @@ Status MinCostFlow::Impl::run_phases(Mode m, Meter& meter) {
   }
 }
 
-// Reads flows, cost and value back from the residual graph.
+// Reads flows, cost, value and potentials back from the residual graph.
 void MinCostFlow::Impl::finish() {
   value = 0;
   cost_total = 0;
   for (ArcId a = 0; a < arcs; ++a) {
-    const std::int32_t f = arc_pos[a] >= 0 ? arc_cap[a] - res[arc_pos[a]].cap : 0;
+    const std::int32_t f = arc_pos[a] >= 0 ? arc[a].cap - res[arc_pos[a]].cap : 0;
     arc_flow[a] = f;
-    cost_total += Cost{f} * arc_cost[a];
-    if (arc_tail[a] == src) value += f;
-    if (arc_head[a] == src) value -= f;
+    cost_total += Cost{f} * arc[a].cost;
+    if (arc[a].tail == src_ext) value += f;
+    if (arc[a].head == src_ext) value -= f;
   }
+  for (NodeId v = 0; v < nodes; ++v) pot_ext[ext_of[v]] = pot[v];
   std::int32_t kept = 0;
   for (std::int32_t k = 0; k < imbalanced_count; ++k) {
     if (excess[imbalanced[k]] != 0) imbalanced[kept++] = imbalanced[k];
@@ -151,11 +173,11 @@ Status MinCostFlow::Impl::solve_scratch(NodeId s, NodeId t, const Budget& budget
   if (budget.clock != nullptr && budget.clock->now_ns() >= budget.deadline_ns) {
     // Too late to start: the zero flow, at zero potentials, is valid and
     // certified (costs are >= 0), and a later solve_warm can start from it.
-    src = s;
-    snk = t;
+    src_ext = s;
+    snk_ext = t;
     stats = {};
     std::fill(arc_flow.begin(), arc_flow.begin() + arcs, 0);
-    std::fill(pot.begin(), pot.begin() + nodes, 0);
+    std::fill(pot_ext.begin(), pot_ext.begin() + nodes, 0);
     value = 0;
     cost_total = 0;
     imbalanced_count = 0;
@@ -166,18 +188,17 @@ Status MinCostFlow::Impl::solve_scratch(NodeId s, NodeId t, const Budget& budget
     return Status::kBudgetExhausted;
   }
   const std::uint64_t base = set_label_base();
-  src = s;
-  snk = t;
   stats = {};
   overflow = false;
   const Cost max_cost = count_degrees();
+  set_terminals(s, t);
   // Distances stay below nodes * max cost.
   if (base > kLabelLimit / base / static_cast<std::uint64_t>(max_cost + 1)) {
     laid_out = false;
     have_state = false;
     return Status::kInvalidInput;
   }
-  std::fill(pot.begin(), pot.begin() + nodes, 0);
+  std::fill(pot_ext.begin(), pot_ext.begin() + nodes, 0);
   std::fill(arc_flow.begin(), arc_flow.begin() + arcs, 0);
   lay_out(false);
   Meter meter(budget, stats);

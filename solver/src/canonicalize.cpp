@@ -88,7 +88,7 @@ Status MinCostFlow::canonicalize(const ArcId* order, std::int32_t count, const B
   for (; k < count && status == Status::kOptimal; ++k) {
     const std::int32_t f = m.arc_pos[order[k]];
     if (f < 0) continue;
-    const NodeId u = m.arc_tail[order[k]], v = m.arc_head[order[k]];
+    const NodeId u = m.res[m.rev[f]].head, v = m.res[f].head;  // internal numbers
     m.fixed[f] = 1;
     m.fixed[m.rev[f]] = 1;
     if (u != target) {  // dead marks are relative to the node a search must reach

@@ -40,7 +40,7 @@ Status MinCostFlow::reset(std::int32_t node_count) {
   m.stats = {};
   std::fill(m.seen.begin(), m.seen.begin() + node_count, 0);
   std::fill(m.renewed.begin(), m.renewed.begin() + node_count, 0);
-  std::fill(m.pot.begin(), m.pot.begin() + node_count, 0);
+  std::fill(m.pot_ext.begin(), m.pot_ext.begin() + node_count, 0);
   return Status::kOptimal;
 }
 
@@ -51,10 +51,10 @@ Status MinCostFlow::add_arc(NodeId from, NodeId to, Flow capacity, Cost cost) {
     return Status::kInvalidInput;
   }
   if (m.arcs >= m.limits.max_arcs) return Status::kCapacityExceeded;
-  m.arc_tail[m.arcs] = from;
-  m.arc_head[m.arcs] = to;
-  m.arc_cap[m.arcs] = static_cast<std::int32_t>(capacity);
-  m.arc_cost[m.arcs] = static_cast<std::int32_t>(cost);
+  m.arc[m.arcs].tail = from;
+  m.arc[m.arcs].head = to;
+  m.arc[m.arcs].cap = static_cast<std::int32_t>(capacity);
+  m.arc[m.arcs].cost = static_cast<std::int32_t>(cost);
   m.arc_flow[m.arcs] = 0;
   m.arc_pos[m.arcs] = -1;
   ++m.arcs;
@@ -69,13 +69,13 @@ Status MinCostFlow::set_arc(ArcId a, Flow capacity, Cost cost) {
   if (capacity < 0 || capacity > kMaxArcCapacity || cost < 0 || cost > kMaxArcCost) {
     return Status::kInvalidInput;
   }
-  if (m.arc_cap[a] == capacity && m.arc_cost[a] == cost) return Status::kOptimal;
-  if (m.arc_cost[a] != cost && m.is_recosted[a] == 0) {
+  if (m.arc[a].cap == capacity && m.arc[a].cost == cost) return Status::kOptimal;
+  if (m.arc[a].cost != cost && m.is_recosted[a] == 0) {
     m.is_recosted[a] = 1;
     m.recosted[m.recosted_count++] = a;
   }
-  m.arc_cap[a] = static_cast<std::int32_t>(capacity);
-  m.arc_cost[a] = static_cast<std::int32_t>(cost);
+  m.arc[a].cap = static_cast<std::int32_t>(capacity);
+  m.arc[a].cost = static_cast<std::int32_t>(cost);
   m.laid_out = false;
   m.optimal = false;
   return Status::kOptimal;
@@ -88,10 +88,10 @@ Status MinCostFlow::replace_arc(ArcId a, NodeId from, NodeId to, Flow capacity, 
   if (capacity < 0 || capacity > kMaxArcCapacity || cost < 0 || cost > kMaxArcCost) {
     return Status::kInvalidInput;
   }
-  m.arc_tail[a] = from;
-  m.arc_head[a] = to;
-  m.arc_cap[a] = static_cast<std::int32_t>(capacity);
-  m.arc_cost[a] = static_cast<std::int32_t>(cost);
+  m.arc[a].tail = from;
+  m.arc[a].head = to;
+  m.arc[a].cap = static_cast<std::int32_t>(capacity);
+  m.arc[a].cost = static_cast<std::int32_t>(cost);
   m.arc_flow[a] = 0;
   m.laid_out = false;
   m.optimal = false;
@@ -142,15 +142,15 @@ Status MinCostFlow::solve_warm(NodeId source, NodeId sink, const Budget& budget)
 
 std::int32_t MinCostFlow::node_count() const { return impl_->nodes; }
 std::int32_t MinCostFlow::arc_count() const { return impl_->arcs; }
-NodeId MinCostFlow::tail(ArcId a) const { return impl_->arc_tail[a]; }
-NodeId MinCostFlow::head(ArcId a) const { return impl_->arc_head[a]; }
-Flow MinCostFlow::capacity(ArcId a) const { return impl_->arc_cap[a]; }
-Cost MinCostFlow::cost(ArcId a) const { return impl_->arc_cost[a]; }
+NodeId MinCostFlow::tail(ArcId a) const { return impl_->arc[a].tail; }
+NodeId MinCostFlow::head(ArcId a) const { return impl_->arc[a].head; }
+Flow MinCostFlow::capacity(ArcId a) const { return impl_->arc[a].cap; }
+Cost MinCostFlow::cost(ArcId a) const { return impl_->arc[a].cost; }
 Flow MinCostFlow::flow(ArcId a) const { return impl_->arc_flow[a]; }
 Flow MinCostFlow::flow_value() const { return impl_->value; }
 Cost MinCostFlow::total_cost() const { return impl_->cost_total; }
 bool MinCostFlow::balanced() const { return impl_->is_balanced; }
-Cost MinCostFlow::potential(NodeId v) const { return impl_->pot[v]; }
+Cost MinCostFlow::potential(NodeId v) const { return impl_->pot_ext[v]; }
 const SolveStats& MinCostFlow::stats() const { return impl_->stats; }
 const Capacity& MinCostFlow::capacity_limits() const { return impl_->limits; }
 std::size_t MinCostFlow::memory_bytes() const { return impl_->bytes(); }

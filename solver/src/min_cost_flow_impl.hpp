@@ -79,12 +79,22 @@ struct MinCostFlow::Impl {
   std::int32_t arcs = 0;
 
   // User arcs.
-  std::vector<NodeId> arc_tail, arc_head;
-  std::vector<std::int32_t> arc_cap, arc_cost, arc_flow;
+  // One record per arc, so that a layout visiting arcs in tie order (not id
+  // order) reads one cache line per arc.
+  struct UserArc {
+    NodeId tail;
+    NodeId head;
+    std::int32_t cap;
+    std::int32_t cost;
+  };
+  std::vector<UserArc> arc;
+  std::vector<std::int32_t> arc_flow;
   std::vector<std::int32_t> arc_pos;  // forward residual record, -1 when not laid out
   std::vector<ArcId> tie_order;          // set_tie_order
   std::vector<std::uint8_t> in_tie_order;
   std::int32_t tie_count = 0;
+  std::vector<ArcId> layout_order;       // active arcs, tie order first then ids (count_degrees)
+  std::int32_t layout_count = 0;
   std::vector<std::int32_t> recosted;    // arcs whose cost set_arc changed since the last layout
   std::vector<std::uint8_t> is_recosted;
   std::int32_t recosted_count = 0;
@@ -99,6 +109,17 @@ struct MinCostFlow::Impl {
   std::vector<std::int32_t> rev;        // [2 * max_arcs] position of each record's partner
   std::vector<std::int32_t> flist;      // [2 * max_arcs] flow lists, in the reverse blocks
   std::vector<std::int32_t> fpos;       // [2 * max_arcs] a reverse record's place in flist
+
+  // Nodes are numbered afresh at each layout, in block order (see
+  // count_degrees), so that the phases' per-node arrays are read in the
+  // order the blocks are: with recycled ids (an incrementally edited
+  // network) the user's numbering scatters them. Everything below that is
+  // per node, and the records' heads, use these internal numbers; the API,
+  // the user arcs and the state kept between calls (pot_ext, seen, renewed)
+  // use the user's.
+  std::vector<NodeId> int_of;  // user id -> internal
+  std::vector<NodeId> ext_of;  // internal -> user id
+  std::vector<Cost> pot_ext;   // potentials by user id, between calls
 
   // Per-node workspace.
   std::vector<Cost> pot;
@@ -142,7 +163,8 @@ struct MinCostFlow::Impl {
   bool optimal = false;      // the last solve finished
   bool is_balanced = true;
   bool overflow = false;     // a label would have left 64 bits (never with checked input)
-  NodeId src = -1, snk = -1;
+  NodeId src = -1, snk = -1;          // internal, during a call
+  NodeId src_ext = -1, snk_ext = -1;  // the user's, of the last solve
   Mode mode = Mode::kMaxFlow;
   int shift = 1;  // labels are distance << shift | hops
   std::uint64_t hop_mask = 1;
@@ -156,7 +178,7 @@ struct MinCostFlow::Impl {
 
   std::size_t bytes() const;
 
-  bool active(ArcId a) const { return arc_cap[a] > 0 && arc_tail[a] != arc_head[a]; }
+  bool active(ArcId a) const { return arc[a].cap > 0 && arc[a].tail != arc[a].head; }
 
   // --- flow lists -----------------------------------------------------------
 
@@ -194,7 +216,15 @@ struct MinCostFlow::Impl {
   // --- layout (residual_graph.cpp) -------------------------------------------
 
   Cost count_degrees();
+  void set_terminals(NodeId s, NodeId t) {  // after count_degrees
+    src_ext = s;
+    snk_ext = t;
+    src = int_of[s];
+    snk = int_of[t];
+  }
   void lay_out(bool repair);
+  // Arcs at user node v at the last count_degrees.
+  std::int32_t degree(NodeId v) const { return block_end[int_of[v]] - first_out[int_of[v]]; }
 
   // --- phases (shortest_paths.cpp, blocking_flow.cpp) --------------------------
 
@@ -214,7 +244,26 @@ struct MinCostFlow::Impl {
     return -excess[v];
   }
 
-  void relax(NodeId u, std::uint64_t kv, Cost rc, NodeId from);
+  // Offers u the label kv + rc (reduced cost, clamped) + one hop, from `from`.
+  // Inlined: it runs once per arc a search scans.
+  [[gnu::always_inline]] void relax(NodeId u, std::uint64_t kv, Cost rc, NodeId from) {
+    auto r = static_cast<std::uint64_t>(rc);
+    if (r > rc_limit) {
+      overflow = true;
+      r = rc_limit;
+    }
+    const std::uint64_t nk = kv + (r << shift) + 1;
+    if (nk < key[u]) {
+      if (mode == Mode::kExcess) origin[u] = origin[from];
+      if (key[u] == detail::kUnlabelled) {
+        heap.push(u, nk);
+        touched[touched_count++] = u;
+      } else {
+        heap.decrease(u, nk);
+      }
+      key[u] = nk;
+    }
+  }
 
   // --- the source's lazy arcs (shortest_paths.cpp) -----------------------------
 

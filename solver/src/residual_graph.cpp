@@ -12,10 +12,8 @@ MinCostFlow::Impl::Impl(const Capacity& c)
     : limits(c), heap(static_cast<std::size_t>(std::max(c.max_nodes, 0)) + 1) {
   const auto n = static_cast<std::size_t>(std::max(c.max_nodes, 0));
   const auto m = static_cast<std::size_t>(std::max(c.max_arcs, 0));
-  arc_tail.resize(m);
-  arc_head.resize(m);
-  arc_cap.resize(m);
-  arc_cost.resize(m);
+  arc.resize(m);
+  layout_order.resize(m);
   arc_flow.resize(m);
   arc_pos.resize(m);
   tie_order.resize(m);
@@ -31,6 +29,9 @@ MinCostFlow::Impl::Impl(const Capacity& c)
   flist.resize(2 * m);
   fpos.resize(2 * m);
   fixed.resize(2 * m);
+  int_of.resize(n);
+  ext_of.resize(n);
+  pot_ext.resize(n);
   pot.resize(n);
   estimate.resize(n);
   key.assign(n, kUnlabelled);
@@ -58,20 +59,22 @@ MinCostFlow::Impl::Impl(const Capacity& c)
 
 std::size_t MinCostFlow::Impl::bytes() const {
   const auto bytes = [](const auto& v) { return v.capacity() * sizeof(v[0]); };
-  return bytes(arc_tail) + bytes(arc_head) + bytes(arc_cap) + bytes(arc_cost) + bytes(arc_flow) +
+  return bytes(arc) + bytes(layout_order) + bytes(arc_flow) +
          bytes(arc_pos) + bytes(tie_order) + bytes(in_tie_order) + bytes(recosted) + bytes(is_recosted) + bytes(first_out) + bytes(first_rev) + bytes(block_end) + bytes(nflow) + bytes(res) + bytes(rev) +
-         bytes(flist) + bytes(fpos) + bytes(fixed) + bytes(pot) + bytes(estimate) + bytes(key) +
+         bytes(flist) + bytes(fpos) + bytes(fixed) + bytes(int_of) + bytes(ext_of) + bytes(pot_ext) + bytes(pot) + bytes(estimate) + bytes(key) +
          bytes(level) + bytes(cur) + bytes(fill) + bytes(path_arc) + bytes(path_node) +
          bytes(touched) + bytes(sources) + bytes(imbalanced) + bytes(excess) + bytes(origin) + bytes(served) + bytes(seen) +
          bytes(renewed) + bytes(visit) + bytes(dead) + bytes(tight_bits) + bytes(cand_bits) +
          bytes(pending) + bytes(spill) + heap.memory_bytes();
 }
 
-// Counts degrees and the largest cost of the arcs to lay out, and places
-// the node blocks in order of first appearance along the layout's arc
-// sequence (tie order first, then ids): the blocks the blocking flow visits
-// in turn (the source's heads, in tie order) sit next to each other even
-// when node ids are recycled.
+// Lists the arcs to lay out (layout_order: tie order first, then ids;
+// inactive ones get no record and zero flow), counts degrees and the
+// largest cost, and numbers the nodes in order of first appearance along
+// that sequence, which is also the order of their blocks: the blocks the
+// blocking flow visits in turn (the source's heads, in tie order) sit next
+// to each other, and so do their per-node data, even when node ids are
+// recycled.
 Cost MinCostFlow::Impl::count_degrees() {
   std::fill(fill.begin(), fill.begin() + nodes, 0);  // out-degree
   std::fill(cur.begin(), cur.begin() + nodes, 0);   // in-degree
@@ -81,13 +84,20 @@ Cost MinCostFlow::Impl::count_degrees() {
   }
   Cost max_cost = 0;
   std::int32_t placed = 0;
+  layout_count = 0;
   for (std::int32_t k = 0; k < tie_count + arcs; ++k) {
     const ArcId a = k < tie_count ? tie_order[k] : k - tie_count;
-    if ((k >= tie_count && in_tie_order[a] != 0) || !active(a)) continue;
-    const NodeId u = arc_tail[a], v = arc_head[a];
+    if (k >= tie_count && in_tie_order[a] != 0) continue;
+    if (!active(a)) {
+      arc_pos[a] = -1;
+      arc_flow[a] = 0;
+      continue;
+    }
+    layout_order[layout_count++] = a;
+    const NodeId u = arc[a].tail, v = arc[a].head;
     ++fill[u];
     ++cur[v];
-    max_cost = std::max<Cost>(max_cost, arc_cost[a]);
+    max_cost = std::max<Cost>(max_cost, arc[a].cost);
     if (visit[u] != visit_epoch) {
       visit[u] = visit_epoch;
       touched[placed++] = u;
@@ -97,14 +107,19 @@ Cost MinCostFlow::Impl::count_degrees() {
       touched[placed++] = v;
     }
   }
-  for (NodeId v = 0; v < nodes; ++v) first_out[v] = first_rev[v] = block_end[v] = 0;
+  // Internal numbers in block order; nodes without arcs after the others.
+  for (NodeId v = 0; v < nodes; ++v) {
+    if (visit[v] != visit_epoch) touched[placed++] = v;
+  }
   std::int32_t at = 0;
-  for (std::int32_t k = 0; k < placed; ++k) {
-    const NodeId v = touched[k];
-    first_out[v] = at;
-    first_rev[v] = at + fill[v];
-    block_end[v] = first_rev[v] + cur[v];
-    at = block_end[v];
+  for (NodeId i = 0; i < nodes; ++i) {
+    const NodeId v = touched[i];
+    int_of[v] = i;
+    ext_of[i] = v;
+    first_out[i] = at;
+    first_rev[i] = at + fill[v];
+    block_end[i] = first_rev[i] + cur[v];
+    at = block_end[i];
   }
   records = at;
   return max_cost;
@@ -120,18 +135,13 @@ void MinCostFlow::Impl::lay_out(bool repair) {
     cur[v] = first_rev[v];
     nflow[v] = 0;
     excess[v] = 0;
+    pot[v] = pot_ext[ext_of[v]];
   }
   // The tie order's arcs first at their tails, then the rest by id.
-  for (std::int32_t k = 0; k < tie_count + arcs; ++k) {
-    const ArcId a = k < tie_count ? tie_order[k] : k - tie_count;
-    if (k >= tie_count && in_tie_order[a] != 0) continue;
-    if (!active(a)) {
-      arc_pos[a] = -1;
-      arc_flow[a] = 0;
-      continue;
-    }
-    const NodeId u = arc_tail[a], v = arc_head[a];
-    const std::int32_t cap = arc_cap[a], cost = arc_cost[a];
+  for (std::int32_t k = 0; k < layout_count; ++k) {
+    const ArcId a = layout_order[k];
+    const NodeId u = int_of[arc[a].tail], v = int_of[arc[a].head];
+    const std::int32_t cap = arc[a].cap, cost = arc[a].cost;
     std::int32_t fl = std::min(std::max(arc_flow[a], 0), cap);
     if (repair) {
       const Cost rc = cost + pot[u] - pot[v];
@@ -159,8 +169,8 @@ void MinCostFlow::Impl::lay_out(bool repair) {
   }
   imbalanced_count = 0;
   for (NodeId v = 0; v < nodes; ++v) {
-    seen[v] = block_end[v] > first_out[v];
-    renewed[v] = 0;
+    seen[ext_of[v]] = block_end[v] > first_out[v];
+    renewed[ext_of[v]] = 0;
     if (v != src && v != snk && excess[v] != 0) imbalanced[imbalanced_count++] = v;
   }
   laid_out = true;

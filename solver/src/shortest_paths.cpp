@@ -6,25 +6,6 @@ namespace keepless::solver {
 
 using namespace detail;
 
-void MinCostFlow::Impl::relax(NodeId u, std::uint64_t kv, Cost rc, NodeId from) {
-  auto r = static_cast<std::uint64_t>(rc);
-  if (r > rc_limit) {
-    overflow = true;
-    r = rc_limit;
-  }
-  const std::uint64_t nk = kv + (r << shift) + 1;
-  if (nk < key[u]) {
-    origin[u] = origin[from];
-    if (key[u] == kUnlabelled) {
-      heap.push(u, nk);
-      touched[touched_count++] = u;
-    } else {
-      heap.decrease(u, nk);
-    }
-    key[u] = nk;
-  }
-}
-
 // --- the source's lazy arcs -------------------------------------------------
 
 // Splits the source's arcs into tight ones and pending ones sorted by
@@ -234,7 +215,10 @@ MinCostFlow::Impl::Search MinCostFlow::Impl::shortest_paths_to_sink(Meter& meter
   heap.clear();
   touched_count = 0;
   offer_count = 0;
-  marked = true;
+  // The source's admissible arcs are listed in cand_bits, which has room for
+  // as many arcs as there are nodes; with more parallel source arcs than
+  // that, the blocking flow scans them all.
+  marked = source_degree() <= static_cast<std::int32_t>(pending.size());
   key[snk] = 0;
   touched[touched_count++] = snk;
   heap.push(snk, 0);

@@ -40,10 +40,10 @@ bool MinCostFlow::Impl::local_path(NodeId x, bool forward) {
         const NodeId w = a.head;
         if (visit[w] == visit_epoch) continue;
         // Forwards: the arc u -> w is record i. Backwards: w -> u is its partner.
-        const std::int32_t arc = forward ? i : rev[i];
-        if (res[arc].cap == 0) continue;
-        if (forward ? a.cost + pu != pot[w] : res[arc].cost + pot[w] != pu) continue;
-        found = arc;
+        const std::int32_t record = forward ? i : rev[i];
+        if (res[record].cap == 0) continue;
+        if (forward ? a.cost + pu != pot[w] : res[record].cost + pot[w] != pu) continue;
+        found = record;
         break;
       }
       stats.work_units += static_cast<std::uint64_t>(p - start + 1);
@@ -110,37 +110,36 @@ void MinCostFlow::Impl::shift_recosted_potentials() {
     const ArcId a = recosted[k];
     is_recosted[a] = 0;
     if (!active(a)) continue;
-    const NodeId u = arc_tail[a], v = arc_head[a];
-    const std::int32_t fl = std::min(arc_flow[a], arc_cap[a]);
-    const Cost rc = arc_cost[a] + pot[u] - pot[v];
-    if (!((rc < 0 && fl < arc_cap[a]) || (rc > 0 && fl > 0))) continue;
-    const std::int32_t deg_u = block_end[u] - first_out[u];
-    const std::int32_t deg_v = block_end[v] - first_out[v];
-    if (deg_v <= deg_u) {
-      pot[v] += rc;
+    const NodeId u = arc[a].tail, v = arc[a].head;
+    const std::int32_t fl = std::min(arc_flow[a], arc[a].cap);
+    const Cost rc = arc[a].cost + pot_ext[u] - pot_ext[v];
+    if (!((rc < 0 && fl < arc[a].cap) || (rc > 0 && fl > 0))) continue;
+    if (degree(v) <= degree(u)) {
+      pot_ext[v] += rc;
     } else {
-      pot[u] -= rc;
+      pot_ext[u] -= rc;
     }
   }
   recosted_count = 0;
 }
 
 Status MinCostFlow::Impl::solve_warm(NodeId s, NodeId t, const Budget& budget) {
-  if (!have_state || s != src || t != snk || overflow) return solve_scratch(s, t, budget);
+  if (!have_state || s != src_ext || t != snk_ext || overflow) return solve_scratch(s, t, budget);
   stats = {};
   stats.warm = true;
   const std::uint64_t base = set_label_base();
   if (!laid_out) {
     const Cost max_cost = count_degrees();
+    set_terminals(s, t);
     estimate_potentials();
     shift_recosted_potentials();
     // The reduced cost of any arc stays below max cost + potential spread.
     Cost lo = 0, hi = 0;
     bool first = true;
     for (NodeId v = 0; v < nodes; ++v) {
-      if (block_end[v] == first_out[v]) continue;
-      lo = first ? pot[v] : std::min(lo, pot[v]);
-      hi = first ? pot[v] : std::max(hi, pot[v]);
+      if (degree(v) == 0) continue;
+      lo = first ? pot_ext[v] : std::min(lo, pot_ext[v]);
+      hi = first ? pot_ext[v] : std::max(hi, pot_ext[v]);
       first = false;
     }
     const auto span = static_cast<std::uint64_t>(max_cost) + static_cast<std::uint64_t>(hi - lo) + 1;
@@ -167,11 +166,12 @@ Status MinCostFlow::Impl::solve_warm(NodeId s, NodeId t, const Budget& budget) {
 // the cheapest arrival over an arc from a known node, else the latest
 // departure over an arc to one, else unchanged. Any value is correct (the
 // repair restores the certificate); a good one leaves little to repair.
-// Runs between count_degrees and lay_out, whose scratch it borrows.
+// Runs between count_degrees and lay_out, whose scratch it borrows; in
+// user numbers, like the potentials kept between calls.
 void MinCostFlow::Impl::estimate_potentials() {
   std::int32_t fresh_count = 0;
   for (NodeId v = 0; v < nodes; ++v) {
-    const bool fresh = (!seen[v] || renewed[v]) && block_end[v] > first_out[v];
+    const bool fresh = (!seen[v] || renewed[v]) && degree(v) > 0;
     fill[v] = fresh ? 1 : 0;
     fresh_count += fresh ? 1 : 0;
   }
@@ -186,16 +186,16 @@ void MinCostFlow::Impl::estimate_potentials() {
   }
   for (ArcId a = 0; a < arcs; ++a) {
     if (!active(a)) continue;
-    const NodeId u = arc_tail[a], v = arc_head[a];
-    if (fill[v] != 0 && fill[u] == 0) arrival[v] = std::min(arrival[v], pot[u] + arc_cost[a]);
-    if (fill[u] != 0 && fill[v] == 0) departure[u] = std::max(departure[u], pot[v] - arc_cost[a]);
+    const NodeId u = arc[a].tail, v = arc[a].head;
+    if (fill[v] != 0 && fill[u] == 0) arrival[v] = std::min(arrival[v], pot_ext[u] + arc[a].cost);
+    if (fill[u] != 0 && fill[v] == 0) departure[u] = std::max(departure[u], pot_ext[v] - arc[a].cost);
   }
   for (NodeId v = 0; v < nodes; ++v) {
     if (fill[v] == 0) continue;
     if (arrival[v] != kNoArrival) {
-      pot[v] = arrival[v];
+      pot_ext[v] = arrival[v];
     } else if (departure[v] != kNoDeparture) {
-      pot[v] = departure[v];
+      pot_ext[v] = departure[v];
     }
   }
 }

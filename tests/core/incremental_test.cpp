@@ -360,6 +360,99 @@ TEST(Incremental, ASlideEditsOnlyWhatChanged) {
   EXPECT_GT(s.memory_bytes(), Sparsifier(caps, Params{}).memory_bytes());
 }
 
+// A clock that moves only when told to.
+class ManualClock final : public solver::Clock {
+ public:
+  std::uint64_t now_ns() const override { return now; }
+  std::uint64_t now = 1000;
+};
+
+// A clock that moves `step` on every read, so a network update or a
+// decide stage (one read before, one after) lasts exactly `step`.
+class SteppingClock final : public solver::Clock {
+ public:
+  explicit SteppingClock(std::uint64_t step) : step_(step) {}
+  std::uint64_t now_ns() const override { return now_ += step_; }
+
+ private:
+  std::uint64_t step_;
+  mutable std::uint64_t now_ = 0;
+};
+
+TEST(Incremental, NoTimeForTheNetworkDefersAndKeepsEverything) {
+  const Capacities caps{10, 600, 1500, 8000};
+  Stream stream(17, 40);
+  Window window(caps);
+  Sparsifier s(caps, Params{}, SolveMode::kIncremental);
+  Sparsifier ref(caps, Params{});
+  ManualClock clock;
+  solver::Budget past;
+  past.clock = &clock;
+  past.deadline_ns = clock.now;  // already due
+  for (std::uint32_t step = 0; step < 24; ++step) {
+    SCOPED_TRACE(::testing::Message() << "step " << step);
+    if (window.keyframe_count() >= 6) {
+      ASSERT_EQ(window.remove_keyframe(window.keyframe(0).id), Status::kOk);
+    }
+    ASSERT_EQ(add(window, stream.next()), Status::kOk);
+    ASSERT_EQ(ref.run(window), Status::kOk);
+    // Runs of deferred keyframes between full updates: the update after a
+    // run catches up with several slides at once, exactly.
+    if (step % 5 != 0) {
+      ASSERT_EQ(s.update(window, past), Status::kBudgetExhausted);
+      EXPECT_TRUE(s.deferred());
+      EXPECT_EQ(s.decision_count(), 0u);
+      EXPECT_EQ(s.summary().points, window.distinct_points());
+      EXPECT_EQ(s.summary().kept, window.distinct_points());
+      EXPECT_EQ(s.summary().culled, 0u);
+    } else {
+      ASSERT_EQ(s.update(window), Status::kOk);
+      EXPECT_FALSE(s.deferred());
+      ASSERT_TRUE(same_result(s, ref));
+    }
+  }
+}
+
+TEST(Incremental, DefersOnlyWhenLessTimeIsLeftThanTheNetworkAndDecidingTake) {
+  const Capacities caps{10, 600, 1500, 8000};
+  Stream stream(23, 40);
+  Window window(caps);
+  Sparsifier s(caps, Params{}, SolveMode::kIncremental);
+  Sparsifier ref(caps, Params{});
+  SteppingClock clock(100);  // network updates and deciding take 100 ns each
+  const auto slide = [&] {
+    if (window.keyframe_count() >= 6) {
+      ASSERT_EQ(window.remove_keyframe(window.keyframe(0).id), Status::kOk);
+    }
+    ASSERT_EQ(add(window, stream.next()), Status::kOk);
+    ASSERT_EQ(ref.run(window), Status::kOk);
+  };
+  const auto budget = [&clock](std::uint64_t left) {
+    solver::Budget b;
+    b.clock = &clock;
+    b.deadline_ns = clock.now_ns() + left;  // this read moves the clock: deadline = next read + left - 100
+    return b;
+  };
+  // No estimate yet: a deadline in the future is tried however close (the
+  // network is updated; the solver then finds the deadline passed).
+  slide();
+  EXPECT_EQ(s.update(window, budget(150)), Status::kBudgetExhausted);
+  EXPECT_FALSE(s.deferred());
+  EXPECT_EQ(s.decision_count(), window.distinct_points());
+  slide();
+  EXPECT_EQ(s.update(window, budget(150)), Status::kBudgetExhausted);
+  EXPECT_FALSE(s.deferred());
+  // Both stages measured twice at 100 ns: 50 ns left is too little (200 ns
+  // expected), 10 ms enough.
+  slide();
+  EXPECT_EQ(s.update(window, budget(150)), Status::kBudgetExhausted);
+  EXPECT_TRUE(s.deferred());
+  slide();
+  ASSERT_EQ(s.update(window, budget(10000000)), Status::kOk);
+  EXPECT_FALSE(s.deferred());
+  EXPECT_TRUE(same_result(s, ref));
+}
+
 TEST(Incremental, FromScratchModeFallsBackToRun) {
   const Capacities caps{10, 600, 1500, 8000};
   Stream stream(3, 40);

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "keepless/decision_t.hpp"
+#include "keepless/decision_timing_t.hpp"
 #include "keepless/platform/node.hpp"
 #include "keepless/status_t.hpp"
 #include "message_builders.hpp"
@@ -437,6 +438,52 @@ TEST_F(NodeOnMemq, StopsAfterMaxKeyframes) {
   EXPECT_FALSE(node_->finished());
   send(kt::make_keyframe(2, 2, kt::id_range(0, 5)));
   EXPECT_TRUE(node_->finished());
+}
+
+// update() after a budget stop carries on from the flow left behind; the
+// decision it then reaches is still run()'s. M = 100 culls nothing, so the
+// reference's window (which never sees budgets) stays the node's.
+TEST_F(NodeOnMemq, ResumesAfterABudgetStopWithTheLibrarysDecisions) {
+  NodeConfig c = default_config();
+  c.params.pair_capacity = 100;
+  const std::vector<keepless::keyframe_t> stream = {
+      kt::make_keyframe(1, 100, kt::id_range(0, 40)), kt::make_keyframe(2, 101, kt::id_range(8, 40)),
+      kt::make_keyframe(3, 102, kt::id_range(16, 40)),
+      // Empty: the 4th fills the window (K = 4) without changing the network,
+      // the 5th slides the first keyframe out.
+      kt::make_keyframe(4, 103, {}), kt::make_keyframe(5, 104, {})};
+
+  // The solver work of the third window, unbudgeted (work units are deterministic).
+  make_node(c);
+  std::vector<std::int64_t> work;
+  void (*on_timing)(const lcm::ReceiveBuffer*, const std::string&, const keepless::decision_timing_t*,
+                    std::vector<std::int64_t>*) =
+      [](const lcm::ReceiveBuffer*, const std::string&, const keepless::decision_timing_t* t,
+         std::vector<std::int64_t>* w) { w->push_back(t->solver_work_units); };
+  bus_->subscribeFunction(c.timing_channel, on_timing, &work);
+  for (int i = 0; i < 3; ++i) send(stream[i]);
+  ASSERT_EQ(work.size(), 3u);
+  ASSERT_GT(work[2], 0);
+
+  // 80 % of it: the third decision stops; the fourth resumes and finishes.
+  c.budget_work_units = static_cast<std::uint64_t>(work[2]) * 4 / 5;
+  make_node(c);
+  kt::ReferenceNode ref(keepless::platform::window_capacities(c), c.params, c.window);
+  std::vector<kt::ReferenceDecision> expected;
+  for (const keepless::keyframe_t& m : stream) {
+    expected.push_back(ref.step(m));
+    ASSERT_TRUE(expected.back().culled.empty()) << "M = 100 should cull nothing";
+    send(m);
+  }
+  ASSERT_EQ(decisions_.size(), stream.size());
+  EXPECT_EQ(decisions_[2].status, keepless::decision_t::STATUS_BUDGET_EXHAUSTED);
+  EXPECT_EQ(decisions_[2].num_culled, 0);
+  EXPECT_EQ(decisions_[2].kept, expected[2].evaluated) << "a stopped decision keeps every evaluated point";
+  EXPECT_EQ(node_->counters().budget_exhaustions, 1u);
+  for (std::size_t i = 0; i < stream.size(); ++i) {
+    if (i == 2) continue;
+    kt::expect_same(expected[i], decisions_[i], ("keyframe " + std::to_string(i)).c_str());
+  }
 }
 
 }  // namespace

@@ -107,6 +107,28 @@ TEST(MinCostFlowEdgeCase, ParallelArcsFillCheapestFirst) {
   EXPECT_EQ(solver.flow(2), 0);
 }
 
+// More parallel source arcs than nodes: the sink-side search cannot list the
+// source's admissible arcs in its node-sized bitset and must scan them all.
+// (It once wrote past that bitset when few arcs were left to list; ASan
+// caught it.) The first phase saturates the 200 cheap arcs and scans more
+// than a quarter of the graph, so the second searches from the sink and
+// meets only the 2 dearer arcs.
+TEST(MinCostFlowEdgeCase, MoreParallelSourceArcsThanNodes) {
+  MinCostFlow solver(Capacity{4, 256});
+  std::vector<TestArc> arcs;
+  for (std::int32_t k = 0; k < 200; ++k) arcs.push_back({0, 1, 1, 0});
+  arcs.push_back({0, 2, 1, 5});
+  arcs.push_back({0, 2, 1, 5});
+  arcs.push_back({1, 3, 200, 0});
+  arcs.push_back({2, 3, 2, 1});
+  const TestNetwork net = make_network(4, 0, 3, arcs);
+  solve_and_certify(solver, net);
+  EXPECT_EQ(solver.flow_value(), 202);
+  EXPECT_EQ(solver.total_cost(), 2 * (5 + 1));
+  EXPECT_EQ(solver.stats().phases, 2u);
+  for (ArcId a = 0; a < 202; ++a) EXPECT_EQ(solver.flow(a), 1) << "arc " << a;
+}
+
 // Documented tie-break: among equal-cost paths the source's earlier arcs win.
 // Two routes of cost 1 share a sink arc of capacity 5: the first takes it all.
 TEST(MinCostFlowEdgeCase, EqualCostTiesGoToEarlierArcs) {

@@ -5,6 +5,7 @@
 
 #ifdef KEEPLESS_HAVE_LCM
 #include "keepless/decision_t.hpp"
+#include "keepless/platform/decision_message.hpp"
 #endif
 
 namespace keepless::perf {
@@ -20,12 +21,7 @@ struct DecisionEncoder::Impl {
 DecisionEncoder::DecisionEncoder(const core::Capacities& c) : impl_(std::make_unique<Impl>()) {
   Impl& e = *impl_;
 #ifdef KEEPLESS_HAVE_LCM
-  e.msg.window_keyframe_id.reserve(c.max_keyframes);
-  e.msg.culled_point_id.reserve(c.max_points);
-  e.msg.num_window_keyframes = 0;
-  e.msg.num_culled = 0;
-  e.reserved = static_cast<std::size_t>(e.msg.getEncodedSize()) +
-               8 * (std::size_t{c.max_keyframes} + c.max_points);
+  e.reserved = platform::reserve_decision(e.msg, c);
 #else
   e.reserved = 128 + 8 * (std::size_t{c.max_keyframes} + c.max_points);
 #endif
@@ -37,37 +33,20 @@ DecisionEncoder::~DecisionEncoder() = default;
 std::size_t DecisionEncoder::encode(std::int64_t sequence, const core::Window& window,
                                     const core::Sparsifier& s, core::Status status) {
   Impl& e = *impl_;
-  const core::Summary& sum = s.summary();
-  const core::PointDecision* d = s.decisions();
 #ifdef KEEPLESS_HAVE_LCM
-  keepless::decision_t& m = e.msg;
-  m.sequence = sequence;
+  // Filled by the same function as keepless_node's; the stream has no
+  // utime, so the sequence stands in for it.
   const std::uint32_t k = window.keyframe_count();
-  m.keyframe_id = k > 0 ? static_cast<std::int64_t>(window.keyframe(k - 1).id) : 0;
-  m.utime = sequence;
-  m.status = status == core::Status::kOk ? keepless::decision_t::STATUS_OPTIMAL
-                                         : keepless::decision_t::STATUS_BUDGET_EXHAUSTED;
-  m.reject_reason = -1;
-  m.points = static_cast<std::int32_t>(sum.points);
-  m.evaluated = static_cast<std::int32_t>(sum.evaluated);
-  m.kept = static_cast<std::int32_t>(sum.kept);
-  m.culled = static_cast<std::int32_t>(sum.culled);
-  m.skipped = static_cast<std::int32_t>(sum.skipped);
-  m.pairs = static_cast<std::int32_t>(sum.pairs);
-  m.max_flow = sum.max_flow;
-  m.total_cost = sum.total_cost;
-  m.window_keyframe_id.resize(k);  // within the reserved capacity: no allocation
-  for (std::uint32_t i = 0; i < k; ++i) m.window_keyframe_id[i] = static_cast<std::int64_t>(window.keyframe(i).id);
-  m.num_window_keyframes = static_cast<std::int32_t>(k);
-  m.culled_point_id.resize(sum.culled);
-  std::uint32_t c = 0;
-  for (std::uint32_t i = 0; i < s.decision_count(); ++i) {
-    if (d[i].verdict == core::Verdict::kCull) m.culled_point_id[c++] = static_cast<std::int64_t>(d[i].point);
-  }
-  m.num_culled = static_cast<std::int32_t>(c);
-  const int n = m.encode(e.buffer.data(), 0, static_cast<int>(e.buffer.size()));
+  platform::DecisionRequest request;
+  request.sequence = sequence;
+  request.keyframe_id = k > 0 ? static_cast<std::int64_t>(window.keyframe(k - 1).id) : 0;
+  request.utime = sequence;
+  platform::fill_decision(e.msg, request, window, s, status);
+  const int n = e.msg.encode(e.buffer.data(), 0, static_cast<int>(e.buffer.size()));
   return n > 0 ? static_cast<std::size_t>(n) : 0;
 #else
+  const core::Summary& sum = s.summary();
+  const core::PointDecision* d = s.decisions();
   std::size_t at = 0;
   const auto put = [&e, &at](std::uint64_t x) {
     std::memcpy(e.buffer.data() + at, &x, 8);

@@ -3,14 +3,17 @@
 // window changes (PaperNetwork builds it from nothing each time).
 //
 // update() compares the window with the one it saw last and edits only what
-// changed. A keyframe is matched by id and content (bit for bit); a new or
-// changed keyframe gets its N(p, f) counted, an unchanged one keeps them. A
-// point whose (keyframe, N) list is unchanged keeps its arcs; otherwise its
-// pair arcs are diffed: kept, re-costed, added or retired. Pairs appear with
-// their first arc and go with their last. Nodes and arcs keep their solver
-// ids while they live, so the solver can re-optimise from its previous flow
-// and potentials (MinCostFlow::solve_warm). Node ids: source 0, sink 1;
-// points and pairs take recycled ids, and so do arcs.
+// changed, in time proportional to the observations of the keyframes that
+// came or went (not to the window). A keyframe is matched by id and content
+// (bit for bit: Window::keyframe_stamp proves it without a comparison when it
+// is the same Window); a new or changed keyframe gets its N(p, f) counted, an
+// unchanged one keeps them. Only the points of the keyframes that came or
+// went change: their pair arcs are diffed, kept or added or retired (a kept
+// pair arc keeps its cost, since a kept keyframe keeps its N). Pairs appear
+// with their first arc and go with their last. Nodes and arcs keep their
+// solver ids while they live, so the solver can re-optimise from its
+// previous flow and potentials (MinCostFlow::solve_warm). Node ids: source
+// 0, sink 1; points and pairs take recycled ids, and so do arcs.
 //
 // The ids do not follow point order, so the solver's insertion-order
 // tie-break does not apply by itself: canonical_order() lists the source
@@ -61,7 +64,7 @@ class IncrementalNetwork {
     std::uint32_t points_changed = 0;  // kept, with other keyframes or counts
     std::uint32_t arcs_added = 0;
     std::uint32_t arcs_retired = 0;
-    std::uint32_t arcs_recosted = 0;
+    std::uint32_t arcs_recosted = 0;  // pair arcs given a new c_s (none: N is per keyframe)
   };
   const Changes& changes() const;
 

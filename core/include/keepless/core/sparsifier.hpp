@@ -54,11 +54,21 @@ class Sparsifier {
   // The same decisions as run(window), incrementally: the network is edited
   // in place, and a call after one that ran out of budget carries on from
   // its state (once: if that runs out too, the next call starts afresh, so
-  // sustained overload cannot lock it into slow repairs). The budget covers
-  // the solve and the tie-break restoration, not the network update; on
-  // kBudgetExhausted every evaluated point is kept. A call to run() in
-  // between makes the next update() start from nothing.
+  // sustained overload cannot lock it into slow repairs). The budget's work
+  // units cover the solve and the tie-break restoration. Its deadline is
+  // when the decisions must be ready: the solver stops early enough to leave
+  // deciding its usual time, and when less time is left than updating the
+  // network, a finished solve and deciding usually take (the shorter of each
+  // one's last two durations), the call is deferred: it returns
+  // kBudgetExhausted at once,
+  // with no per-point decisions and every window point counted as kept
+  // (summary().kept == summary().points), and the next call brings the
+  // network up to date with everything since. On any kBudgetExhausted
+  // nothing is culled. A call to run() in between makes the next update()
+  // start from nothing.
   [[nodiscard]] Status update(const Window& window, const solver::Budget& budget = {});
+  // The last update() was deferred (see above).
+  bool deferred() const;
 
   // Times the stages of each run()/update() on `clock` (null: not timed).
   void set_clock(const solver::Clock* clock);

@@ -35,6 +35,11 @@ class Window {
   // twice by this keyframe) the window is unchanged.
   [[nodiscard]] Status add_keyframe(const Keyframe& keyframe, const Observation* observations,
                                     std::uint32_t count);
+  // Adds keyframe `slot` of another window with its observations, as
+  // add_keyframe does, keeping its stamp (see keyframe_stamp): a window
+  // rebuilt from another one (e.g. without some points) stays recognisable
+  // keyframe by keyframe. kInvalidArgument for a slot out of range.
+  [[nodiscard]] Status copy_keyframe(const Window& from, std::uint32_t slot);
   [[nodiscard]] Status remove_keyframe(KeyframeId id);  // kUnknownKeyframe if absent
   void clear();
 
@@ -43,6 +48,12 @@ class Window {
   const Keyframe& keyframe(std::uint32_t slot) const;
   const Observation* observations(std::uint32_t slot) const;
   std::uint32_t observation_count(std::uint32_t slot) const;
+  // A number given to the keyframe in `slot` by add_keyframe, unique in the
+  // process, and kept by copy_keyframe: two slots (of this or any other
+  // Window) with the same stamp hold the same keyframe and observations, so
+  // a consumer that saw the stamp before can skip comparing the contents.
+  // Different stamps say nothing (the same contents may be added twice).
+  std::uint64_t keyframe_stamp(std::uint32_t slot) const;
   std::uint32_t total_observations() const;
   std::uint32_t distinct_points() const;
   // Slot of a keyframe id, or -1.
@@ -52,6 +63,9 @@ class Window {
   std::size_t memory_bytes() const;
 
  private:
+  // add_keyframe with the given stamp (0: a new one).
+  Status add(const Keyframe& keyframe, const Observation* observations, std::uint32_t count,
+             std::uint64_t stamp);
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };

@@ -1,9 +1,11 @@
 #pragma once
 // keepless_node's loop body: receives keyframe_t / map_event_t as raw LCM
 // buffers, validates them before they touch the window, slides the window,
-// runs the sparsifier and publishes decision_t (+ decision_timing_t), and a
-// periodic status_t. Everything is allocated in the constructor; handling a
-// message allocates nothing (LCM's own C library aside).
+// updates the sparsifier (Sparsifier::update: the previous window's network
+// edited in place, run()'s decisions), publishes decision_t
+// (+ decision_timing_t), and a periodic status_t. Everything is allocated in
+// the constructor; handling a message allocates nothing (LCM's own C library
+// aside).
 
 #include <cstddef>
 #include <cstdint>
