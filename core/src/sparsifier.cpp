@@ -41,10 +41,9 @@ struct Sparsifier::Impl {
   bool resume = false;              // the last update stopped for budget: carry on from its state
   bool resumed = false;             // the last update was such a resumption
   bool deferred = false;            // the last update left the network for later
-  // What update() expects its network update and its deciding to take, on
-  // the budget's clock, to plan against a deadline.
-  // The solve counts only when it finished: a stopped one says nothing of
-  // what a whole one needs.
+  // What update() expects its stages to take, on the budget's clock, to plan
+  // against a deadline. A solve counts only when it finished: a stopped one
+  // says nothing of what a whole one needs.
   RecentDuration network_time, solve_time, decide_time;
   std::vector<PointDecision> decisions;  // [max_points]
   std::uint32_t count = 0;
