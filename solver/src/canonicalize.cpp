@@ -12,10 +12,7 @@ using namespace detail;
 // nodes that reach `to`, and fixing arcs only removes some, so a dead node
 // stays dead for the rest of the pass.
 bool MinCostFlow::Impl::tie_path(NodeId from, NodeId to) {
-  if (++visit_epoch == 0) {
-    std::fill(visit.begin(), visit.begin() + nodes, 0u);
-    visit_epoch = 1;
-  }
+  new_visit_epoch();
   touched_count = 0;
   visit[from] = visit_epoch;
   touched[touched_count++] = from;

@@ -320,6 +320,13 @@ struct MinCostFlow::Impl {
 
   bool tie_path(NodeId from, NodeId to);
   void new_dead_epoch();
+  // A fresh mark for visit[] (searches and count_degrees mark nodes with it).
+  void new_visit_epoch() {
+    if (++visit_epoch == 0) {
+      std::fill(visit.begin(), visit.begin() + nodes, 0u);
+      visit_epoch = 1;
+    }
+  }
 
   bool valid_terminals(NodeId s, NodeId t) const {
     return s >= 0 && s < nodes && t >= 0 && t < nodes && s != t;

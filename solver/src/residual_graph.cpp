@@ -78,10 +78,7 @@ std::size_t MinCostFlow::Impl::bytes() const {
 Cost MinCostFlow::Impl::count_degrees() {
   std::fill(fill.begin(), fill.begin() + nodes, 0);  // out-degree
   std::fill(cur.begin(), cur.begin() + nodes, 0);   // in-degree
-  if (++visit_epoch == 0) {
-    std::fill(visit.begin(), visit.begin() + nodes, 0u);
-    visit_epoch = 1;
-  }
+  new_visit_epoch();
   Cost max_cost = 0;
   std::int32_t placed = 0;
   layout_count = 0;

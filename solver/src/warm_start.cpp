@@ -14,10 +14,7 @@ using namespace detail;
 // backwards scans its whole block, every record's partner being an arc
 // into it.
 bool MinCostFlow::Impl::local_path(NodeId x, bool forward) {
-  if (++visit_epoch == 0) {
-    std::fill(visit.begin(), visit.begin() + nodes, 0u);
-    visit_epoch = 1;
-  }
+  new_visit_epoch();
   visit[x] = visit_epoch;
   path_node[0] = x;
   cur[x] = first_out[x];
