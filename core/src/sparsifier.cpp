@@ -5,6 +5,7 @@
 #include <memory>
 #include <vector>
 
+#include "keepless/core/pairwise_start.hpp"
 #include "solver_status.hpp"
 
 namespace keepless::core {
@@ -34,9 +35,12 @@ class RecentDuration {
 struct Sparsifier::Impl {
   Params params;
   SolveMode mode;
+  Start start;
   PaperNetwork network;
   std::unique_ptr<IncrementalNetwork> incremental;  // kIncremental only
   solver::MinCostFlow solver;  // shared: run() resets it, update() keeps it
+  PairwiseStart pairwise;      // Start::kClosedForm
+  std::vector<solver::ArcId> identity;  // [max_points] PaperNetwork's tie order: its first arcs
   bool solver_incremental = false;  // the solver holds the incremental network
   bool resume = false;              // the last update stopped for budget: carry on from its state
   bool resumed = false;             // the last update was such a resumption
@@ -53,15 +57,36 @@ struct Sparsifier::Impl {
 
   std::uint64_t now() const { return clock != nullptr ? clock->now_ns() : 0; }
 
-  Impl(const Capacities& c, const Params& p, SolveMode m)
+  Impl(const Capacities& c, const Params& p, SolveMode m, Start st)
       : params(p),
         mode(m),
+        start(st),
         network(c),
         incremental(m == SolveMode::kIncremental ? std::make_unique<IncrementalNetwork>(c) : nullptr),
         solver(m == SolveMode::kIncremental
                    ? larger(PaperNetwork::solver_capacity(c), IncrementalNetwork::solver_capacity(c))
-                   : PaperNetwork::solver_capacity(c)) {
+                   : PaperNetwork::solver_capacity(c)),
+        pairwise(st == Start::kClosedForm ? solver.capacity_limits() : solver::Capacity{}) {
     decisions.resize(c.max_points);
+    if (st == Start::kClosedForm) {
+      identity.resize(c.max_points);
+      for (std::size_t i = 0; i < identity.size(); ++i) identity[i] = static_cast<solver::ArcId>(i);
+    }
+  }
+
+  // Start::kClosedForm: the solver certifies the closed-form optimum. Should
+  // it not (never for the paper's capacities), it re-optimised from there,
+  // and canonicalize() moves its optimum to the tie-break's, on what is left
+  // of the work budget.
+  Status solve_closed_form(solver::NodeId source, solver::NodeId sink, const solver::ArcId* order,
+                           std::int32_t count, const solver::Budget& budget) {
+    pairwise.compute(solver, sink, order, count);
+    Status r = from_solver(solver.solve_from(source, sink, pairwise.flow(), pairwise.potential(), budget));
+    if (r != Status::kOk || solver.stats().certified) return r;
+    solver::Budget rest = budget;
+    const std::uint64_t used = solver.stats().work_units;
+    rest.work_units = budget.work_units > used ? budget.work_units - used : 0;
+    return from_solver(solver.canonicalize(order, count, rest));
   }
 
   // Decisions from the source arcs' flows; an unfinished solve culls nothing.
@@ -99,8 +124,9 @@ struct Sparsifier::Impl {
   }
 };
 
-Sparsifier::Sparsifier(const Capacities& capacities, const Params& params, SolveMode mode)
-    : impl_(std::make_unique<Impl>(capacities, params, mode)) {}
+Sparsifier::Sparsifier(const Capacities& capacities, const Params& params, SolveMode mode,
+                       Start start)
+    : impl_(std::make_unique<Impl>(capacities, params, mode, start)) {}
 Sparsifier::~Sparsifier() = default;
 
 Status Sparsifier::validate(const Params& p) {
@@ -120,7 +146,12 @@ Status Sparsifier::run(const Window& window, const solver::Budget& budget) {
   const std::uint64_t t0 = s.now();
   if (Status b = s.network.build(window, s.params, s.solver); b != Status::kOk) return b;
   const std::uint64_t t1 = s.now();
-  const Status result = from_solver(s.solver.solve(s.network.source(), s.network.sink(), budget));
+  const solver::NodeId source = s.network.source(), sink = s.network.sink();
+  const Status result =
+      s.start == Start::kClosedForm
+          ? s.solve_closed_form(source, sink, s.identity.data(),
+                                static_cast<std::int32_t>(s.network.evaluated_count()), budget)
+          : from_solver(s.solver.solve(source, sink, budget));
   const std::uint64_t t2 = s.now();
   if (result != Status::kOk && result != Status::kBudgetExhausted) return result;
   s.summary.keyframes = window.keyframe_count();
@@ -174,28 +205,36 @@ Status Sparsifier::update(const Window& window, const solver::Budget& budget) {
     s.network_time.add(u1 - u0);
     solve_budget.deadline_ns = budget.deadline_ns > decide_ns ? budget.deadline_ns - decide_ns : 0;
   }
-  // The network's arc ids are recycled, so the solver is told the order
-  // its tie-break must follow: source arcs by ascending point id, as in
-  // PaperNetwork. A solve from zero flow in that order finds run()'s optimum
-  // directly. Only after a stop for budget does the next call re-optimise
-  // from the flow and potentials left behind (keeping the progress made);
-  // that can land on another optimum among ties, so canonicalize() then
-  // moves to the one run() finds. A slide's repair from that state costs
-  // more than a fresh solve, so if the resumption runs out too, the next
-  // call starts afresh: sustained overload cannot lock the path into it.
+  // The network's arc ids are recycled, so the tie-break is given as an
+  // order: source arcs by ascending point id, as PaperNetwork inserts them.
+  // The closed-form start breaks its ties by that order directly. From zero
+  // flow, the solver is told it and a solve finds run()'s optimum; only
+  // after a stop for budget does the next call re-optimise from the flow
+  // and potentials left behind (keeping the progress made), which can land
+  // on another optimum among ties, so canonicalize() then moves to the one
+  // run() finds. A slide's repair from that state costs more than a fresh
+  // solve, so if the resumption runs out too, the next call starts afresh:
+  // sustained overload cannot lock the path into it.
   const auto evaluated = static_cast<std::int32_t>(net.evaluated_count());
-  Status result = from_solver(s.solver.set_tie_order(net.canonical_order(), evaluated));
-  const bool warm = s.resume && !s.resumed;
-  if (result == Status::kOk && !warm) {
-    result = from_solver(s.solver.solve(net.source(), net.sink(), solve_budget));
-  } else if (result == Status::kOk) {
-    result = from_solver(s.solver.solve_warm(net.source(), net.sink(), solve_budget));
-    if (result == Status::kOk) {
-      // The rest of the work budget (the clock's deadline is absolute).
-      solver::Budget rest = solve_budget;
-      const std::uint64_t used = s.solver.stats().work_units;
-      rest.work_units = budget.work_units > used ? budget.work_units - used : 0;
-      result = from_solver(s.solver.canonicalize(net.canonical_order(), evaluated, rest));
+  const solver::ArcId* order = net.canonical_order();
+  Status result = Status::kOk;
+  bool warm = false;
+  if (s.start == Start::kClosedForm) {
+    result = s.solve_closed_form(net.source(), net.sink(), order, evaluated, solve_budget);
+  } else {
+    result = from_solver(s.solver.set_tie_order(order, evaluated));
+    warm = s.resume && !s.resumed;
+    if (result == Status::kOk && !warm) {
+      result = from_solver(s.solver.solve(net.source(), net.sink(), solve_budget));
+    } else if (result == Status::kOk) {
+      result = from_solver(s.solver.solve_warm(net.source(), net.sink(), solve_budget));
+      if (result == Status::kOk) {
+        // The rest of the work budget (the clock's deadline is absolute).
+        solver::Budget rest = solve_budget;
+        const std::uint64_t used = s.solver.stats().work_units;
+        rest.work_units = budget.work_units > used ? budget.work_units - used : 0;
+        result = from_solver(s.solver.canonicalize(order, evaluated, rest));
+      }
     }
   }
   s.resume = result == Status::kBudgetExhausted;
@@ -228,6 +267,7 @@ const IncrementalNetwork* Sparsifier::incremental_network() const {
   return impl_->incremental.get();
 }
 SolveMode Sparsifier::mode() const { return impl_->mode; }
+Start Sparsifier::start() const { return impl_->start; }
 const solver::MinCostFlow& Sparsifier::solver() const { return impl_->solver; }
 
 std::size_t Sparsifier::memory_bytes() const {
@@ -235,6 +275,7 @@ std::size_t Sparsifier::memory_bytes() const {
   // network.memory_bytes() already counts its own handle, held inside Impl.
   return sizeof(Sparsifier) + sizeof(Impl) - sizeof(PaperNetwork) + s.network.memory_bytes() +
          (s.incremental ? s.incremental->memory_bytes() : 0) + s.solver.memory_bytes() +
+         s.pairwise.memory_bytes() + s.identity.capacity() * sizeof(solver::ArcId) +
          s.decisions.capacity() * sizeof(PointDecision);
 }
 

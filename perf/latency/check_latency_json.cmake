@@ -11,7 +11,8 @@ string(STRIP "${out}" out)
 string(REGEX REPLACE ".*\n" "" last "${out}")
 foreach(key workload decisions e2e_p50_ms e2e_p99_ms e2e_max_ms budget_exhausted
             allocations_after_warmup footprint_bytes ours_scratch_median_ms incremental_median_ms
-            lemon_ns_median_ms lemon_cs_median_ms closed_form_median_ms identical_decisions)
+            lemon_ns_median_ms lemon_cs_median_ms closed_form_median_ms ours_zero_flow_median_ms
+            slide_zero_flow_median_ms identical_decisions)
   string(JSON value ERROR_VARIABLE missing GET "${last}" ${key})
   if(missing)
     message(FATAL_ERROR "key ${key} missing from: ${last}")

@@ -153,7 +153,7 @@ void MinCostFlow::Impl::finish() {
   value = 0;
   cost_total = 0;
   for (ArcId a = 0; a < arcs; ++a) {
-    const std::int32_t f = arc_pos[a] >= 0 ? arc[a].cap - res[arc_pos[a]].cap : 0;
+    const std::int32_t f = arc_pos[a] >= 0 ? arc[a].capacity - res[arc_pos[a]].cap : 0;
     arc_flow[a] = f;
     cost_total += Cost{f} * arc[a].cost;
     if (arc[a].tail == src_ext) value += f;
@@ -168,25 +168,30 @@ void MinCostFlow::Impl::finish() {
   is_balanced = kept == 0;
 }
 
-Status MinCostFlow::Impl::solve_scratch(NodeId s, NodeId t, const Budget& budget) {
+// Too late to start: the zero flow, at zero potentials, is valid and
+// certified (costs are >= 0), and a later solve_warm can start from it.
+Status MinCostFlow::Impl::stop_before_start(NodeId s, NodeId t) {
   clear_recosted();
+  src_ext = s;
+  snk_ext = t;
+  stats = {};
+  std::fill(arc_flow.begin(), arc_flow.begin() + arcs, 0);
+  std::fill(pot_ext.begin(), pot_ext.begin() + nodes, 0);
+  value = 0;
+  cost_total = 0;
+  imbalanced_count = 0;
+  is_balanced = true;
+  laid_out = false;
+  have_state = true;
+  optimal = false;
+  return Status::kBudgetExhausted;
+}
+
+Status MinCostFlow::Impl::solve_scratch(NodeId s, NodeId t, const Budget& budget) {
   if (budget.clock != nullptr && budget.clock->now_ns() >= budget.deadline_ns) {
-    // Too late to start: the zero flow, at zero potentials, is valid and
-    // certified (costs are >= 0), and a later solve_warm can start from it.
-    src_ext = s;
-    snk_ext = t;
-    stats = {};
-    std::fill(arc_flow.begin(), arc_flow.begin() + arcs, 0);
-    std::fill(pot_ext.begin(), pot_ext.begin() + nodes, 0);
-    value = 0;
-    cost_total = 0;
-    imbalanced_count = 0;
-    is_balanced = true;
-    laid_out = false;
-    have_state = true;
-    optimal = false;
-    return Status::kBudgetExhausted;
+    return stop_before_start(s, t);
   }
+  clear_recosted();
   const std::uint64_t base = set_label_base();
   stats = {};
   overflow = false;

@@ -71,12 +71,11 @@ void MinCostFlow::Impl::new_dead_epoch() {
 
 Status MinCostFlow::canonicalize(const ArcId* order, std::int32_t count, const Budget& budget) {
   Impl& m = *impl_;
-  if (!m.optimal || !m.laid_out || count < 0 || (count > 0 && order == nullptr)) {
-    return Status::kInvalidInput;
-  }
+  if (!m.optimal || count < 0 || (count > 0 && order == nullptr)) return Status::kInvalidInput;
   for (std::int32_t k = 0; k < count; ++k) {
     if (order[k] < 0 || order[k] >= m.arcs) return Status::kInvalidInput;
   }
+  m.ensure_laid_out();
   const std::uint64_t swaps_before = m.stats.canonical_swaps;
   Meter meter(budget, m.stats);
   Status status = Status::kOptimal;

@@ -53,7 +53,7 @@ Status MinCostFlow::add_arc(NodeId from, NodeId to, Flow capacity, Cost cost) {
   if (m.arcs >= m.limits.max_arcs) return Status::kCapacityExceeded;
   m.arc[m.arcs].tail = from;
   m.arc[m.arcs].head = to;
-  m.arc[m.arcs].cap = static_cast<std::int32_t>(capacity);
+  m.arc[m.arcs].capacity = static_cast<std::int32_t>(capacity);
   m.arc[m.arcs].cost = static_cast<std::int32_t>(cost);
   m.arc_flow[m.arcs] = 0;
   m.arc_pos[m.arcs] = -1;
@@ -69,12 +69,12 @@ Status MinCostFlow::set_arc(ArcId a, Flow capacity, Cost cost) {
   if (capacity < 0 || capacity > kMaxArcCapacity || cost < 0 || cost > kMaxArcCost) {
     return Status::kInvalidInput;
   }
-  if (m.arc[a].cap == capacity && m.arc[a].cost == cost) return Status::kOptimal;
+  if (m.arc[a].capacity == capacity && m.arc[a].cost == cost) return Status::kOptimal;
   if (m.arc[a].cost != cost && m.is_recosted[a] == 0) {
     m.is_recosted[a] = 1;
     m.recosted[m.recosted_count++] = a;
   }
-  m.arc[a].cap = static_cast<std::int32_t>(capacity);
+  m.arc[a].capacity = static_cast<std::int32_t>(capacity);
   m.arc[a].cost = static_cast<std::int32_t>(cost);
   m.laid_out = false;
   m.optimal = false;
@@ -90,7 +90,7 @@ Status MinCostFlow::replace_arc(ArcId a, NodeId from, NodeId to, Flow capacity, 
   }
   m.arc[a].tail = from;
   m.arc[a].head = to;
-  m.arc[a].cap = static_cast<std::int32_t>(capacity);
+  m.arc[a].capacity = static_cast<std::int32_t>(capacity);
   m.arc[a].cost = static_cast<std::int32_t>(cost);
   m.arc_flow[a] = 0;
   m.laid_out = false;
@@ -144,8 +144,9 @@ std::int32_t MinCostFlow::node_count() const { return impl_->nodes; }
 std::int32_t MinCostFlow::arc_count() const { return impl_->arcs; }
 NodeId MinCostFlow::tail(ArcId a) const { return impl_->arc[a].tail; }
 NodeId MinCostFlow::head(ArcId a) const { return impl_->arc[a].head; }
-Flow MinCostFlow::capacity(ArcId a) const { return impl_->arc[a].cap; }
+Flow MinCostFlow::capacity(ArcId a) const { return impl_->arc[a].capacity; }
 Cost MinCostFlow::cost(ArcId a) const { return impl_->arc[a].cost; }
+const Arc* MinCostFlow::arc_data() const { return impl_->arc.data(); }
 Flow MinCostFlow::flow(ArcId a) const { return impl_->arc_flow[a]; }
 Flow MinCostFlow::flow_value() const { return impl_->value; }
 Cost MinCostFlow::total_cost() const { return impl_->cost_total; }

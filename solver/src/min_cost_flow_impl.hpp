@@ -78,16 +78,9 @@ struct MinCostFlow::Impl {
   std::int32_t nodes = 0;
   std::int32_t arcs = 0;
 
-  // User arcs.
-  // One record per arc, so that a layout visiting arcs in tie order (not id
-  // order) reads one cache line per arc.
-  struct UserArc {
-    NodeId tail;
-    NodeId head;
-    std::int32_t cap;
-    std::int32_t cost;
-  };
-  std::vector<UserArc> arc;
+  // User arcs, one record each, so that a layout visiting arcs in tie
+  // order (not id order) reads one cache line per arc.
+  std::vector<Arc> arc;
   std::vector<std::int32_t> arc_flow;
   std::vector<std::int32_t> arc_pos;  // forward residual record, -1 when not laid out
   std::vector<ArcId> tie_order;          // set_tie_order
@@ -178,7 +171,7 @@ struct MinCostFlow::Impl {
 
   std::size_t bytes() const;
 
-  bool active(ArcId a) const { return arc[a].cap > 0 && arc[a].tail != arc[a].head; }
+  bool active(ArcId a) const { return arc[a].capacity > 0 && arc[a].tail != arc[a].head; }
 
   // --- flow lists -----------------------------------------------------------
 
@@ -300,6 +293,7 @@ struct MinCostFlow::Impl {
   Status run(Mode m, detail::Meter& meter);
   Status run_phases(Mode m, detail::Meter& meter);
   void finish();
+  Status stop_before_start(NodeId s, NodeId t);
   Status solve_scratch(NodeId s, NodeId t, const Budget& budget);
 
   // --- local repair and warm starts (warm_start.cpp) ---------------------------
@@ -315,6 +309,14 @@ struct MinCostFlow::Impl {
   void shift_recosted_potentials();
   Status solve_warm(NodeId s, NodeId t, const Budget& budget);
   void estimate_potentials();
+
+  // --- a caller's start (given_start.cpp) ---------------------------------------
+
+  static constexpr Cost kPotentialBound = Cost{1} << 60;
+  bool adopt(NodeId s, NodeId t, const Flow* flow, const Cost* potential);
+  Status solve_from(NodeId s, NodeId t, const Flow* flow, const Cost* potential, const Budget& budget);
+  // canonicalize() after an adopted start: the residual graph is laid out on demand.
+  void ensure_laid_out();
 
   // --- canonicalize (canonicalize.cpp) -----------------------------------------
 

@@ -138,7 +138,7 @@ void MinCostFlow::Impl::lay_out(bool repair) {
   for (std::int32_t k = 0; k < layout_count; ++k) {
     const ArcId a = layout_order[k];
     const NodeId u = int_of[arc[a].tail], v = int_of[arc[a].head];
-    const std::int32_t cap = arc[a].cap, cost = arc[a].cost;
+    const std::int32_t cap = arc[a].capacity, cost = arc[a].cost;
     std::int32_t fl = std::min(std::max(arc_flow[a], 0), cap);
     if (repair) {
       const Cost rc = cost + pot[u] - pot[v];

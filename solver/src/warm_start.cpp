@@ -108,9 +108,9 @@ void MinCostFlow::Impl::shift_recosted_potentials() {
     is_recosted[a] = 0;
     if (!active(a)) continue;
     const NodeId u = arc[a].tail, v = arc[a].head;
-    const std::int32_t fl = std::min(arc_flow[a], arc[a].cap);
+    const std::int32_t fl = std::min(arc_flow[a], arc[a].capacity);
     const Cost rc = arc[a].cost + pot_ext[u] - pot_ext[v];
-    if (!((rc < 0 && fl < arc[a].cap) || (rc > 0 && fl > 0))) continue;
+    if (!((rc < 0 && fl < arc[a].capacity) || (rc > 0 && fl > 0))) continue;
     if (degree(v) <= degree(u)) {
       pot_ext[v] += rc;
     } else {

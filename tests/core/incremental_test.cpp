@@ -160,9 +160,9 @@ std::uint32_t check_stream(std::uint64_t seed, const StreamSpec& spec, std::uint
                            std::uint32_t* capacity_errors) {
   Stream stream(seed, spec.per_frame);
   Window window(spec.caps);
-  Sparsifier inc(spec.caps, spec.params, SolveMode::kIncremental);
-  Sparsifier warm(spec.caps, spec.params, SolveMode::kIncremental);
-  Sparsifier ref(spec.caps, spec.params);
+  Sparsifier inc(spec.caps, spec.params, SolveMode::kIncremental);  // the closed-form start
+  Sparsifier warm(spec.caps, spec.params, SolveMode::kIncremental, Start::kZeroFlow);
+  Sparsifier ref(spec.caps, spec.params, SolveMode::kFromScratch, Start::kZeroFlow);
   std::uint32_t matched = 0;
   for (std::uint32_t step = 0; step < spec.steps; ++step) {
     SCOPED_TRACE(::testing::Message() << "seed " << seed << " step " << step);
@@ -190,7 +190,7 @@ std::uint32_t check_stream(std::uint64_t seed, const StreamSpec& spec, std::uint
     // Stop late (most of the flow in place), so the resume after the next
     // slide starts from a nearly optimal state plus the slide's edits.
     solver::Budget late;
-    late.work_units = inc.solver().stats().work_units * (60 + step % 36) / 100;
+    late.work_units = ref.solver().stats().work_units * (60 + step % 36) / 100;
     const Status w = warm.update(window, step % 2 == 0 ? late : solver::Budget{});
     if (w == Status::kBudgetExhausted) {
       EXPECT_EQ(warm.summary().culled, 0u);
@@ -203,6 +203,7 @@ std::uint32_t check_stream(std::uint64_t seed, const StreamSpec& spec, std::uint
       continue;
     }
     EXPECT_TRUE(same_result(inc, ref));
+    EXPECT_TRUE(inc.solver().stats().certified) << "the closed-form start should stand";
     if (w == Status::kOk) {
       EXPECT_TRUE(same_result(warm, ref)) << "resumed warm solve";
     }

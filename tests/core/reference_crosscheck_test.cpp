@@ -102,15 +102,16 @@ std::int64_t lemon_cost(const solver::MinCostFlow& s, solver::NodeId source, sol
 // test's run time, so one is kept per distinct Params.
 class SparsifierCache {
  public:
-  Sparsifier& get(const Params& p) {
-    const auto key = std::make_tuple(p.pair_capacity, p.theta, p.box_width, p.box_height);
+  Sparsifier& get(const Params& p, Start start) {
+    const auto key = std::make_tuple(p.pair_capacity, p.theta, p.box_width, p.box_height, start);
     auto& slot = cache_[key];
-    if (!slot) slot = std::make_unique<Sparsifier>(kCaps, p);
+    if (!slot) slot = std::make_unique<Sparsifier>(kCaps, p, SolveMode::kFromScratch, start);
     return *slot;
   }
 
  private:
-  std::map<std::tuple<std::int64_t, double, std::int32_t, std::int32_t>, std::unique_ptr<Sparsifier>>
+  std::map<std::tuple<std::int64_t, double, std::int32_t, std::int32_t, Start>,
+           std::unique_ptr<Sparsifier>>
       cache_;
 };
 
@@ -122,11 +123,17 @@ TEST(ReferenceCrossCheck, RandomWindows) {
   for (std::uint64_t seed = 1; seed <= 1500; ++seed) {
     const test::RandomCase c = test::random_case(seed);
     ASSERT_TRUE(test::load(window, c.frames)) << "seed " << seed;
-    Sparsifier& s = sparsifiers.get(c.params);
+    // The product's closed-form start, and successive shortest paths from
+    // zero flow: both must be the reference's canonical optimum.
+    Sparsifier& zero = sparsifiers.get(c.params, Start::kZeroFlow);
+    ASSERT_EQ(zero.run(window), Status::kOk) << "seed " << seed;
+    Sparsifier& s = sparsifiers.get(c.params, Start::kClosedForm);
     ASSERT_EQ(s.run(window), Status::kOk) << "seed " << seed;
+    ASSERT_TRUE(s.solver().stats().certified) << "seed " << seed;
     closed.solve(s.network(), c.params);
     const test::RefResult ref = test::reference_sparsify(c.frames, c.params);
     ASSERT_TRUE(agrees(s, closed, ref)) << "seed " << seed;
+    ASSERT_TRUE(agrees(zero, closed, ref)) << "seed " << seed << " (zero-flow start)";
     if (seed % 5 == 0) {
       ASSERT_TRUE(test::flow_certificate(s.solver(), s.network().source(), s.network().sink()))
           << "seed " << seed;

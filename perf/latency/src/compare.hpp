@@ -1,6 +1,9 @@
 #pragma once
 // The from-scratch solvers keepless_latency compares on a window's network:
-// ours (reset + arcs + solve), LEMON's NetworkSimplex and CostScaling (each
+// ours as the decision path runs it (reset + arcs + the closed-form start +
+// solve_from, which certifies it), ours from zero flow (reset + arcs +
+// solve: successive shortest paths, as any other network would need),
+// LEMON's NetworkSimplex and CostScaling (each
 // after Preflow for the maximum flow value, as a LEMON user would), and
 // LEMON's simplex on costs with an exact tie-break, whose optimum is unique,
 // to derive decisions independently of our solver.
@@ -8,6 +11,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "keepless/core/pairwise_start.hpp"
 #include "keepless/core/sparsifier.hpp"
 #include "keepless/solver/min_cost_flow.hpp"
 
@@ -25,14 +29,18 @@ struct ArcList {
   solver::NodeId source = 0, sink = 1;
   std::int32_t evaluated = 0;
   std::vector<Arc> arcs;
+  std::vector<solver::ArcId> source_arcs;  // 0 .. evaluated-1: the tie order
 };
 
 // Copies the network of the last run() (allocates: not on the decision path).
 void network_arcs(const core::Sparsifier& scratch, ArcList* out);
 
-// Each returns the elapsed nanoseconds on `clock`, and the answer.
+// Each returns the elapsed nanoseconds on `clock`, and the answer (-1 when
+// the solve failed or, for ours, its start was not certified).
 std::uint64_t time_ours(const ArcList& net, const solver::Clock& clock, solver::MinCostFlow& mcf,
-                        solver::Flow* value, solver::Cost* cost);
+                        core::PairwiseStart& start, solver::Flow* value, solver::Cost* cost);
+std::uint64_t time_ours_zero_flow(const ArcList& net, const solver::Clock& clock,
+                                  solver::MinCostFlow& mcf, solver::Flow* value, solver::Cost* cost);
 
 bool have_lemon();
 std::uint64_t time_lemon_network_simplex(const ArcList& net, const solver::Clock& clock,

@@ -3,9 +3,12 @@
 // reports each stage's latency histogram and the end-to-end one, decisions
 // whose budget ran out, heap allocations after warm-up (a counting global
 // operator new, replaced for this binary), and the fixed footprint. On
-// sampled windows of the same run it times the from-scratch solvers (ours,
-// LEMON's NetworkSimplex and CostScaling after Preflow, the per-pair closed
-// form) and checks that every path decides the same. With --lcm it measures
+// sampled windows of the same run it times the from-scratch solvers (ours
+// as the decision path runs it and ours from zero flow, LEMON's
+// NetworkSimplex and CostScaling after Preflow, the per-pair closed form)
+// and checks that every path decides the same: each window is also decided
+// from scratch by successive shortest paths from zero flow, independently
+// of the closed-form start. With --lcm it measures
 // keyframe-published -> decision-received across keepless_node on loopback.
 // The last stdout line is one JSON object.
 
@@ -152,7 +155,8 @@ struct Replay {
   std::size_t footprint = 0;
   core::Capacities caps{};
   // Sampled windows.
-  std::vector<std::uint64_t> ours, lemon_ns, lemon_cs, closed, incremental, slide_scratch, slide_incremental;
+  std::vector<std::uint64_t> ours, ours_zero_flow, lemon_ns, lemon_cs, closed, incremental, slide_scratch,
+      slide_zero_flow, slide_incremental;
   std::uint32_t compared = 0, lemon_checked = 0, cost_mismatches = 0, lemon_decision_mismatches = 0,
                 closed_mismatches = 0;
   double points_mean = 0, arcs_mean = 0;
@@ -188,15 +192,19 @@ void compare_window(const core::Sparsifier& scratch, const core::Capacities& cap
   ArcList net;
   network_arcs(scratch, &net);
   solver::MinCostFlow mcf(core::PaperNetwork::solver_capacity(caps));
-  std::uint64_t best = ~0ull, best_ns = ~0ull, best_closed = ~0ull, best_slide = ~0ull;
+  core::PairwiseStart start(mcf.capacity_limits());
+  std::uint64_t best = ~0ull, best_zero = ~0ull, best_ns = ~0ull, best_closed = ~0ull;
   solver::Flow value = 0, v2 = 0;
   solver::Cost cost = 0, c2 = 0;
   for (std::uint32_t k = 0; k < std::max(o.reps, 1u); ++k) {
-    best = std::min(best, time_ours(net, clock, mcf, &value, &cost));
+    best = std::min(best, time_ours(net, clock, mcf, start, &value, &cost));
+    best_zero = std::min(best_zero, time_ours_zero_flow(net, clock, mcf, &v2, &c2));
   }
   const solver::Cost expected = scratch.summary().total_cost;
   if (value != scratch.summary().max_flow || cost != expected) ++r->cost_mismatches;
+  if (v2 != value || c2 != expected) ++r->cost_mismatches;
   r->ours.push_back(best);
+  r->ours_zero_flow.push_back(best_zero);
   if (have_lemon()) {
     for (std::uint32_t k = 0; k < std::max(o.reps, 1u); ++k) {
       best_ns = std::min(best_ns, time_lemon_network_simplex(net, clock, &v2, &c2));
@@ -234,7 +242,6 @@ void compare_window(const core::Sparsifier& scratch, const core::Capacities& cap
       break;
     }
   }
-  (void)best_slide;
   ++r->compared;
 }
 
@@ -246,7 +253,9 @@ bool replay(const KeyframeStream& stream, std::uint32_t warmup, std::uint64_t bu
   const core::Params params;
   core::Window window(caps);
   core::Sparsifier inc(caps, params, core::SolveMode::kIncremental);
-  core::Sparsifier scratch(caps, params);
+  // The independent check: from scratch, successive shortest paths from zero flow.
+  core::Sparsifier scratch(caps, params, core::SolveMode::kFromScratch, core::Start::kZeroFlow);
+  core::Sparsifier fresh(caps, params);  // run() as the library does it, timed on sampled windows
   DecisionEncoder encoder(caps);
   solver::SteadyClock clock;
   inc.set_clock(&clock);
@@ -318,7 +327,10 @@ bool replay(const KeyframeStream& stream, std::uint32_t warmup, std::uint64_t bu
       if (status == core::Status::kOk) {
         r->incremental.push_back(st.solve_ns);
         r->slide_incremental.push_back(st.network_ns + st.solve_ns + st.decide_ns);
-        r->slide_scratch.push_back(s1 - s0);
+        r->slide_zero_flow.push_back(s1 - s0);
+        const std::uint64_t f0 = clock.now_ns();
+        if (fresh.run(window) != core::Status::kOk || !agrees(inc, status, fresh)) ++r->mismatches;
+        r->slide_scratch.push_back(clock.now_ns() - f0);
         compare_window(scratch, caps, o, clock, r);
       }
     }
@@ -414,8 +426,8 @@ int main(int argc, char** argv) {
     std::printf("%-12s %9.3f %9.3f %9.3f %9.3f %9.3f\n", h->name, h->p(0.5), h->p(0.9), h->p(0.99),
                 h->p(0.999), h->max());
   }
-  const double ours = median_ms(r.ours), lemon_ns = median_ms(r.lemon_ns), lemon_cs = median_ms(r.lemon_cs),
-               closed = median_ms(r.closed), inc = median_ms(r.incremental);
+  const double ours = median_ms(r.ours), zero = median_ms(r.ours_zero_flow), lemon_ns = median_ms(r.lemon_ns),
+               lemon_cs = median_ms(r.lemon_cs), closed = median_ms(r.closed), inc = median_ms(r.incremental);
   const auto ratio = [](double a, double b) { return b > 0 ? a / b : 0.0; };
   if (r.compared > 0) {
     std::printf("from scratch on %u sampled windows (median of per-window best of %u, ms):\n", r.compared,
@@ -424,14 +436,17 @@ int main(int argc, char** argv) {
                 " | closed form %.3f (ours %.2fx it)\n",
                 ours, lemon_ns, ratio(lemon_ns, ours), lemon_cs, ratio(lemon_cs, ours), closed,
                 ratio(ours, closed));
+    std::printf("  ours from zero flow %.3f (LEMON NetworkSimplex %.1fx it; it %.2fx the closed form)\n", zero,
+                ratio(lemon_ns, zero), ratio(zero, closed));
     std::printf("  incremental solve %.3f (scratch solve %.2fx it); slide incl. network: scratch %.3f,"
-                " incremental %.3f (%.2fx)\n",
+                " incremental %.3f (%.2fx); scratch from zero flow %.3f\n",
                 inc, ratio(ours, inc), median_ms(r.slide_scratch), median_ms(r.slide_incremental),
-                ratio(median_ms(r.slide_scratch), median_ms(r.slide_incremental)));
+                ratio(median_ms(r.slide_scratch), median_ms(r.slide_incremental)),
+                median_ms(r.slide_zero_flow));
   }
   const bool identical = r.mismatches == 0 && r.cost_mismatches == 0 && r.lemon_decision_mismatches == 0 &&
                          r.closed_mismatches == 0 && r.failures == 0 && r.decisions > 0;
-  std::printf("identical decisions: %s (%u windows incremental vs run(); %u LEMON canonical, %u closed form;"
+  std::printf("identical decisions: %s (%u windows incremental vs run() from zero flow; %u LEMON canonical, %u closed form;"
               " cost mismatches %u)\n",
               identical ? "true" : "false", r.decisions, r.lemon_checked, r.compared, r.cost_mismatches);
   std::printf("heap allocations after warm-up: %llu\n", static_cast<unsigned long long>(r.allocations));
@@ -459,7 +474,9 @@ int main(int argc, char** argv) {
       "\"compared_windows\":%u,\"ours_scratch_median_ms\":%.4f,\"incremental_median_ms\":%.4f,"
       "\"lemon_ns_median_ms\":%.4f,\"lemon_cs_median_ms\":%.4f,\"closed_form_median_ms\":%.4f,"
       "\"lemon_ns_over_ours\":%.3f,\"ours_over_closed_form\":%.3f,\"scratch_over_incremental\":%.3f,"
+      "\"ours_zero_flow_median_ms\":%.4f,\"lemon_ns_over_ours_zero_flow\":%.3f,"
       "\"slide_scratch_median_ms\":%.4f,\"slide_incremental_median_ms\":%.4f,"
+      "\"slide_zero_flow_median_ms\":%.4f,"
       "\"lcm_decisions\":%u,\"lcm_p50_ms\":%.4f,\"lcm_p99_ms\":%.4f,\"lcm_max_ms\":%.4f,"
       "\"identical_decisions\":%s}\n",
       o.workload.c_str(), stream.window, r.decisions, granted.c_str(), o.mlock ? "true" : "false",
@@ -467,8 +484,8 @@ int main(int argc, char** argv) {
       r.network.p(0.5), r.network.p(0.99), r.solve.p(0.5), r.solve.p(0.99), r.decide.p(0.5), r.decide.p(0.99),
       r.publish.p(0.5), r.publish.p(0.99), budget_ms, r.exhausted, r.deferred, r.late,
       static_cast<unsigned long long>(r.allocations), r.footprint, r.compared, ours, inc, lemon_ns, lemon_cs,
-      closed, ratio(lemon_ns, ours), ratio(ours, closed), ratio(ours, inc), median_ms(r.slide_scratch),
-      median_ms(r.slide_incremental), lcm.decisions, lcm.p50_ms, lcm.p99_ms, lcm.max_ms,
+      closed, ratio(lemon_ns, ours), ratio(ours, closed), ratio(ours, inc), zero, ratio(lemon_ns, zero),
+      median_ms(r.slide_scratch), median_ms(r.slide_incremental), median_ms(r.slide_zero_flow), lcm.decisions, lcm.p50_ms, lcm.p99_ms, lcm.max_ms,
       identical ? "true" : "false");
   return identical ? 0 : 1;
 }

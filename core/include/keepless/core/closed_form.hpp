@@ -2,8 +2,9 @@
 // The per-pair closed form of the paper's network. With its capacities the
 // source arcs never bind (capacity = out-degree), so the optimum decomposes:
 // each pair carries min(M, shared points) units on its cheapest points by
-// c_c + c_s, ties to the smaller point id. A test oracle and a benchmark
-// lower bound; the product's path is the SSP solver.
+// c_c + c_s, ties to the smaller point id. A test oracle, written
+// independently and simply (it sorts each pair); the decision path's
+// closed form is PairwiseStart, certified by the solver.
 
 #include <cstddef>
 #include <cstdint>

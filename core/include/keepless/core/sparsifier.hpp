@@ -5,10 +5,11 @@
 // run() builds the network and solves it from nothing. update() (with
 // SolveMode::kIncremental) keeps the network between calls and edits only
 // what changed since the previous window (IncrementalNetwork), then solves it
-// in the canonical tie-break order; after a stop for budget, the next call
-// resumes from the flow and potentials left behind (solve_warm) and restores
-// the tie-break (canonicalize). Its decisions, flows and cost equal run()'s
-// on the same window.
+// from the closed-form start (or, with Start::kZeroFlow, in the canonical
+// tie-break order; then after a stop for budget the next call resumes from
+// the flow and potentials left behind (solve_warm) and restores the
+// tie-break (canonicalize)). Its decisions, flows and cost equal run()'s on
+// the same window.
 
 #include <cstddef>
 #include <cstdint>
@@ -29,6 +30,15 @@ enum class SolveMode : std::uint8_t {
   kIncremental,  // also holds the incremental network (about the size of the window again)
 };
 
+// How a solve starts. kClosedForm: from the optimum of the paper's network
+// in closed form (per pair, see core/src/pairwise_start.hpp) with the
+// potentials that prove it, which the solver certifies in one pass over the
+// arcs (MinCostFlow::solve_from); a start that failed the certificate would
+// be re-optimised, then put in the canonical tie-break. kZeroFlow: successive
+// shortest paths from the zero flow, as a general network would need. Both
+// give the same flows.
+enum class Start : std::uint8_t { kClosedForm, kZeroFlow };
+
 // Where a run() or update() spent its time, when a clock is set.
 struct StageTimes {
   std::uint64_t network_ns = 0;  // build (run) or in-place update (update)
@@ -39,7 +49,7 @@ struct StageTimes {
 class Sparsifier {
  public:
   Sparsifier(const Capacities& capacities, const Params& params,
-             SolveMode mode = SolveMode::kFromScratch);
+             SolveMode mode = SolveMode::kFromScratch, Start start = Start::kClosedForm);
   ~Sparsifier();
   Sparsifier(const Sparsifier&) = delete;
   Sparsifier& operator=(const Sparsifier&) = delete;
@@ -83,6 +93,7 @@ class Sparsifier {
   const PaperNetwork& network() const;                  // after run()
   const IncrementalNetwork* incremental_network() const;  // after update(); null without kIncremental
   SolveMode mode() const;
+  Start start() const;
   const solver::MinCostFlow& solver() const;
   std::size_t memory_bytes() const;
 

@@ -30,6 +30,12 @@
 // maximum flow, but among equal-cost optima it may differ from solve()'s;
 // canonicalize() then selects one optimum by a rule that does not depend on
 // the history.
+//
+// Known optimum: a caller that can write down an optimal flow and its
+// potentials for its network (the paper's has a closed form) hands them to
+// solve_from(), which certifies them in one pass over the arcs instead of
+// solving; a start that fails the certificate is re-optimised as by
+// solve_warm(), so a wrong guess costs time, never the result.
 
 #include <cstddef>
 #include <cstdint>
@@ -78,6 +84,14 @@ struct Budget {
   std::uint64_t deadline_ns = std::numeric_limits<std::uint64_t>::max();
 };
 
+// An arc as added or last edited (capacity 0 retires it).
+struct Arc {
+  NodeId tail;
+  NodeId head;
+  std::int32_t capacity;
+  std::int32_t cost;
+};
+
 struct SolveStats {
   std::uint64_t phases = 0;        // Dijkstra runs that reached a target
   std::uint64_t augmentations = 0; // augmenting paths pushed
@@ -85,6 +99,7 @@ struct SolveStats {
   std::uint64_t repaired_arcs = 0; // solve_warm: arcs saturated or emptied by the repair
   std::uint64_t canonical_swaps = 0;  // canonicalize: zero-cost cycles pushed
   bool warm = false;               // solve_warm reused the previous state
+  bool certified = false;          // solve_from: the given start was optimal as it stood
 };
 
 class MinCostFlow {
@@ -130,6 +145,23 @@ class MinCostFlow {
   // conservation at some nodes); the next solve_warm() continues.
   [[nodiscard]] Status solve_warm(NodeId source, NodeId sink, const Budget& budget = {});
 
+  // Starts from the caller's flow[arc] and potential[node] (arrays of
+  // arc_count() and node_count()). They are adopted at the cost of one pass
+  // over the arcs (arc_count() work units) when they certify a minimum-cost
+  // maximum flow: every flow within its arc's capacity (zero on retired
+  // arcs), conservation at every node but source and sink, every arc with
+  // residual capacity at reduced cost >= 0 and every arc with flow at <= 0,
+  // potentials within +-2^60, and potential(sink) - potential(source) above
+  // (node_count() - 1) x the largest cost, which no residual source-to-sink
+  // path can exceed, so none is left. Then stats().certified is set. Any
+  // other start is clipped to the capacities and re-optimised like
+  // solve_warm()'s previous state, to the same kind of result. A budget
+  // that cannot cover the pass (work units below arc_count(), or a deadline
+  // already passed) stops before it, as solve() past its deadline does:
+  // kBudgetExhausted at the zero flow.
+  [[nodiscard]] Status solve_from(NodeId source, NodeId sink, const Flow* flow,
+                                  const Cost* potential, const Budget& budget = {});
+
   // After an optimal solve: among all minimum-cost maximum flows, moves to
   // the one whose flows on `order` are lexicographically greatest (first
   // arc's flow as large as possible, then the second's, ...), by pushing
@@ -148,6 +180,7 @@ class MinCostFlow {
   NodeId head(ArcId a) const;
   Flow capacity(ArcId a) const;
   Cost cost(ArcId a) const;
+  const Arc* arc_data() const;  // arcs 0 .. arc_count() - 1, for bulk reads
   Flow flow(ArcId a) const;  // as of the last solve; 0 for arcs added or replaced since
   Flow flow_value() const;   // net flow out of the source
   Cost total_cost() const;

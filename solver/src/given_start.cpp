@@ -1,0 +1,88 @@
+#include <algorithm>
+
+#include "min_cost_flow_impl.hpp"
+
+namespace keepless::solver {
+
+using namespace detail;
+
+// Takes the caller's start as the state (flows clipped to the capacities,
+// potentials to +-2^60) and checks it in the same pass: capacities,
+// reduced costs, conservation, and the potential gap between the
+// terminals. Any residual source-to-sink path P has potential(sink) -
+// potential(source) <= cost(P) <= (nodes - 1) x max cost when every
+// residual arc's reduced cost is >= 0, so a larger gap proves the flow
+// maximum while the reduced costs prove it cheapest for its value.
+bool MinCostFlow::Impl::adopt(NodeId s, NodeId t, const Flow* flow, const Cost* potential) {
+  bool ok = true;
+  for (NodeId v = 0; v < nodes; ++v) {
+    ok &= potential[v] >= -kPotentialBound && potential[v] <= kPotentialBound;
+    pot_ext[v] = std::clamp(potential[v], -kPotentialBound, kPotentialBound);
+    excess[v] = 0;  // user numbering here
+    seen[v] = 1;    // the given potentials stand (see estimate_potentials)
+    renewed[v] = 0;
+  }
+  Cost max_cost = 0;
+  cost_total = 0;
+  for (ArcId a = 0; a < arcs; ++a) {
+    const Flow f = flow[a];
+    if (!active(a)) {
+      ok &= f == 0;
+      arc_flow[a] = 0;
+      continue;
+    }
+    const Arc& e = arc[a];
+    const Cost rc = e.cost + pot_ext[e.tail] - pot_ext[e.head];
+    ok &= f >= 0 && f <= e.capacity && (f == e.capacity || rc >= 0) && (f == 0 || rc <= 0);
+    const auto fl = static_cast<std::int32_t>(std::clamp<Flow>(f, 0, e.capacity));
+    arc_flow[a] = fl;
+    excess[e.tail] -= fl;
+    excess[e.head] += fl;
+    max_cost = std::max<Cost>(max_cost, e.cost);
+    cost_total += Cost{fl} * e.cost;
+  }
+  for (NodeId v = 0; v < nodes; ++v) ok &= v == s || v == t || excess[v] == 0;
+  value = -excess[s];
+  return ok && pot_ext[t] - pot_ext[s] > Cost{nodes - 1} * max_cost;
+}
+
+Status MinCostFlow::Impl::solve_from(NodeId s, NodeId t, const Flow* flow, const Cost* potential,
+                                     const Budget& budget) {
+  if ((budget.clock != nullptr && budget.clock->now_ns() >= budget.deadline_ns) ||
+      budget.work_units < static_cast<std::uint64_t>(arcs)) {
+    return stop_before_start(s, t);  // no time for the check
+  }
+  clear_recosted();
+  stats = {};
+  overflow = false;
+  const bool certified = adopt(s, t, flow, potential);
+  src_ext = s;
+  snk_ext = t;
+  have_state = true;
+  laid_out = false;
+  if (!certified) return solve_warm(s, t, budget);
+  stats.work_units = static_cast<std::uint64_t>(arcs);
+  stats.certified = true;
+  imbalanced_count = 0;
+  is_balanced = true;
+  optimal = true;
+  return Status::kOptimal;
+}
+
+void MinCostFlow::Impl::ensure_laid_out() {
+  if (laid_out) return;
+  count_degrees();
+  set_terminals(src_ext, snk_ext);
+  lay_out(false);
+}
+
+Status MinCostFlow::solve_from(NodeId source, NodeId sink, const Flow* flow, const Cost* potential,
+                               const Budget& budget) {
+  Impl& m = *impl_;
+  if (!m.valid_terminals(source, sink) || (flow == nullptr && m.arcs > 0) || potential == nullptr) {
+    return Status::kInvalidInput;
+  }
+  return m.solve_from(source, sink, flow, potential, budget);
+}
+
+}  // namespace keepless::solver
