@@ -74,23 +74,24 @@ void PairwiseStart::Impl::compute(const solver::MinCostFlow& solver, solver::Nod
     potential[e.head] = e.cost;
   }
   // One pass over the arcs: a pair's sink arc is its way out, a point's
-  // pair arc becomes a unit, and the largest cost bounds every path's.
+  // pair arc becomes a unit, and the largest cost bounds every path's. No
+  // branches on an arc's kind (an incrementally edited network scatters the
+  // kinds over the ids): every arc is written out, units advance the list.
   // Then a counting sort groups the units by pair.
   solver::Cost max_cost = 0;
   std::int32_t listed_count = 0;
   for (solver::ArcId a = 0; a < arcs; ++a) {
     const solver::Arc e = arc[a];
-    if (e.capacity == 0) continue;
-    max_cost = std::max<solver::Cost>(max_cost, e.cost);
-    if (e.head == sink) {
-      out[e.tail] = a;
-      continue;
-    }
+    const bool live = e.capacity != 0;
+    const bool way_out = live && e.head == sink;
+    if (way_out) out[e.tail] = a;  // one per pair: predictable
+    max_cost = std::max<solver::Cost>(max_cost, live ? e.cost : 0);
     const Point p = point[e.tail];
-    if (p.rank < 0) continue;
+    const bool unit = live && !way_out && p.rank >= 0;
     const auto unit_cost = static_cast<std::uint64_t>(p.cost) + static_cast<std::uint64_t>(e.cost);
-    listed[listed_count++] = Unit{unit_cost << 32 | static_cast<std::uint32_t>(p.rank), a, e.head};
-    ++first[e.head + 1];
+    listed[listed_count] = Unit{unit_cost << 32 | static_cast<std::uint32_t>(p.rank), a, e.head};
+    listed_count += unit ? 1 : 0;
+    first[e.head + 1] += unit ? 1 : 0;
   }
   for (std::int32_t v = 0; v < nodes; ++v) first[v + 1] += first[v];
   for (std::int32_t u = 0; u < listed_count; ++u) units[first[listed[u].pair]++] = listed[u];

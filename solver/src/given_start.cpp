@@ -24,21 +24,20 @@ bool MinCostFlow::Impl::adopt(NodeId s, NodeId t, const Flow* flow, const Cost* 
   }
   Cost max_cost = 0;
   cost_total = 0;
+  // Without branches on whether an arc is retired (an edited network
+  // scatters them): a retired arc's flow must be 0 and is taken as 0.
   for (ArcId a = 0; a < arcs; ++a) {
     const Flow f = flow[a];
-    if (!active(a)) {
-      ok &= f == 0;
-      arc_flow[a] = 0;
-      continue;
-    }
     const Arc& e = arc[a];
+    const bool live = active(a);
     const Cost rc = e.cost + pot_ext[e.tail] - pot_ext[e.head];
-    ok &= f >= 0 && f <= e.capacity && (f == e.capacity || rc >= 0) && (f == 0 || rc <= 0);
-    const auto fl = static_cast<std::int32_t>(std::clamp<Flow>(f, 0, e.capacity));
+    ok &= f >= 0 && f <= (live ? e.capacity : 0) && (f == e.capacity || rc >= 0 || !live) &&
+          (f == 0 || rc <= 0);
+    const auto fl = static_cast<std::int32_t>(std::clamp<Flow>(f, 0, live ? e.capacity : 0));
     arc_flow[a] = fl;
     excess[e.tail] -= fl;
     excess[e.head] += fl;
-    max_cost = std::max<Cost>(max_cost, e.cost);
+    max_cost = std::max<Cost>(max_cost, live ? e.cost : 0);
     cost_total += Cost{fl} * e.cost;
   }
   for (NodeId v = 0; v < nodes; ++v) ok &= v == s || v == t || excess[v] == 0;
