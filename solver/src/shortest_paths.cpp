@@ -32,7 +32,7 @@ void MinCostFlow::Impl::lazy_begin() {
   }
   if (pend_end == 0) return;
   // Costs are small integers: a counting sort by w is stable in position.
-  if (hi_w - lo_w < static_cast<Cost>(nodes)) {
+  if (hi_w - lo_w + 1 < static_cast<Cost>(nodes)) {  // range + 1 counters fit in fill[]
     const auto range = static_cast<std::int32_t>(hi_w - lo_w) + 1;
     std::fill(fill.begin(), fill.begin() + range + 1, 0);
     for (std::int32_t j = 0; j < pend_end; ++j) ++fill[pending[j].w - lo_w + 1];

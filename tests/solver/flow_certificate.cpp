@@ -1,5 +1,6 @@
 #include "flow_certificate.hpp"
 
+#include <algorithm>
 #include <cstddef>
 
 namespace keepless::solver::test {
@@ -77,8 +78,7 @@ namespace keepless::solver::test {
   return ::testing::AssertionSuccess();
 }
 
-::testing::AssertionResult is_maximum_flow(const MinCostFlow& solver, const TestNetwork& net) {
-  // Breadth-first search over residual arcs from the source.
+std::vector<char> residual_reach(const TestNetwork& net, const std::vector<Flow>& flows) {
   std::vector<char> reached(static_cast<std::size_t>(net.node_count), 0);
   std::vector<NodeId> queue{net.source};
   reached[static_cast<std::size_t>(net.source)] = 1;
@@ -86,7 +86,7 @@ namespace keepless::solver::test {
     const NodeId v = queue[q];
     for (std::size_t i = 0; i < net.arcs.size(); ++i) {
       const TestArc& arc = net.arcs[i];
-      const Flow f = solver.flow(static_cast<ArcId>(i));
+      const Flow f = flows[i];
       NodeId next = -1;
       if (arc.from == v && f < arc.capacity) next = arc.to;
       if (arc.to == v && f > 0) next = arc.from;
@@ -96,8 +96,27 @@ namespace keepless::solver::test {
       }
     }
   }
-  if (reached[static_cast<std::size_t>(net.sink)]) {
+  return reached;
+}
+
+::testing::AssertionResult is_maximum_flow(const MinCostFlow& solver, const TestNetwork& net) {
+  if (residual_reach(net, arc_flows(solver))[static_cast<std::size_t>(net.sink)]) {
     return ::testing::AssertionFailure() << net.label << ": residual graph still has an s-t path";
+  }
+  return ::testing::AssertionSuccess();
+}
+
+::testing::AssertionResult is_fresh_optimum(const MinCostFlow& solver, const TestNetwork& net) {
+  if (auto certified = is_certified_min_cost_flow(solver, net); !certified) return certified;
+  if (auto maximum = is_maximum_flow(solver, net); !maximum) return maximum;
+  MinCostFlow fresh(Capacity{std::max(net.node_count, 1), std::max<std::int32_t>(static_cast<std::int32_t>(net.arcs.size()), 1)});
+  if (load(fresh, net) != Status::kOptimal || fresh.solve(net.source, net.sink) != Status::kOptimal) {
+    return ::testing::AssertionFailure() << net.label << ": the fresh solve failed";
+  }
+  if (solver.flow_value() != fresh.flow_value() || solver.total_cost() != fresh.total_cost()) {
+    return ::testing::AssertionFailure()
+           << net.label << ": value " << solver.flow_value() << " cost " << solver.total_cost()
+           << ", a fresh solve " << fresh.flow_value() << " / " << fresh.total_cost();
   }
   return ::testing::AssertionSuccess();
 }

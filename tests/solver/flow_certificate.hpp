@@ -21,6 +21,12 @@ namespace keepless::solver::test {
 // No augmenting source -> sink path in the residual graph.
 ::testing::AssertionResult is_maximum_flow(const MinCostFlow& solver, const TestNetwork& net);
 
+// Both of the above, and the value and cost of a fresh solve of `net`.
+::testing::AssertionResult is_fresh_optimum(const MinCostFlow& solver, const TestNetwork& net);
+
+// The nodes the source reaches in the residual graph of `flows` (one per arc).
+std::vector<char> residual_reach(const TestNetwork& net, const std::vector<Flow>& flows);
+
 std::vector<Flow> arc_flows(const MinCostFlow& solver);
 
 }  // namespace keepless::solver::test

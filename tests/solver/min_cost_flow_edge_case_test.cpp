@@ -367,6 +367,23 @@ TEST(MinCostFlowEdgeCase, MovedSolverKeepsItsResult) {
   EXPECT_EQ(assigned.total_cost(), 21);
 }
 
+// Sized exactly to its nodes, with the source's arcs spread over as many
+// cost values as there are nodes: the lazy source's counting sort needs one
+// counter more than that and must take the comparison sort instead (ASan
+// caught the overflow).
+TEST(MinCostFlowEdgeCase, ExactNodeCapacityWithWidelySpreadSourceCosts) {
+  TestNetwork net;
+  net.label = "exact capacity";
+  net.node_count = 4;
+  net.source = 0;
+  net.sink = 3;
+  net.arcs = {{0, 1, 1, 1}, {0, 2, 1, 4}, {1, 3, 1, 0}, {2, 3, 1, 0}};
+  MinCostFlow solver(Capacity{4, 4});
+  solve_and_certify(solver, net);
+  EXPECT_EQ(solver.flow_value(), 2);
+  EXPECT_EQ(solver.total_cost(), 5);
+}
+
 TEST(MinCostFlowEdgeCase, EveryStatusHasADistinctName) {
   const Status all[] = {Status::kOptimal, Status::kBudgetExhausted, Status::kInvalidInput,
                         Status::kCapacityExceeded};

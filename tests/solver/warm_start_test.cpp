@@ -60,13 +60,10 @@ std::vector<ArcId> full_order(const TestNetwork& net) {
 
 void expect_same_optimum(MinCostFlow& warm, const TestNetwork& net) {
   ASSERT_TRUE(warm.balanced()) << net.label;
-  ASSERT_TRUE(is_certified_min_cost_flow(warm, net));
-  ASSERT_TRUE(is_maximum_flow(warm, net));
+  ASSERT_TRUE(is_fresh_optimum(warm, net));
   MinCostFlow fresh(kTestCapacity);
   ASSERT_EQ(load(fresh, net), Status::kOptimal);
   ASSERT_EQ(fresh.solve(net.source, net.sink), Status::kOptimal);
-  ASSERT_EQ(warm.flow_value(), fresh.flow_value()) << net.label;
-  ASSERT_EQ(warm.total_cost(), fresh.total_cost()) << net.label;
 
   const std::vector<ArcId> order = full_order(net);
   const auto count = static_cast<std::int32_t>(order.size());
