@@ -47,6 +47,7 @@ struct PaperNetwork::Impl {
   std::vector<std::uint32_t> arc_point, arc_pair;
   std::vector<std::int64_t> arc_cs;
   std::vector<std::int64_t> cm;  // c_m(n), [max_keyframes + 1]
+  std::vector<solver::ArcId> source_arcs;  // 0, 1, ...: the source arcs come first, by point id
 
   std::uint32_t points = 0, evaluated = 0, pairs = 0, arcs = 0, m = 0;
   solver::NodeId sink = 1;
@@ -70,6 +71,8 @@ struct PaperNetwork::Impl {
     arc_pair.resize(c.max_pair_arcs);
     arc_cs.resize(c.max_pair_arcs);
     cm.resize(k + 1);
+    source_arcs.resize(c.max_points);
+    for (std::size_t i = 0; i < source_arcs.size(); ++i) source_arcs[i] = static_cast<solver::ArcId>(i);
   }
 
   void clear() {
@@ -244,6 +247,7 @@ std::int64_t PaperNetwork::connectivity_cost(std::uint32_t n) const { return imp
 std::uint32_t PaperNetwork::pair_slot_j(std::uint32_t q) const { return impl_->pair_j[q]; }
 std::uint32_t PaperNetwork::pair_slot_k(std::uint32_t q) const { return impl_->pair_k[q]; }
 solver::ArcId PaperNetwork::pair_sink_arc(std::uint32_t q) const { return impl_->pair_sink[q]; }
+const solver::ArcId* PaperNetwork::canonical_order() const { return impl_->source_arcs.data(); }
 std::int64_t PaperNetwork::pair_baseline_cost(std::uint32_t q) const { return impl_->pair_cb[q]; }
 std::uint32_t PaperNetwork::arc_point(std::uint32_t a) const { return impl_->arc_point[a]; }
 std::uint32_t PaperNetwork::arc_pair(std::uint32_t a) const { return impl_->arc_pair[a]; }
@@ -261,7 +265,7 @@ std::size_t PaperNetwork::memory_bytes() const {
          bytes(n.neighbours) + bytes(n.slot_begin) + bytes(n.point_id) + bytes(n.point_views) +
          bytes(n.point_first) + bytes(n.point_arc) + bytes(n.pair_of) + bytes(n.pair_j) +
          bytes(n.pair_k) + bytes(n.pair_sink) + bytes(n.pair_cb) + bytes(n.arc_point) +
-         bytes(n.arc_pair) + bytes(n.arc_cs) + bytes(n.cm);
+         bytes(n.arc_pair) + bytes(n.arc_cs) + bytes(n.cm) + bytes(n.source_arcs);
 }
 
 }  // namespace keepless::core

@@ -20,8 +20,10 @@ struct PairwiseStart::Impl {
   std::vector<Point> point;             // [max_nodes]
   std::vector<solver::ArcId> out;       // [max_nodes] a pair's sink arc
   std::vector<std::int32_t> first;      // [max_nodes + 1] a pair's first unit in `units`
-  std::vector<Unit> listed;             // [max_arcs] units in arc order
+  std::vector<Unit> listed;             // [max_arcs] units in arc order; later, ties at a cut
   std::vector<Unit> units;              // [max_arcs] the same, grouped by pair
+  static constexpr std::uint64_t kBins = 1024;
+  std::vector<std::uint32_t> bins;      // [kBins] unit costs of a pair, from its cheapest
 
   explicit Impl(const solver::Capacity& c) {
     const auto n = static_cast<std::size_t>(std::max(c.max_nodes, 0));
@@ -33,7 +35,9 @@ struct PairwiseStart::Impl {
     first.resize(n + 1);
     listed.resize(m);
     units.resize(m);
+    bins.resize(kBins);
   }
+  void take_cheapest(Unit* begin, Unit* end, std::int64_t take);
   void compute(const solver::MinCostFlow& solver, solver::NodeId sink, const solver::ArcId* order,
                std::int32_t count);
 };
@@ -53,7 +57,48 @@ std::size_t PairwiseStart::memory_bytes() const {
   return sizeof(Impl) + s.flow.capacity() * sizeof(solver::Flow) +
          s.potential.capacity() * sizeof(solver::Cost) + s.point.capacity() * sizeof(Impl::Point) +
          s.out.capacity() * sizeof(solver::ArcId) + s.first.capacity() * sizeof(std::int32_t) +
-         (s.listed.capacity() + s.units.capacity()) * sizeof(Impl::Unit);
+         (s.listed.capacity() + s.units.capacity()) * sizeof(Impl::Unit) +
+         s.bins.capacity() * sizeof(std::uint32_t);
+}
+
+// Moves the `take` smallest keys of [begin, end) to its front, in any
+// order. Unit costs are small integers here (c_c + c_s), so a histogram
+// finds the cost at the cut in two passes, and only the units at that cost
+// need ordering by key (rank); a pair whose costs span more bins than there
+// are takes nth_element.
+void PairwiseStart::Impl::take_cheapest(Unit* begin, Unit* end, std::int64_t take) {
+  const auto by_key = [](const Unit& a, const Unit& b) { return a.key < b.key; };
+  std::uint64_t lo = ~std::uint64_t{0}, hi = 0;
+  for (const Unit* u = begin; u != end; ++u) {
+    lo = std::min(lo, u->key >> 32);
+    hi = std::max(hi, u->key >> 32);
+  }
+  if (hi - lo >= kBins) {
+    std::nth_element(begin, begin + take, end, by_key);
+    return;
+  }
+  std::fill(bins.begin(), bins.begin() + static_cast<std::ptrdiff_t>(hi - lo + 1), 0u);
+  for (const Unit* u = begin; u != end; ++u) ++bins[(u->key >> 32) - lo];
+  std::uint64_t cut = 0;
+  std::int64_t below = 0;
+  while (below + bins[cut] < take) below += bins[cut++];
+  cut += lo;
+  // Below the cut to the front (in place: never ahead of the reader), those
+  // at it aside; then the cheapest ranks among those at it.
+  Unit* front = begin;
+  Unit* ties = listed.data();
+  std::int64_t tied = 0;
+  for (const Unit* u = begin; u != end; ++u) {
+    const std::uint64_t c = u->key >> 32;
+    const Unit unit = *u;
+    *front = unit;
+    front += c < cut ? 1 : 0;
+    ties[tied] = unit;
+    tied += c == cut ? 1 : 0;
+  }
+  const std::int64_t need = take - below;
+  if (need < tied) std::nth_element(ties, ties + need, ties + tied, by_key);
+  std::copy(ties, ties + need, front);
 }
 
 void PairwiseStart::Impl::compute(const solver::MinCostFlow& solver, solver::NodeId sink,
@@ -107,10 +152,7 @@ void PairwiseStart::Impl::compute(const solver::MinCostFlow& solver, solver::Nod
     const solver::ArcId way_out = out[q];
     const std::int64_t room = way_out >= 0 ? arc[way_out].capacity : 0;
     const std::int64_t take = std::min<std::int64_t>(room, end - begin);
-    if (take < end - begin) {
-      std::nth_element(begin, begin + take, end,
-                       [](const Unit& a, const Unit& b) { return a.key < b.key; });
-    }
+    if (take < end - begin) take_cheapest(begin, end, take);
     std::uint64_t marginal = 0;
     for (const Unit* u = begin; u != begin + take; ++u) {
       flow[u->arc] = 1;

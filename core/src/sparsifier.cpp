@@ -40,7 +40,6 @@ struct Sparsifier::Impl {
   std::unique_ptr<IncrementalNetwork> incremental;  // kIncremental only
   solver::MinCostFlow solver;  // shared: run() resets it, update() keeps it
   PairwiseStart pairwise;      // Start::kClosedForm
-  std::vector<solver::ArcId> identity;  // [max_points] PaperNetwork's tie order: its first arcs
   bool solver_incremental = false;  // the solver holds the incremental network
   bool resume = false;              // the last update stopped for budget: carry on from its state
   bool resumed = false;             // the last update was such a resumption
@@ -68,21 +67,23 @@ struct Sparsifier::Impl {
                    : PaperNetwork::solver_capacity(c)),
         pairwise(st == Start::kClosedForm ? solver.capacity_limits() : solver::Capacity{}) {
     decisions.resize(c.max_points);
-    if (st == Start::kClosedForm) {
-      identity.resize(c.max_points);
-      for (std::size_t i = 0; i < identity.size(); ++i) identity[i] = static_cast<solver::ArcId>(i);
-    }
   }
 
   // Start::kClosedForm: the solver certifies the closed-form optimum. Should
   // it not (never for the paper's capacities), it re-optimised from there,
-  // and canonicalize() moves its optimum to the tie-break's, on what is left
-  // of the work budget.
+  // and canonicalize() moves its optimum to the tie-break's.
   Status solve_closed_form(solver::NodeId source, solver::NodeId sink, const solver::ArcId* order,
                            std::int32_t count, const solver::Budget& budget) {
     pairwise.compute(solver, sink, order, count);
-    Status r = from_solver(solver.solve_from(source, sink, pairwise.flow(), pairwise.potential(), budget));
+    const Status r =
+        from_solver(solver.solve_from(source, sink, pairwise.flow(), pairwise.potential(), budget));
     if (r != Status::kOk || solver.stats().certified) return r;
+    return canonicalize(order, count, budget);
+  }
+
+  // canonicalize() on what the solve left of the work budget (the deadline
+  // is absolute).
+  Status canonicalize(const solver::ArcId* order, std::int32_t count, const solver::Budget& budget) {
     solver::Budget rest = budget;
     const std::uint64_t used = solver.stats().work_units;
     rest.work_units = budget.work_units > used ? budget.work_units - used : 0;
@@ -149,7 +150,7 @@ Status Sparsifier::run(const Window& window, const solver::Budget& budget) {
   const solver::NodeId source = s.network.source(), sink = s.network.sink();
   const Status result =
       s.start == Start::kClosedForm
-          ? s.solve_closed_form(source, sink, s.identity.data(),
+          ? s.solve_closed_form(source, sink, s.network.canonical_order(),
                                 static_cast<std::int32_t>(s.network.evaluated_count()), budget)
           : from_solver(s.solver.solve(source, sink, budget));
   const std::uint64_t t2 = s.now();
@@ -228,13 +229,7 @@ Status Sparsifier::update(const Window& window, const solver::Budget& budget) {
       result = from_solver(s.solver.solve(net.source(), net.sink(), solve_budget));
     } else if (result == Status::kOk) {
       result = from_solver(s.solver.solve_warm(net.source(), net.sink(), solve_budget));
-      if (result == Status::kOk) {
-        // The rest of the work budget (the clock's deadline is absolute).
-        solver::Budget rest = solve_budget;
-        const std::uint64_t used = s.solver.stats().work_units;
-        rest.work_units = budget.work_units > used ? budget.work_units - used : 0;
-        result = from_solver(s.solver.canonicalize(order, evaluated, rest));
-      }
+      if (result == Status::kOk) result = s.canonicalize(order, evaluated, solve_budget);
     }
   }
   s.resume = result == Status::kBudgetExhausted;
@@ -275,7 +270,7 @@ std::size_t Sparsifier::memory_bytes() const {
   // network.memory_bytes() already counts its own handle, held inside Impl.
   return sizeof(Sparsifier) + sizeof(Impl) - sizeof(PaperNetwork) + s.network.memory_bytes() +
          (s.incremental ? s.incremental->memory_bytes() : 0) + s.solver.memory_bytes() +
-         s.pairwise.memory_bytes() + s.identity.capacity() * sizeof(solver::ArcId) +
+         s.pairwise.memory_bytes() +
          s.decisions.capacity() * sizeof(PointDecision);
 }
 

@@ -27,13 +27,14 @@ bool MinCostFlow::Impl::adopt(NodeId s, NodeId t, const Flow* flow, const Cost* 
   // Without branches on whether an arc is retired (an edited network
   // scatters them): a retired arc's flow must be 0 and is taken as 0.
   for (ArcId a = 0; a < arcs; ++a) {
+    // `&` and `|`, not `&&` and `||`: no branches to mispredict.
     const Flow f = flow[a];
     const Arc& e = arc[a];
-    const bool live = active(a);
+    const bool live = (e.capacity > 0) & (e.tail != e.head);  // active(a)
+    const std::int32_t cap = live ? e.capacity : 0;
     const Cost rc = e.cost + pot_ext[e.tail] - pot_ext[e.head];
-    ok &= f >= 0 && f <= (live ? e.capacity : 0) && (f == e.capacity || rc >= 0 || !live) &&
-          (f == 0 || rc <= 0);
-    const auto fl = static_cast<std::int32_t>(std::clamp<Flow>(f, 0, live ? e.capacity : 0));
+    ok &= (f >= 0) & (f <= cap) & ((f == cap) | (rc >= 0)) & ((f == 0) | (rc <= 0));
+    const auto fl = static_cast<std::int32_t>(std::clamp<Flow>(f, 0, cap));
     arc_flow[a] = fl;
     excess[e.tail] -= fl;
     excess[e.head] += fl;

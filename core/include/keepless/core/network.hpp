@@ -39,7 +39,9 @@ class PaperNetwork {
   std::uint32_t point_views(std::uint32_t i) const;  // n
   // Evaluated points (n >= 2) are network nodes; -1 for skipped points.
   std::int32_t point_source_arc(std::uint32_t i) const;
-
+  // Source arcs of the evaluated points, ascending point id (here simply
+  // arcs 0 .. evaluated_count()-1), as IncrementalNetwork::canonical_order.
+  const solver::ArcId* canonical_order() const;
   std::uint32_t evaluated_count() const;
   std::uint32_t pair_count() const;
   std::uint32_t pair_arc_count() const;  // point -> pair arcs
