@@ -24,10 +24,9 @@ bool MinCostFlow::Impl::adopt(NodeId s, NodeId t, const Flow* flow, const Cost* 
   }
   Cost max_cost = 0;
   cost_total = 0;
-  // Without branches on whether an arc is retired (an edited network
-  // scatters them): a retired arc's flow must be 0 and is taken as 0.
+  // No branches (`&`, `|`): an edited network scatters retired arcs over
+  // the ids. A retired arc's flow must be 0, and is taken as 0.
   for (ArcId a = 0; a < arcs; ++a) {
-    // `&` and `|`, not `&&` and `||`: no branches to mispredict.
     const Flow f = flow[a];
     const Arc& e = arc[a];
     const bool live = (e.capacity > 0) & (e.tail != e.head);  // active(a)

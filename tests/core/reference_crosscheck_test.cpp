@@ -159,6 +159,41 @@ TEST(ReferenceCrossCheck, RandomWindows) {
   EXPECT_GT(bound, 1000u);
 }
 
+// Windows of 24 to 40 keyframes with a few points seen by all of them:
+// c_m(2) passes 1,024 (1,470 at m = 24), so the closed-form start's
+// histogram cannot span the unit costs of the pairs that hold both those
+// points and two-view ones, and it selects with nth_element instead. Both
+// starts must still be the reference's optimum.
+TEST(ReferenceCrossCheck, WideCostRanges) {
+  const Capacities caps{40, 4096, 16384, 65536};
+  Window window(caps);
+  ClosedForm closed(caps);
+  std::uint32_t wide = 0;
+  for (std::uint64_t seed = 1; seed <= 200 && wide < 60 && !HasFailure(); ++seed) {
+    test::RandomCase c = test::random_case(50000 + seed, 40, 150);
+    if (c.frames.size() < 24) continue;
+    for (std::uint64_t j = 0; j < 3; ++j) {  // ids the generator never draws
+      for (std::size_t f = 0; f < c.frames.size(); ++f) {
+        c.frames[f].observations.push_back({(std::uint64_t{1} << 62) + j, 8.0 * static_cast<double>(f + j),
+                                            6.0 * static_cast<double>(f)});
+      }
+    }
+    ASSERT_TRUE(test::load(window, c.frames)) << "seed " << seed;
+    Sparsifier s(caps, c.params);
+    Sparsifier zero(caps, c.params, SolveMode::kFromScratch, Start::kZeroFlow);
+    ASSERT_EQ(s.run(window), Status::kOk) << "seed " << seed;
+    ASSERT_EQ(zero.run(window), Status::kOk) << "seed " << seed;
+    ASSERT_TRUE(s.solver().stats().certified) << "seed " << seed;
+    ASSERT_GE(s.network().max_views(), 24u);
+    closed.solve(s.network(), c.params);
+    const test::RefResult ref = test::reference_sparsify(c.frames, c.params);
+    ASSERT_TRUE(agrees(s, closed, ref)) << "seed " << seed;
+    ASSERT_TRUE(agrees(zero, closed, ref)) << "seed " << seed << " (zero-flow start)";
+    ++wide;
+  }
+  EXPECT_EQ(wide, 60u);
+}
+
 // Keypoints far outside any image (cell indices clamp), at huge magnitudes
 // where the box test's subtraction rounds, and next to clamped cell borders:
 // the grid still counts exactly what the all-pairs reference counts.
