@@ -31,7 +31,7 @@ enum class SolveMode : std::uint8_t {
 };
 
 // How a solve starts. kClosedForm: from the optimum of the paper's network
-// in closed form (per pair, see core/src/pairwise_start.hpp) with the
+// in closed form (per pair, see keepless/core/pairwise_start.hpp) with the
 // potentials that prove it, which the solver certifies in one pass over the
 // arcs (MinCostFlow::solve_from); a start that failed the certificate would
 // be re-optimised, then put in the canonical tie-break. kZeroFlow: successive
@@ -62,20 +62,20 @@ class Sparsifier {
   [[nodiscard]] Status run(const Window& window, const solver::Budget& budget = {});
 
   // The same decisions as run(window), incrementally: the network is edited
-  // in place, and a call after one that ran out of budget carries on from
-  // its state (once: if that runs out too, the next call starts afresh, so
-  // sustained overload cannot lock it into slow repairs). The budget's work
-  // units cover the solve and the tie-break restoration. Its deadline is
-  // when the decisions must be ready: the solver stops early enough to leave
-  // deciding its usual time, and when less time is left than updating the
-  // network, a finished solve and deciding usually take (the shorter of each
-  // one's last two durations), the call is deferred: it returns
-  // kBudgetExhausted at once,
-  // with no per-point decisions and every window point counted as kept
-  // (summary().kept == summary().points), and the next call brings the
-  // network up to date with everything since. On any kBudgetExhausted
-  // nothing is culled. A call to run() in between makes the next update()
-  // start from nothing.
+  // in place. The budget's work units cover the solve (from the closed
+  // form: its certificate, one unit per arc slot; from zero flow: the solve
+  // and the tie-break restoration, and a call after one that ran out of
+  // budget carries on from its state, once: if that runs out too, the next
+  // call starts afresh, so sustained overload cannot lock it into slow
+  // repairs). Its deadline is when the decisions must be ready: the solver
+  // stops early enough to leave deciding its usual time, and when less time
+  // is left than updating the network, a finished solve and deciding
+  // usually take (the shorter of each one's last two durations), the call is
+  // deferred: it returns kBudgetExhausted at once, with no per-point
+  // decisions and every window point counted as kept (summary().kept ==
+  // summary().points), and the next call brings the network up to date with
+  // everything since. On any kBudgetExhausted nothing is culled. A call to
+  // run() in between makes the next update() start from nothing.
   [[nodiscard]] Status update(const Window& window, const solver::Budget& budget = {});
   // The last update() was deferred (see above).
   bool deferred() const;
