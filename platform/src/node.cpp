@@ -151,7 +151,7 @@ struct Node::Impl {
       budget.clock = &clock;
       budget.deadline_ns = t0 + static_cast<std::uint64_t>(config.latency_target_ms * 1e6);
     }
-    // After a budget stop, update() resumes from the state left behind.
+    // A stop for budget culls nothing; the next keyframe's update() catches up.
     const core::Status run = sparsifier.update(sliding.window(), budget);
     const std::uint64_t t3 = monotonic_ns();
     const std::uint32_t n_culled = fill_decision(decision, request(), sliding.window(), sparsifier, run);
