@@ -279,6 +279,19 @@ void compare_window(const core::Sparsifier& scratch, const core::Capacities& cap
   ++r->compared;
 }
 
+// Keyframe k of the stream into `window`, the oldest out once K are held:
+// the windows both passes of replay() decide. False if the oldest could not
+// be removed; `added` is the keyframe's own status.
+bool slide_in(const KeyframeStream& stream, std::uint32_t k, core::Window& window, core::Status* added) {
+  if (window.keyframe_count() == stream.window &&
+      window.remove_keyframe(window.keyframe(0).id) != core::Status::kOk) {
+    return false;
+  }
+  const std::vector<core::Observation>& obs = stream.observations[k];
+  *added = window.add_keyframe(stream.keyframes[k], obs.data(), static_cast<std::uint32_t>(obs.size()));
+  return true;
+}
+
 // One pass over the stream. budget_ns == 0: no deadline.
 bool replay(const KeyframeStream& stream, std::uint32_t warmup, std::uint64_t budget_ns,
             const Options& o, bool compare, Replay* r) {
@@ -311,16 +324,11 @@ bool replay(const KeyframeStream& stream, std::uint32_t warmup, std::uint64_t bu
   counter.pause();
   for (std::uint32_t k = 0; k < total; ++k) {
     const bool measuring = k >= warmup;
-    const core::Keyframe& kf = stream.keyframes[k];
-    const std::vector<core::Observation>& obs = stream.observations[k];
     if (measuring) counter.resume();
     // --- the decision path ---
     const std::uint64_t t0 = clock.now_ns();  // the keyframe arrives
-    if (window.keyframe_count() == stream.window) {
-      if (window.remove_keyframe(window.keyframe(0).id) != core::Status::kOk) return false;
-    }
-    const core::Status added =
-        window.add_keyframe(kf, obs.data(), static_cast<std::uint32_t>(obs.size()));
+    core::Status added = core::Status::kOk;
+    if (!slide_in(stream, k, window, &added)) return false;
     const std::uint64_t t1 = clock.now_ns();
     // The solver gets 90% of the budget; the rest is for deciding and
     // publishing, which follow it.
@@ -375,11 +383,8 @@ bool replay(const KeyframeStream& stream, std::uint32_t warmup, std::uint64_t bu
   core::Window check(caps);
   std::size_t next = 0;
   for (std::uint32_t k = 0; k < total && next < answers.size(); ++k) {
-    if (check.keyframe_count() == stream.window) {
-      if (check.remove_keyframe(check.keyframe(0).id) != core::Status::kOk) return false;
-    }
-    (void)check.add_keyframe(stream.keyframes[k], stream.observations[k].data(),
-                             static_cast<std::uint32_t>(stream.observations[k].size()));
+    core::Status added = core::Status::kOk;  // a refusal was counted in the first pass
+    if (!slide_in(stream, k, check, &added)) return false;
     if (answers[next].keyframe != k) continue;
     const Answer& a = answers[next++];
     const std::uint64_t s0 = clock.now_ns();
