@@ -24,8 +24,8 @@ void network_arcs(const core::Sparsifier& scratch, ArcList* out) {
   for (solver::ArcId a = 0; a < m.arc_count(); ++a) {
     out->arcs.push_back({m.tail(a), m.head(a), m.capacity(a), m.cost(a)});
   }
-  out->source_arcs.clear();
-  for (solver::ArcId a = 0; a < out->evaluated; ++a) out->source_arcs.push_back(a);
+  const solver::ArcId* order = scratch.network().canonical_order();
+  out->source_arcs.assign(order, order + out->evaluated);
 }
 
 namespace {

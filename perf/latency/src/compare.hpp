@@ -29,7 +29,7 @@ struct ArcList {
   solver::NodeId source = 0, sink = 1;
   std::int32_t evaluated = 0;
   std::vector<Arc> arcs;
-  std::vector<solver::ArcId> source_arcs;  // 0 .. evaluated-1: the tie order
+  std::vector<solver::ArcId> source_arcs;  // PaperNetwork::canonical_order(): the tie order
 };
 
 // Copies the network of the last run() (allocates: not on the decision path).
