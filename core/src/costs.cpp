@@ -160,7 +160,10 @@ void information_levels(const Keyframe& kf, const Observation* observations, std
     }
     ++used;
   }
-  if (used == 0) return;
+  // With 3 observations (6 equations, 6 unknowns) every leverage is exactly
+  // 1 (r = 1, a level boundary): the pose is not over-determined, so there
+  // is nothing to rank.
+  if (used < 4) return;
   // Cholesky; a pivot below 1e-9 of the largest diagonal entry (or not
   // finite) makes the keyframe degenerate: every observation stays neutral.
   double largest = 0.0;

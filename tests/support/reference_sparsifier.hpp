@@ -190,7 +190,8 @@ inline std::vector<std::vector<double>> ref_jacobian(const RefKeyframe& f, const
 
 // Every observation's level (core::CostModel::kInformation): 2 - floor(log2 r)
 // in [0, 4], r the leverage tr(J L^-1 J^T) times n / 6; 2 where unknown or
-// degenerate (an LDL^T pivot <= 1e-9 of L's largest diagonal entry).
+// degenerate (fewer than 4 observations with a depth, or an LDL^T pivot
+// <= 1e-9 of L's largest diagonal entry).
 inline std::vector<std::uint64_t> ref_information_levels(const RefKeyframe& f) {
   std::vector<std::uint64_t> levels(f.observations.size(), 2);
   if (!(f.fx > 0) || !(f.fy > 0)) return levels;
@@ -204,7 +205,7 @@ inline std::vector<std::uint64_t> ref_information_levels(const RefKeyframe& f) {
     }
     ++used;
   }
-  if (used == 0) return levels;
+  if (used < 4) return levels;  // not over-determined: every leverage is 1
   double largest = 0;
   for (int r = 0; r < 6; ++r) largest = std::max(largest, info[r][r]);
   auto d = info;  // elimination without pivoting: its pivots are LDL^T's D

@@ -47,7 +47,9 @@ enum class Scope : std::uint8_t { kWindow, kNewest };
 //     log-det loss of dropping it, relative to the keyframe's mean (6 / n),
 //     quantised to 0 (>= 4x the mean) .. 4 (< 0.5x); the arc costs the sum of
 //     its two observations' levels. Observations without a depth, keyframes
-//     without intrinsics or with a singular L, cost the neutral level 2.
+//     without intrinsics, with fewer than 4 observations with a depth (every
+//     leverage is then exactly the mean) or with a singular L, cost the
+//     neutral level 2.
 // c_c, the cost terms' mask and theta apply to every model.
 enum class CostModel : std::uint8_t { kPaper, kAuthors, kInformation };
 
