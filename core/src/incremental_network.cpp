@@ -1020,10 +1020,20 @@ solver::ArcId IncrementalNetwork::point_source_arc(std::uint32_t i) const {
 const solver::ArcId* IncrementalNetwork::canonical_order() const {
   return impl_->order.data() + impl_->order_begin;
 }
-std::uint32_t IncrementalNetwork::point_slot(std::uint32_t i, std::uint32_t x) const {
+void IncrementalNetwork::point_slots(std::uint32_t* at, std::uint32_t* slots) const {
   const Impl& n = *impl_;
-  const std::uint32_t block = n.points[n.ranks[n.cur].slot[n.rank_begin + i]].block;
-  return n.frames[n.arena[block + 2 + 2 * x]].window_slot;
+  const std::uint32_t* rank_slot = n.ranks[n.cur].slot.data() + n.rank_begin;
+  const std::uint32_t count = n.rank_end - n.rank_begin;
+  std::uint32_t w = 0;
+  for (std::uint32_t i = 0; i < count; ++i) {
+    if (i + kAhead < count) prefetch(&n.points[rank_slot[i + kAhead]]);
+    if (i + kAhead / 2 < count) prefetch(n.arena.data() + n.points[rank_slot[i + kAhead / 2]].block);
+    const Impl::Point& pt = n.points[rank_slot[i]];
+    const std::uint32_t* e = n.arena.data() + pt.block + 2;
+    at[i] = w;
+    for (std::uint32_t x = 0; x < pt.listed; ++x) slots[w++] = n.frames[e[2 * x]].window_slot;
+  }
+  at[count] = w;
 }
 std::uint32_t IncrementalNetwork::evaluated_count() const { return impl_->evaluated; }
 std::uint32_t IncrementalNetwork::pair_count() const { return impl_->live_pairs; }

@@ -239,8 +239,14 @@ std::uint32_t PaperNetwork::point_count() const { return impl_->points; }
 PointId PaperNetwork::point_id(std::uint32_t i) const { return impl_->point_id[i]; }
 std::uint32_t PaperNetwork::point_views(std::uint32_t i) const { return impl_->point_views[i]; }
 std::int32_t PaperNetwork::point_source_arc(std::uint32_t i) const { return impl_->point_arc[i]; }
-std::uint32_t PaperNetwork::point_slot(std::uint32_t i, std::uint32_t x) const {
-  return impl_->records[impl_->point_first[i] + x].slot;
+void PaperNetwork::point_slots(std::uint32_t* at, std::uint32_t* slots) const {
+  const Impl& n = *impl_;
+  std::uint32_t r = 0;  // records are sorted by (point, slot): in point order already
+  for (std::uint32_t i = 0; i < n.points; ++i) {
+    at[i] = r;
+    for (std::uint32_t x = 0; x < n.point_views[i]; ++x, ++r) slots[r] = n.records[r].slot;
+  }
+  at[n.points] = r;
 }
 std::uint32_t PaperNetwork::evaluated_count() const { return impl_->evaluated; }
 std::uint32_t PaperNetwork::pair_count() const { return impl_->pairs; }

@@ -49,8 +49,12 @@ struct Sparsifier::Impl {
   // says nothing of what a whole one needs.
   RecentDuration network_time, solve_time, decide_time;
   std::vector<PointDecision> decisions;  // [max_points]
-  // The coverage floor's scratch: per window slot its evaluated points not
+  // The policies' scratch: each point's window slots (flattened, see
+  // PaperNetwork::point_slots); per window slot its evaluated points not
   // culled and its culled ones (indices into decisions, grouped by slot).
+  std::vector<std::uint8_t> in_scope;      // [max_points]
+  std::vector<std::uint32_t> slots_at;     // [max_points + 1]
+  std::vector<std::uint32_t> slots;        // [max_observations]
   std::vector<std::uint32_t> covered;      // [max_keyframes]
   std::vector<std::uint32_t> culled_at;    // [max_keyframes + 1]
   std::vector<std::uint32_t> culled_list;  // [max_observations]
@@ -73,6 +77,9 @@ struct Sparsifier::Impl {
                    : PaperNetwork::solver_capacity(c)),
         pairwise(st == Start::kClosedForm ? solver.capacity_limits() : solver::Capacity{}) {
     decisions.resize(c.max_points);
+    in_scope.resize(c.max_points);
+    slots_at.resize(std::size_t{c.max_points} + 1);
+    slots.resize(c.max_observations);
     covered.resize(c.max_keyframes);
     culled_at.resize(std::size_t{c.max_keyframes} + 1);
     culled_list.resize(c.max_observations);
@@ -139,20 +146,29 @@ struct Sparsifier::Impl {
   template <typename Net>
   void apply_policies(const Window& window, const Net& net, bool finished) {
     const std::uint32_t k = window.keyframe_count();
-    if (params.scope == Scope::kNewest && k > 0) restrict_to_newest(net, k - 1);
-    if (params.coverage_floor > 0 && finished) apply_floor(net, k);
+    if (params.scope == Scope::kNewest && k > 0) restrict_to_newest(window, k - 1);
+    if (params.coverage_floor > 0 && finished) {
+      net.point_slots(slots_at.data(), slots.data());
+      apply_floor(k);
+    }
   }
 
-  template <typename Net>
-  void restrict_to_newest(const Net& net, std::uint32_t newest) {
+  // The newest keyframe's points are found by id among the decisions
+  // (ascending id): its observations, not every point's keyframes, are read.
+  void restrict_to_newest(const Window& window, std::uint32_t newest) {
+    std::uint8_t* seen = in_scope.data();
+    std::fill(seen, seen + count, std::uint8_t{0});
+    const Observation* obs = window.observations(newest);
+    const PointDecision* first = decisions.data();
+    for (std::uint32_t o = 0; o < window.observation_count(newest); ++o) {
+      const PointDecision* at = std::lower_bound(
+          first, first + count, obs[o].point,
+          [](const PointDecision& d, PointId id) { return d.point < id; });
+      seen[at - first] = 1;  // every window point has a decision
+    }
     for (std::uint32_t i = 0; i < count; ++i) {
       PointDecision& d = decisions[i];
-      if (d.verdict == Verdict::kSkip) continue;
-      bool seen = false;
-      for (std::uint32_t x = 0; x < net.point_views(i) && !seen; ++x) {
-        seen = net.point_slot(i, x) == newest;
-      }
-      if (seen) continue;
+      if (d.verdict == Verdict::kSkip || seen[i]) continue;
       --(d.verdict == Verdict::kKeep ? summary.kept : summary.culled);
       ++summary.skipped;
       ++summary.out_of_scope;
@@ -165,15 +181,16 @@ struct Sparsifier::Impl {
   // of their capacity first (nearest to being kept), ties to the smaller
   // point id, until it holds or none is left. A promotion only raises
   // counts, so every earlier keyframe still holds when the pass ends.
-  template <typename Net>
-  void apply_floor(const Net& net, std::uint32_t k) {
+  void apply_floor(std::uint32_t k) {
     std::fill(covered.begin(), covered.begin() + k, 0u);
     std::fill(culled_at.begin(), culled_at.begin() + k + 1, 0u);
-    const auto for_slots = [&net](std::uint32_t i, auto&& f) {
-      for (std::uint32_t x = 0; x < net.point_views(i); ++x) f(net.point_slot(i, x));
+    const auto for_slots = [this](std::uint32_t i, auto&& f) {
+      for (std::uint32_t x = slots_at[i]; x < slots_at[i + 1]; ++x) f(slots[x]);
     };
+    // Evaluated: seen by >= 2 keyframes (a scope's skips included).
+    const auto evaluated = [this](std::uint32_t i) { return slots_at[i + 1] - slots_at[i] >= 2; };
     for (std::uint32_t i = 0; i < count; ++i) {
-      if (net.point_source_arc(i) < 0) continue;  // not evaluated
+      if (!evaluated(i)) continue;
       if (decisions[i].verdict == Verdict::kCull) {
         for_slots(i, [&](std::uint32_t s) { ++culled_at[s + 1]; });
       } else {
@@ -182,7 +199,7 @@ struct Sparsifier::Impl {
     }
     for (std::uint32_t s = 0; s < k; ++s) culled_at[s + 1] += culled_at[s];
     for (std::uint32_t i = 0; i < count; ++i) {
-      if (net.point_source_arc(i) < 0 || decisions[i].verdict != Verdict::kCull) continue;
+      if (!evaluated(i) || decisions[i].verdict != Verdict::kCull) continue;
       for_slots(i, [&](std::uint32_t s) { culled_list[culled_at[s]++] = i; });
     }
     for (std::uint32_t s = k; s > 0; --s) culled_at[s] = culled_at[s - 1];
@@ -373,7 +390,8 @@ std::size_t Sparsifier::memory_bytes() const {
          (s.incremental ? s.incremental->memory_bytes() : 0) + s.solver.memory_bytes() +
          s.pairwise.memory_bytes() +
          s.decisions.capacity() * sizeof(PointDecision) +
-         (s.covered.capacity() + s.culled_at.capacity() + s.culled_list.capacity() +
+         s.in_scope.capacity() +
+         (s.slots_at.capacity() + s.slots.capacity() + s.covered.capacity() + s.culled_at.capacity() + s.culled_list.capacity() +
           s.candidates.capacity()) *
              sizeof(std::uint32_t);
 }

@@ -75,9 +75,9 @@ class IncrementalNetwork {
   std::uint32_t point_views(std::uint32_t i) const;  // n
   // Source arc of an evaluated point (n >= 2); -1 for a skipped one.
   solver::ArcId point_source_arc(std::uint32_t i) const;
-  // The window slot of the x-th keyframe observing point i (x < n), in no
-  // particular order.
-  std::uint32_t point_slot(std::uint32_t i, std::uint32_t x) const;
+  // Every point's window slots, flattened in point order as
+  // PaperNetwork::point_slots, each point's in no particular order.
+  void point_slots(std::uint32_t* at, std::uint32_t* slots) const;
 
   // Source arcs of the evaluated points, ascending point id.
   const solver::ArcId* canonical_order() const;
