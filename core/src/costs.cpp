@@ -132,12 +132,13 @@ void jacobian_rows(const Keyframe& kf, const Observation& o, double ju[6], doubl
   jv[5] = kf.fy * a;
 }
 
-// Solves L y = j for the lower-triangular Cholesky factor L (row-major 6x6).
-void forward(const double l[36], const double j[6], double y[6]) {
+// Solves L y = j for the lower-triangular Cholesky factor L (row-major
+// 6x6), given the reciprocals of its diagonal.
+void forward(const double l[36], const double inverse_diagonal[6], const double j[6], double y[6]) {
   for (int r = 0; r < 6; ++r) {
     double x = j[r];
     for (int c = 0; c < r; ++c) x -= l[6 * r + c] * y[c];
-    y[r] = x / l[6 * r + r];
+    y[r] = x * inverse_diagonal[r];
   }
 }
 
@@ -182,6 +183,8 @@ void information_levels(const Keyframe& kf, const Observation* observations, std
       }
     }
   }
+  double inverse_diagonal[6];
+  for (int r = 0; r < 6; ++r) inverse_diagonal[r] = 1.0 / l[6 * r + r];
   // Leverage t = |L^-1 ju|^2 + |L^-1 jv|^2; its mean over the used
   // observations is 6 / used, so r = t * used / 6 has mean 1. Level
   // 2 - floor(log2 r), clamped to [0, 4]: frexp gives floor(log2 r) exactly.
@@ -189,8 +192,8 @@ void information_levels(const Keyframe& kf, const Observation* observations, std
     if (!usable(observations[i])) continue;
     double ju[6], jv[6], yu[6], yv[6];
     jacobian_rows(kf, observations[i], ju, jv);
-    forward(l, ju, yu);
-    forward(l, jv, yv);
+    forward(l, inverse_diagonal, ju, yu);
+    forward(l, inverse_diagonal, jv, yv);
     double t = 0.0;
     for (int r = 0; r < 6; ++r) t += yu[r] * yu[r] + yv[r] * yv[r];
     const double ratio = t * static_cast<double>(used) / 6.0;
