@@ -410,6 +410,21 @@ TEST(Policies, InvalidParams) {
   EXPECT_EQ(Sparsifier::validate(p), Status::kInvalidArgument);
 }
 
+TEST(Policies, OptionNames) {
+  Scope scope = Scope::kWindow;
+  EXPECT_TRUE(parse_scope("newest", &scope));
+  EXPECT_EQ(scope, Scope::kNewest);
+  EXPECT_FALSE(parse_scope("Newest", &scope));
+  EXPECT_EQ(scope, Scope::kNewest);
+  CostModel model = CostModel::kPaper;
+  for (CostModel m : {CostModel::kPaper, CostModel::kAuthors, CostModel::kInformation}) {
+    EXPECT_TRUE(parse_cost_model(to_string(m), &model));
+    EXPECT_EQ(model, m);
+  }
+  EXPECT_FALSE(parse_cost_model("", &model));
+  EXPECT_STREQ(to_string(Scope::kWindow), "window");
+}
+
 TEST(Policies, WindowRefusesUnmappedBeyondCapacity) {
   Capacities caps = kCaps;
   caps.max_unmapped_keypoints = 3;

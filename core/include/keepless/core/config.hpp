@@ -74,4 +74,12 @@ struct Params {
   std::int32_t image_height = 480;
 };
 
+// The options' names as command lines spell them: "window", "newest";
+// "paper", "authors", "information". parse_* return false (and leave *out
+// alone) for any other text.
+const char* to_string(Scope scope);
+const char* to_string(CostModel model);
+bool parse_scope(const char* text, Scope* out);
+bool parse_cost_model(const char* text, CostModel* out);
+
 }  // namespace keepless::core
