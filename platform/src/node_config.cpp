@@ -60,6 +60,11 @@ std::string node_usage() {
          "  --M N                     pair -> sink capacity (default 100)\n"
          "  --theta X                 keep iff flow > X * n(n-1)/2 (default 0.5)\n"
          "  --box WxH                 spatial-diversity box in pixels (default 64x48)\n"
+         "  --scope window|newest     decide every window point, or only the newest keyframe's (default window)\n"
+         "  --floor L                 every keyframe keeps >= L of its evaluated points (default 0: off)\n"
+         "  --cost paper|authors|information\n"
+         "                            point -> pair costs (default paper; README, Decision policies)\n"
+         "  --image WxH               the image the authors' 64x48 grid covers (default 640x480)\n"
          "  --budget-work N           solver work units per decision (default unlimited)\n"
          "  --latency-target-ms X     solve deadline from keyframe arrival (default 5; 0 = none)\n"
          "  --cpus LIST               pin to these CPUs, e.g. 0,1 or 2-3 (reported if refused)\n"
@@ -138,6 +143,20 @@ ParseResult parse_node_arguments(int argc, const char* const* argv, NodeConfig& 
     } else if (flag == "--box") {
       if (!parse_box(value, config.params.box_width, config.params.box_height)) {
         return bad("expected WxH, e.g. 64x48");
+      }
+    } else if (flag == "--scope") {
+      if (!core::parse_scope(value.c_str(), &config.params.scope)) return bad("expected window or newest");
+    } else if (flag == "--floor") {
+      if (!parse_u64(value, 0, std::numeric_limits<std::uint32_t>::max(), n)) return bad("expected an integer >= 0");
+      config.params.coverage_floor = static_cast<std::uint32_t>(n);
+    } else if (flag == "--cost") {
+      if (!core::parse_cost_model(value.c_str(), &config.params.cost_model)) {
+        return bad("expected paper, authors or information");
+      }
+    } else if (flag == "--image") {
+      if (!parse_box(value, config.params.image_width, config.params.image_height) ||
+          config.params.image_width < 1 || config.params.image_height < 1) {
+        return bad("expected WxH pixels, e.g. 640x480");
       }
     } else if (flag == "--budget-work") {
       if (!parse_u64(value, 1, std::numeric_limits<std::uint64_t>::max(), n)) return bad("expected an integer >= 1");
