@@ -15,6 +15,7 @@
 #include <memory>
 #include <vector>
 
+#include "decision_checks.hpp"
 #include "flow_certificate.hpp"
 #include "keepless/core/costs.hpp"
 #include "keepless/core/sparsifier.hpp"
@@ -29,24 +30,9 @@ const Capacities kCaps{16, 2048, 8192, 32768, 4096};
 
 ::testing::AssertionResult agrees(const Sparsifier& s, const test::RefResult& ref) {
   const Summary& sum = s.summary();
-  if (s.decision_count() != ref.points.size()) {
-    return ::testing::AssertionFailure() << "decisions " << s.decision_count() << " vs reference "
-                                         << ref.points.size();
-  }
-  std::uint32_t kept = 0, culled = 0, skipped = 0;
-  for (std::uint32_t i = 0; i < s.decision_count(); ++i) {
-    const PointDecision& d = s.decisions()[i];
-    const test::RefPoint& r = ref.points[i];
-    if (d.point != r.id || d.flow != r.flow || d.capacity != r.capacity || d.verdict != r.verdict) {
-      return ::testing::AssertionFailure()
-             << "point " << d.point << " (ref " << r.id << "): flow " << d.flow << " vs " << r.flow
-             << ", capacity " << d.capacity << " vs " << r.capacity << ", verdict "
-             << to_string(d.verdict) << " vs " << to_string(r.verdict);
-    }
-    kept += d.verdict == Verdict::kKeep;
-    culled += d.verdict == Verdict::kCull;
-    skipped += d.verdict == Verdict::kSkip;
-  }
+  std::uint32_t verdicts[3];
+  if (auto match = test::decisions_match(s, ref, verdicts); !match) return match;
+  const std::uint32_t kept = verdicts[0], culled = verdicts[1], skipped = verdicts[2];
   if (sum.max_flow != ref.max_flow || sum.total_cost != ref.total_cost) {
     return ::testing::AssertionFailure() << "max flow " << sum.max_flow << " vs " << ref.max_flow
                                          << ", cost " << sum.total_cost << " vs " << ref.total_cost;

@@ -250,13 +250,20 @@ GeneratedWindow generate_window(SplitMix64& rng, std::uint32_t index) {
   return w;
 }
 
-TEST(CrossArchitecture, SparsifierDecisionsMatchRecordedHash) {
-  constexpr std::uint32_t kWindows = 40;
+// Room for any generated window.
+Capacities generated_capacities() {
   Capacities capacities;
   capacities.max_keyframes = 16;
   capacities.max_points = 1024;
   capacities.max_observations = 4096;
   capacities.max_pair_arcs = 32768;
+  capacities.max_unmapped_keypoints = 4096;
+  return capacities;
+}
+
+TEST(CrossArchitecture, SparsifierDecisionsMatchRecordedHash) {
+  constexpr std::uint32_t kWindows = 40;
+  const Capacities capacities = generated_capacities();
 
   SplitMix64 rng(0x2024'0511'0000'0005ULL);
   Fnv1a64 hash;
@@ -322,12 +329,7 @@ TEST(CrossArchitecture, SparsifierDecisionsMatchRecordedHash) {
 // with the newest keyframe's scope and a binding coverage floor.
 TEST(CrossArchitecture, PolicyDecisionsMatchRecordedHash) {
   constexpr std::uint32_t kWindows = 24;
-  Capacities capacities;
-  capacities.max_keyframes = 16;
-  capacities.max_points = 1024;
-  capacities.max_observations = 4096;
-  capacities.max_pair_arcs = 32768;
-  capacities.max_unmapped_keypoints = 4096;
+  const Capacities capacities = generated_capacities();
 
   SplitMix64 rng(0x706f6c6963790001ULL);
   SplitMix64 extra(0x706f6c6963790002ULL);
