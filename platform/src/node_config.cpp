@@ -55,6 +55,8 @@ std::string node_usage() {
          "  --window K                keyframes in the sliding window (default 20)\n"
          "  --max-observations N      observations per keyframe_t accepted (default 2000)\n"
          "  --max-event-ids N         ids per list of a map_event_t accepted (default 1024)\n"
+         "  --max-unmapped N          unmapped keypoints per keyframe_t accepted (default 0; --cost authors\n"
+         "                            counts them)\n"
          "  --max-pair-arcs N         solver pair-arc capacity (default 0: worst case K*N*(K-1)/2;\n"
          "                            less saves memory, a window beyond it is answered 'capacity exceeded')\n"
          "  --M N                     pair -> sink capacity (default 100)\n"
@@ -130,6 +132,9 @@ ParseResult parse_node_arguments(int argc, const char* const* argv, NodeConfig& 
     } else if (flag == "--max-event-ids") {
       if (!parse_u64(value, 1, 1u << 20, n)) return bad("expected an integer in 1..1048576");
       config.max_event_ids = static_cast<std::uint32_t>(n);
+    } else if (flag == "--max-unmapped") {
+      if (!parse_u64(value, 0, 1u << 20, n)) return bad("expected an integer in 0..1048576");
+      config.max_unmapped = static_cast<std::uint32_t>(n);
     } else if (flag == "--max-pair-arcs") {
       if (!parse_u64(value, 0, 1u << 28, n)) return bad("expected an integer in 0..2^28");
       config.max_pair_arcs = static_cast<std::uint32_t>(n);
@@ -202,6 +207,7 @@ core::Capacities window_capacities(const NodeConfig& config) {
   c.max_observations = static_cast<std::uint32_t>(obs);
   c.max_points = static_cast<std::uint32_t>(obs);
   // Sum over points of n(n-1)/2 with sum n <= obs and n <= K.
+  c.max_unmapped_keypoints = static_cast<std::uint32_t>(k * config.max_unmapped);
   c.max_pair_arcs = config.max_pair_arcs != 0 ? config.max_pair_arcs
                                                : static_cast<std::uint32_t>(obs * (k - 1) / 2);
   return c;
