@@ -49,7 +49,8 @@ struct Sparsifier::Impl {
   // says nothing of what a whole one needs.
   RecentDuration network_time, solve_time, decide_time;
   std::vector<PointDecision> decisions;  // [max_points]
-  // The policies' scratch: each point's window slots (flattened, see
+  // The policies' scratch. Scope kNewest: which decisions the newest
+  // keyframe observes. The floor: each point's window slots (flattened, see
   // PaperNetwork::point_slots); per window slot its evaluated points not
   // culled and its culled ones (indices into decisions, grouped by slot).
   std::vector<std::uint8_t> in_scope;      // [max_points]
@@ -77,13 +78,16 @@ struct Sparsifier::Impl {
                    : PaperNetwork::solver_capacity(c)),
         pairwise(st == Start::kClosedForm ? solver.capacity_limits() : solver::Capacity{}) {
     decisions.resize(c.max_points);
-    in_scope.resize(c.max_points);
-    slots_at.resize(std::size_t{c.max_points} + 1);
-    slots.resize(c.max_observations);
-    covered.resize(c.max_keyframes);
-    culled_at.resize(std::size_t{c.max_keyframes} + 1);
-    culled_list.resize(c.max_observations);
-    candidates.resize(c.max_observations);
+    // The policies' scratch only where they are on (Params are fixed).
+    if (p.scope == Scope::kNewest) in_scope.resize(c.max_points);
+    if (p.coverage_floor > 0) {
+      slots_at.resize(std::size_t{c.max_points} + 1);
+      slots.resize(c.max_observations);
+      covered.resize(c.max_keyframes);
+      culled_at.resize(std::size_t{c.max_keyframes} + 1);
+      culled_list.resize(c.max_observations);
+      candidates.resize(c.max_observations);
+    }
   }
 
   // Start::kClosedForm: the solver certifies the closed-form optimum. Should
