@@ -395,8 +395,8 @@ std::size_t Sparsifier::memory_bytes() const {
          s.pairwise.memory_bytes() +
          s.decisions.capacity() * sizeof(PointDecision) +
          s.in_scope.capacity() +
-         (s.slots_at.capacity() + s.slots.capacity() + s.covered.capacity() + s.culled_at.capacity() + s.culled_list.capacity() +
-          s.candidates.capacity()) *
+         (s.slots_at.capacity() + s.slots.capacity() + s.covered.capacity() +
+          s.culled_at.capacity() + s.culled_list.capacity() + s.candidates.capacity()) *
              sizeof(std::uint32_t);
 }
 

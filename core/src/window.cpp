@@ -96,9 +96,8 @@ Status Window::add(const Keyframe& keyframe, const Observation* observations, st
     return Status::kCapacityExceeded;
   }
   if (keyframe.unmapped_count > 0 && keyframe.unmapped == nullptr) return Status::kInvalidArgument;
-  if (!finite(keyframe.centre, 3) || !finite(keyframe.orientation, 4) ||
-      !finite(&keyframe.fx, 1) || !finite(&keyframe.fy, 1) || !finite(&keyframe.cx, 1) ||
-      !finite(&keyframe.cy, 1)) {
+  const double intrinsics[4] = {keyframe.fx, keyframe.fy, keyframe.cx, keyframe.cy};
+  if (!finite(keyframe.centre, 3) || !finite(keyframe.orientation, 4) || !finite(intrinsics, 4)) {
     return Status::kInvalidArgument;
   }
   for (std::uint32_t i = 0; i < count; ++i) {
