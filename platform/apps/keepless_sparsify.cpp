@@ -3,6 +3,11 @@
 //   keepless_sparsify --window FILE [--M 100] [--theta 0.5] [--box 64x48] [--decisions OUT]
 //                     [--max-keyframes N] [--max-points N] [--max-observations N]
 //                     [--max-pair-arcs N]
+//   keepless_sparsify --colmap DIR | --bal FILE [--mode replay|whole] [--K 20] [--order name|id|file]
+//                     [--out DIR|FILE] [--out-format bin|txt] [--scale S | --sim3 FILE]
+//                     [--min-obs-per-image F] (and the flags above; also with --window)
+// The map path (sparsify/model_run.hpp) runs when a map flag is given;
+// --window alone is the single-window path below, unchanged.
 //
 // The whole file is parsed and checked against the hard limits first, then a
 // Window and Sparsifier sized exactly to its needs decide it in one run.
@@ -32,6 +37,7 @@
 #include "keepless/core/window.hpp"
 #include "keepless/core/window_file.hpp"
 #include "keepless/platform/monotonic_clock.hpp"
+#include "sparsify/model_run.hpp"
 
 namespace {
 
@@ -43,13 +49,17 @@ constexpr int kExitInternal = 1;
 constexpr const char* kUsage =
     "usage: keepless_sparsify --window FILE [--M 100] [--theta 0.5] [--box 64x48] "
     "[--decisions OUT] [--max-keyframes 10000] [--max-points 2000000] "
-    "[--max-observations 10000000] [--max-pair-arcs 50000000]";
+    "[--max-observations 10000000] [--max-pair-arcs 50000000]; or --colmap DIR | --bal FILE "
+    "(or --window FILE) [--mode replay|whole] [--K 20] [--order name|id|file] [--out DIR|FILE] "
+    "[--out-format bin|txt] [--scale S | --sim3 FILE] [--min-obs-per-image 30]";
 
 struct Options {
   std::string window;
   std::string decisions;  // empty: no decisions file
   core::Params params;
   core::WindowFileLimits limits;
+  keepless::sparsify::ModelOptions model;
+  bool map_path = false;  // a map flag was given
 };
 
 int usage_error(const std::string& reason) {
@@ -77,9 +87,51 @@ int parse_args(int argc, char** argv, Options* opt, bool* help) {
     if (i + 1 >= argc) return usage_error("missing value for " + flag);
     const char* value = argv[++i];
     const std::string bad = "bad value for " + flag + ": '" + value + "'";
+    namespace sp = keepless::sparsify;
     if (flag == "--window") {
       if (*value == '\0') return usage_error(bad);
       opt->window = value;
+      opt->model.input = sp::Input::kWindow;
+    } else if (flag == "--colmap" || flag == "--bal") {
+      if (*value == '\0' || !opt->model.path.empty()) return usage_error(bad + " (one input)");
+      opt->model.path = value;
+      opt->model.input = flag == "--colmap" ? sp::Input::kColmap : sp::Input::kBal;
+      opt->map_path = true;
+    } else if (flag == "--out" || flag == "--sim3") {
+      if (*value == '\0') return usage_error(bad);
+      (flag == "--out" ? opt->model.out : opt->model.sim3) = value;
+      opt->map_path = true;
+    } else if (flag == "--out-format") {
+      if (std::strcmp(value, "bin") != 0 && std::strcmp(value, "txt") != 0) return usage_error(bad + " (bin or txt)");
+      opt->model.out_format = value;
+      opt->map_path = true;
+    } else if (flag == "--mode") {
+      if (std::strcmp(value, "replay") != 0 && std::strcmp(value, "whole") != 0) {
+        return usage_error(bad + " (replay or whole)");
+      }
+      opt->model.mode = *value == 'r' ? sp::Mode::kReplay : sp::Mode::kWhole;
+      opt->model.mode_given = opt->map_path = true;
+    } else if (flag == "--order") {
+      const std::string o = value;
+      if (o != "name" && o != "id" && o != "file") return usage_error(bad + " (name, id or file)");
+      opt->model.order = o == "name" ? keepless::io::KeyframeOrder::kName
+                                     : (o == "id" ? keepless::io::KeyframeOrder::kId : keepless::io::KeyframeOrder::kFile);
+      opt->model.order_given = opt->map_path = true;
+    } else if (flag == "--K") {
+      if (!parse_limit(value, &opt->model.K)) return usage_error(bad + " (an integer >= 1)");
+      opt->map_path = true;
+    } else if (flag == "--min-obs-per-image") {
+      std::uint64_t f = 0;
+      if (!core::parse_uint64(value, &f) || f > std::numeric_limits<std::uint32_t>::max()) {
+        return usage_error(bad + " (an integer >= 0)");
+      }
+      opt->model.floor = static_cast<std::int64_t>(f);
+      opt->map_path = true;
+    } else if (flag == "--scale") {
+      double s = 0;
+      if (!core::parse_finite_double(value, &s) || !(s > 0)) return usage_error(bad + " (a number > 0)");
+      opt->model.scale = s;
+      opt->map_path = true;
     } else if (flag == "--decisions") {
       if (*value == '\0') return usage_error(bad);
       opt->decisions = value;
@@ -113,7 +165,10 @@ int parse_args(int argc, char** argv, Options* opt, bool* help) {
       return usage_error("unknown flag '" + flag + "'");
     }
   }
-  if (opt->window.empty()) return usage_error("--window is required");
+  if (opt->window.empty() == opt->model.path.empty()) {
+    return usage_error("one of --window, --colmap, --bal is required");
+  }
+  if (opt->model.path.empty()) opt->model.path = opt->window;
   if (core::Sparsifier::validate(opt->params) != core::Status::kOk) {
     return usage_error("invalid parameters");
   }
@@ -228,6 +283,12 @@ int main(int argc, char** argv) {
     return 0;
   }
   try {
+    if (opt.map_path) {
+      opt.model.params = opt.params;
+      opt.model.limits = opt.limits;
+      opt.model.decisions = opt.decisions;
+      return keepless::sparsify::run_model(opt.model);
+    }
     return run(opt);
   } catch (const std::exception& e) {  // allocation failure while sizing a huge input
     std::fprintf(stderr, "keepless_sparsify: %s\n", e.what());

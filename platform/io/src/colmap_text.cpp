@@ -1,0 +1,329 @@
+// COLMAP's text layout (src/base/reconstruction.cc, Read/Write*Text): '#'
+// comment lines, then one line a record, fields separated by spaces:
+//   cameras.txt   CAMERA_ID MODEL WIDTH HEIGHT PARAMS[]
+//   images.txt    IMAGE_ID QW QX QY QZ TX TY TZ CAMERA_ID NAME
+//                 POINTS2D[] as (X Y POINT3D_ID), -1 for none (the line may be empty)
+//   points3D.txt  POINT3D_ID X Y Z R G B ERROR TRACK[] as (IMAGE_ID POINT2D_IDX)
+// Numbers are written as COLMAP writes them (std::ostream, precision 17 =
+// "%.17g"), so a model COLMAP wrote comes back byte for byte.
+
+#include <cinttypes>
+#include <cstdio>
+#include <string_view>
+
+#include "colmap_parse.hpp"
+#include "keepless/core/window_file.hpp"
+
+namespace keepless::io::detail {
+
+namespace {
+
+bool is_blank(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f'; }
+
+// Lines of a text, numbered from 1, trailing blanks removed.
+class Lines {
+ public:
+  explicit Lines(const std::string& text) : text_(text) {}
+  bool next(std::string_view* line, std::uint64_t* number) {
+    if (at_ >= text_.size()) return false;
+    std::size_t end = text_.find('\n', at_);
+    if (end == std::string::npos) end = text_.size();
+    std::size_t stop = end;
+    while (stop > at_ && is_blank(text_[stop - 1])) --stop;
+    *line = std::string_view(text_).substr(at_, stop - at_);
+    *number = ++line_;
+    at_ = end + 1;
+    return true;
+  }
+  // The next record line: skips blank and '#' lines.
+  bool next_record(std::string_view* line, std::uint64_t* number) {
+    while (next(line, number)) {
+      std::size_t i = 0;
+      while (i < line->size() && is_blank((*line)[i])) ++i;
+      if (i < line->size() && (*line)[i] != '#') return true;
+    }
+    return false;
+  }
+
+ private:
+  const std::string& text_;
+  std::size_t at_ = 0;
+  std::uint64_t line_ = 0;
+};
+
+// One line's fields, parsed strictly.
+class Fields {
+ public:
+  Fields(const std::string& name, std::string_view line, std::uint64_t number, std::string* error)
+      : name_(name), line_(line), number_(number), error_(error) {
+    std::size_t i = 0;
+    while (true) {
+      while (i < line.size() && is_blank(line[i])) ++i;
+      if (i >= line.size()) break;
+      const std::size_t start = i;
+      while (i < line.size() && !is_blank(line[i])) ++i;
+      starts_.push_back(start);
+      tokens_.emplace_back(line.substr(start, i - start));
+    }
+  }
+  std::size_t size() const { return tokens_.size(); }
+  // The line from field i on (the image name).
+  std::string rest(std::size_t i) const { return std::string(line_.substr(starts_[i])); }
+
+  bool fail(const std::string& reason) {
+    *error_ = name_ + ":" + std::to_string(number_) + ": " + reason;
+    return false;
+  }
+  bool at_least(std::size_t n, const char* what) {
+    return tokens_.size() >= n || fail(std::string("expected ") + what + ", got " +
+                                       std::to_string(tokens_.size()) + " fields");
+  }
+  bool u64(std::size_t i, const char* what, std::uint64_t* out) {
+    return core::parse_uint64(tokens_[i].c_str(), out) || bad(i, what, "an unsigned integer");
+  }
+  template <typename T>
+  bool uint(std::size_t i, const char* what, T max, T* out) {
+    std::uint64_t v = 0;
+    if (!u64(i, what, &v)) return false;
+    if (v > max) return bad(i, what, "at most " + std::to_string(max));
+    *out = static_cast<T>(v);
+    return true;
+  }
+  bool u32(std::size_t i, const char* what, std::uint32_t* out) {
+    return uint<std::uint32_t>(i, what, UINT32_MAX, out);
+  }
+  bool f64(std::size_t i, const char* what, double* out) {
+    return core::parse_finite_double(tokens_[i].c_str(), out) || bad(i, what, "a finite number");
+  }
+  const std::string& token(std::size_t i) const { return tokens_[i]; }
+
+ private:
+  bool bad(std::size_t i, const char* what, const std::string& expected) {
+    std::string t = tokens_[i].substr(0, 40);
+    return fail(std::string("bad ") + what + " '" + t + "' (field " + std::to_string(i + 1) + ", " +
+                expected + ")");
+  }
+  const std::string& name_;
+  std::string_view line_;
+  std::uint64_t number_;
+  std::string* error_;
+  std::vector<std::size_t> starts_;
+  std::vector<std::string> tokens_;
+};
+
+// Appends "%.17g" of v (what std::ostream with precision 17 prints).
+void put(std::string* s, double v) {
+  char b[40];
+  const int n = std::snprintf(b, sizeof b, "%.17g", v);
+  s->append(b, static_cast<std::size_t>(n));
+}
+void put(std::string* s, std::uint64_t v) { s->append(std::to_string(v)); }
+
+}  // namespace
+
+bool parse_cameras_text(const std::string& name, const std::string& text, ColmapModel* out,
+                        Positions* pos, std::string* error) {
+  Lines lines(text);
+  std::string_view line;
+  std::uint64_t number = 0;
+  while (lines.next_record(&line, &number)) {
+    Fields f(name, line, number, error);
+    if (!f.at_least(4, "CAMERA_ID MODEL WIDTH HEIGHT PARAMS[]")) return false;
+    ColmapCamera c;
+    const CameraModelInfo* info = camera_model_by_name(f.token(1));
+    if (info == nullptr) return f.fail("unknown camera model '" + f.token(1).substr(0, 40) + "'");
+    if (f.size() != 4 + static_cast<std::size_t>(info->num_params)) {
+      return f.fail(std::string(info->name) + " takes " + std::to_string(info->num_params) +
+                    " parameters, got " + std::to_string(f.size() - 4));
+    }
+    c.model_id = info->id;
+    if (!f.u32(0, "CAMERA_ID", &c.id) || !f.u64(2, "WIDTH", &c.width) || !f.u64(3, "HEIGHT", &c.height)) {
+      return false;
+    }
+    c.params.resize(info->num_params);
+    for (int k = 0; k < info->num_params; ++k) {
+      if (!f.f64(4 + k, "camera parameter", &c.params[k])) return false;
+    }
+    out->cameras.push_back(std::move(c));
+    pos->camera.push_back(number);
+  }
+  return true;
+}
+
+bool parse_images_text(const std::string& name, const std::string& text, ColmapModel* out,
+                       Positions* pos, std::string* error) {
+  Lines lines(text);
+  std::string_view line;
+  std::uint64_t number = 0;
+  while (lines.next_record(&line, &number)) {
+    Fields f(name, line, number, error);
+    if (!f.at_least(10, "IMAGE_ID QW QX QY QZ TX TY TZ CAMERA_ID NAME")) return false;
+    ColmapImage im;
+    if (!f.u32(0, "IMAGE_ID", &im.id)) return false;
+    for (int k = 0; k < 4; ++k) {
+      if (!f.f64(1 + k, "quaternion", &im.qvec[k])) return false;
+    }
+    for (int k = 0; k < 3; ++k) {
+      if (!f.f64(5 + k, "translation", &im.tvec[k])) return false;
+    }
+    if (!f.u32(8, "CAMERA_ID", &im.camera_id)) return false;
+    im.name = f.rest(9);
+    pos->image.push_back(number);
+    std::uint64_t points_line = 0;
+    if (!lines.next(&line, &points_line)) {
+      return f.fail("image " + std::to_string(im.id) + " has no POINTS2D line");
+    }
+    Fields p(name, line, points_line, error);
+    if (p.size() % 3 != 0) {
+      return p.fail("POINTS2D needs (X Y POINT3D_ID) triples, got " + std::to_string(p.size()) + " fields");
+    }
+    im.points2D.resize(p.size() / 3);
+    for (std::size_t k = 0; k < im.points2D.size(); ++k) {
+      ColmapPoint2D& q = im.points2D[k];
+      if (!p.f64(3 * k, "X", &q.x) || !p.f64(3 * k + 1, "Y", &q.y)) return false;
+      if (p.token(3 * k + 2) == "-1") {
+        q.point3D_id = kNoPoint3D;
+      } else if (!p.uint<std::uint64_t>(3 * k + 2, "POINT3D_ID", kNoPoint3D - 1, &q.point3D_id)) {
+        return false;
+      }
+    }
+    pos->image_points.push_back(points_line);
+    out->images.push_back(std::move(im));
+  }
+  return true;
+}
+
+bool parse_points_text(const std::string& name, const std::string& text, ColmapModel* out,
+                       Positions* pos, std::string* error) {
+  Lines lines(text);
+  std::string_view line;
+  std::uint64_t number = 0;
+  while (lines.next_record(&line, &number)) {
+    Fields f(name, line, number, error);
+    if (!f.at_least(8, "POINT3D_ID X Y Z R G B ERROR TRACK[]")) return false;
+    if (f.size() % 2 != 0) return f.fail("TRACK needs (IMAGE_ID POINT2D_IDX) pairs");
+    ColmapPoint3D p;
+    if (!f.u64(0, "POINT3D_ID", &p.id)) return false;
+    for (int k = 0; k < 3; ++k) {
+      if (!f.f64(1 + k, "coordinate", &p.xyz[k])) return false;
+    }
+    for (int k = 0; k < 3; ++k) {
+      if (!f.uint<std::uint8_t>(4 + k, "colour", 255, &p.rgb[k])) return false;
+    }
+    if (!f.f64(7, "ERROR", &p.error)) return false;
+    p.track.resize((f.size() - 8) / 2);
+    for (std::size_t k = 0; k < p.track.size(); ++k) {
+      if (!f.u32(8 + 2 * k, "IMAGE_ID", &p.track[k].image_id) ||
+          !f.u32(9 + 2 * k, "POINT2D_IDX", &p.track[k].point2D_idx)) {
+        return false;
+      }
+    }
+    out->points.push_back(std::move(p));
+    pos->point.push_back(number);
+    pos->point_track.push_back(number);
+  }
+  return true;
+}
+
+std::string format_text_cameras(const ColmapModel& m) {
+  std::string s =
+      "# Camera list with one line of data per camera:\n"
+      "#   CAMERA_ID, MODEL, WIDTH, HEIGHT, PARAMS[]\n"
+      "# Number of cameras: ";
+  put(&s, std::uint64_t{m.cameras.size()});
+  s += '\n';
+  for (const ColmapCamera& c : m.cameras) {
+    put(&s, std::uint64_t{c.id});
+    s += ' ';
+    s += camera_model_by_id(c.model_id)->name;
+    s += ' ';
+    put(&s, c.width);
+    s += ' ';
+    put(&s, c.height);
+    for (double p : c.params) {
+      s += ' ';
+      put(&s, p);
+    }
+    s += '\n';
+  }
+  return s;
+}
+
+std::string format_text_images(const ColmapModel& m) {
+  const std::uint64_t obs = count_observations(m);
+  std::string s =
+      "# Image list with two lines of data per image:\n"
+      "#   IMAGE_ID, QW, QX, QY, QZ, TX, TY, TZ, CAMERA_ID, NAME\n"
+      "#   POINTS2D[] as (X, Y, POINT3D_ID)\n"
+      "# Number of images: ";
+  put(&s, std::uint64_t{m.images.size()});
+  s += ", mean observations per image: ";
+  put(&s, m.images.empty() ? 0.0 : static_cast<double>(obs) / static_cast<double>(m.images.size()));
+  s += '\n';
+  for (const ColmapImage& im : m.images) {
+    put(&s, std::uint64_t{im.id});
+    for (double q : im.qvec) {
+      s += ' ';
+      put(&s, q);
+    }
+    for (double t : im.tvec) {
+      s += ' ';
+      put(&s, t);
+    }
+    s += ' ';
+    put(&s, std::uint64_t{im.camera_id});
+    s += ' ';
+    s += im.name;
+    s += '\n';
+    for (std::size_t k = 0; k < im.points2D.size(); ++k) {
+      const ColmapPoint2D& p = im.points2D[k];
+      if (k > 0) s += ' ';
+      put(&s, p.x);
+      s += ' ';
+      put(&s, p.y);
+      s += ' ';
+      if (p.point3D_id == kNoPoint3D) {
+        s += "-1";
+      } else {
+        put(&s, p.point3D_id);
+      }
+    }
+    s += '\n';
+  }
+  return s;
+}
+
+std::string format_text_points(const ColmapModel& m) {
+  const std::uint64_t obs = count_observations(m);
+  std::string s =
+      "# 3D point list with one line of data per point:\n"
+      "#   POINT3D_ID, X, Y, Z, R, G, B, ERROR, TRACK[] as (IMAGE_ID, POINT2D_IDX)\n"
+      "# Number of points: ";
+  put(&s, std::uint64_t{m.points.size()});
+  s += ", mean track length: ";
+  put(&s, m.points.empty() ? 0.0 : static_cast<double>(obs) / static_cast<double>(m.points.size()));
+  s += '\n';
+  for (const ColmapPoint3D& p : m.points) {
+    put(&s, p.id);
+    for (double x : p.xyz) {
+      s += ' ';
+      put(&s, x);
+    }
+    for (std::uint8_t c : p.rgb) {
+      s += ' ';
+      put(&s, std::uint64_t{c});
+    }
+    s += ' ';
+    put(&s, p.error);
+    for (const ColmapTrackElement& e : p.track) {
+      s += ' ';
+      put(&s, std::uint64_t{e.image_id});
+      s += ' ';
+      put(&s, std::uint64_t{e.point2D_idx});
+    }
+    s += '\n';
+  }
+  return s;
+}
+
+}  // namespace keepless::io::detail
