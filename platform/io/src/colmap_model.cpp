@@ -91,12 +91,13 @@ bool check_model(const detail::FileNames& names, const detail::Positions& pos, c
       const auto im = images.find(e.image_id);
       if (im == images.end()) return fail(names.points3D, where, what + "unknown image " + std::to_string(e.image_id));
       const ColmapImage& image = m.images[im->second];
+      const std::uint64_t idx_at = pos.binary ? where + 4 : where;  // the point2D_idx field
       if (e.point2D_idx >= image.points2D.size()) {
-        return fail(names.points3D, where,
+        return fail(names.points3D, idx_at,
                     what + "image " + std::to_string(e.image_id) + " has no 2D point " + std::to_string(e.point2D_idx));
       }
       if (image.points2D[e.point2D_idx].point3D_id != p.id) {
-        return fail(names.points3D, where,
+        return fail(names.points3D, idx_at,
                     what + "image " + std::to_string(e.image_id) + " 2D point " + std::to_string(e.point2D_idx) +
                         " does not name this point");
       }

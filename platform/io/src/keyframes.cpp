@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <numeric>
+#include <cmath>
+#include <unordered_map>
 #include <unordered_set>
 
 #include "keepless/io/atomic_file.hpp"
@@ -68,6 +70,20 @@ void colmap_camera_centre(const ColmapImage& image, double centre[3]) {
   detail::quaternion_matrix(image.qvec, r);
   const double* t = image.tvec;
   for (int i = 0; i < 3; ++i) centre[i] = -(r[i] * t[0] + r[3 + i] * t[1] + r[6 + i] * t[2]);
+}
+
+void matched_centres(const ColmapModel& a, const ColmapModel& b, std::vector<std::array<double, 3>>* in_a,
+                     std::vector<std::array<double, 3>>* in_b) {
+  std::unordered_map<std::uint32_t, const ColmapImage*> in_b_by_id;
+  for (const ColmapImage& im : b.images) in_b_by_id[im.id] = &im;
+  in_a->clear();
+  in_b->clear();
+  for (const ColmapImage& im : a.images) {
+    const auto it = in_b_by_id.find(im.id);
+    if (it == in_b_by_id.end()) continue;
+    colmap_camera_centre(im, in_a->emplace_back().data());
+    colmap_camera_centre(*it->second, in_b->emplace_back().data());
+  }
 }
 
 Keyframes keyframes_from_colmap(const ColmapModel& model, KeyframeOrder order, const Similarity& to_metric_frame) {

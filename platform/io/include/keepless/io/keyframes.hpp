@@ -10,8 +10,10 @@
 // those 2D points in the image's order; the others follow the point's fate
 // (kept or culled with it). duplicates counts the observations so merged.
 
+#include <array>
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "keepless/core/window_file.hpp"
 #include "keepless/io/bal_problem.hpp"
@@ -44,6 +46,11 @@ struct Keyframes {
 
 // The centre of an image: -R(q)^T t.
 void colmap_camera_centre(const ColmapImage& image, double centre[3]);
+
+// The camera centres of the images `a` and `b` share (matched by id), in
+// `a`'s order: for comparing two solutions of one model.
+void matched_centres(const ColmapModel& a, const ColmapModel& b, std::vector<std::array<double, 3>>* in_a,
+                     std::vector<std::array<double, 3>>* in_b);
 
 Keyframes keyframes_from_colmap(const ColmapModel& model, KeyframeOrder order, const Similarity& to_metric);
 Keyframes keyframes_from_bal(const BalProblem& problem, KeyframeOrder order, const Similarity& to_metric);
