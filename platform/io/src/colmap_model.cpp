@@ -53,7 +53,14 @@ bool check_model(const detail::FileNames& names, const detail::Positions& pos, c
       return fail(names.images, pos.image[i],
                   "image " + std::to_string(im.id) + " names unknown camera " + std::to_string(im.camera_id));
     }
-    if (im.name.empty()) return fail(names.images, pos.image[i], "image " + std::to_string(im.id) + " has no name");
+    // Names must survive the text format, which ends them at the line's end
+    // and trims them.
+    const auto blank = [](char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f'; };
+    if (im.name.empty() || blank(im.name.front()) || blank(im.name.back()) ||
+        im.name.find_first_of("\n\r") != std::string::npos) {
+      return fail(names.images, pos.image[i],
+                  "image " + std::to_string(im.id) + ": a name must be non-empty, on one line, without blanks at its ends");
+    }
     if (im.qvec[0] == 0 && im.qvec[1] == 0 && im.qvec[2] == 0 && im.qvec[3] == 0) {
       return fail(names.images, pos.image[i], "image " + std::to_string(im.id) + " has a zero quaternion");
     }

@@ -8,6 +8,8 @@
 // "%.17g"), so a model COLMAP wrote comes back byte for byte.
 
 #include <cinttypes>
+#include <cmath>
+#include <cstdlib>
 #include <cstdio>
 #include <string_view>
 
@@ -17,6 +19,20 @@
 namespace keepless::io::detail {
 
 namespace {
+
+// A finite decimal number, the whole token. Unlike core::parse_finite_double
+// this takes subnormals (strtod flags their underflow with ERANGE), which a
+// binary model may hold and "%.17g" writes exactly.
+bool parse_number(const std::string& token, double* out) {
+  for (const char c : token) {
+    if (!(c >= '0' && c <= '9') && c != '+' && c != '-' && c != '.' && c != 'e' && c != 'E') return false;
+  }
+  char* end = nullptr;
+  const double v = std::strtod(token.c_str(), &end);
+  if (token.empty() || end != token.c_str() + token.size() || !std::isfinite(v)) return false;
+  *out = v;
+  return true;
+}
 
 bool is_blank(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f'; }
 
@@ -93,7 +109,7 @@ class Fields {
     return uint<std::uint32_t>(i, what, UINT32_MAX, out);
   }
   bool f64(std::size_t i, const char* what, double* out) {
-    return core::parse_finite_double(tokens_[i].c_str(), out) || bad(i, what, "a finite number");
+    return parse_number(tokens_[i], out) || bad(i, what, "a finite number");
   }
   const std::string& token(std::size_t i) const { return tokens_[i]; }
 
