@@ -9,16 +9,9 @@
 #include <cstdlib>
 #include <string>
 
+#include "fuzz_check.hpp"
 #include "keepless/io/bal_problem.hpp"
 
-// The oracle: a broken property aborts, naming its line.
-#define check(ok)                                                        \
-  do {                                                                   \
-    if (!(ok)) {                                                         \
-      std::fprintf(stderr, "%s:%d: oracle failed: %s\n", __FILE__, __LINE__, #ok); \
-      std::abort();                                                      \
-    }                                                                    \
-  } while (0)
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   namespace io = keepless::io;
@@ -26,21 +19,21 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   io::BalProblem p;
   std::string error;
   if (!io::parse_bal("fuzz", text, &p, &error)) {
-    check(error.rfind("fuzz:", 0) == 0 && error.find(": ", 5) != std::string::npos);
+    KEEPLESS_FUZZ_CHECK(error.rfind("fuzz:", 0) == 0 && error.find(": ", 5) != std::string::npos);
     return 0;
   }
   const std::string written = io::format_bal(p);
   io::BalProblem q;
-  check(io::parse_bal("fuzz", written, &q, &error));
-  check(q.num_cameras == p.num_cameras && q.num_points == p.num_points &&
+  KEEPLESS_FUZZ_CHECK(io::parse_bal("fuzz", written, &q, &error));
+  KEEPLESS_FUZZ_CHECK(q.num_cameras == p.num_cameras && q.num_points == p.num_points &&
         q.observations.size() == p.observations.size() && q.camera_params == p.camera_params &&
         q.point_params == p.point_params && q.camera_text == p.camera_text && q.point_text == p.point_text);
   for (std::size_t i = 0; i < p.observations.size(); ++i) {
     const auto& a = p.observations[i];
     const auto& b = q.observations[i];
-    check(a.camera == b.camera && a.point == b.point && a.x == b.x && a.y == b.y && a.x_text == b.x_text &&
+    KEEPLESS_FUZZ_CHECK(a.camera == b.camera && a.point == b.point && a.x == b.x && a.y == b.y && a.x_text == b.x_text &&
           a.y_text == b.y_text);
   }
-  check(io::format_bal(q) == written);
+  KEEPLESS_FUZZ_CHECK(io::format_bal(q) == written);
   return 0;
 }

@@ -12,16 +12,9 @@
 #include <cstdlib>
 #include <string>
 
+#include "fuzz_check.hpp"
 #include "keepless/io/colmap_model.hpp"
 
-// The oracle: a broken property aborts, naming its line.
-#define check(ok)                                                        \
-  do {                                                                   \
-    if (!(ok)) {                                                         \
-      std::fprintf(stderr, "%s:%d: oracle failed: %s\n", __FILE__, __LINE__, #ok); \
-      std::abort();                                                      \
-    }                                                                    \
-  } while (0)
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   namespace io = keepless::io;
@@ -40,22 +33,22 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   io::ColmapModel model;
   std::string error;
   if (!io::parse_colmap("fuzz", in, format, &model, &error)) {
-    check(error.rfind("fuzz/", 0) == 0 && error.find(": ") != std::string::npos);  // FILE:POS: reason
+    KEEPLESS_FUZZ_CHECK(error.rfind("fuzz/", 0) == 0 && error.find(": ") != std::string::npos);  // FILE:POS: reason
     return 0;
   }
   const io::ColmapFiles out = io::format_colmap(model, format);
   if (format == io::ColmapFormat::kBinary) {
-    check(out.cameras == in.cameras && out.images == in.images && out.points3D == in.points3D);
+    KEEPLESS_FUZZ_CHECK(out.cameras == in.cameras && out.images == in.images && out.points3D == in.points3D);
   }
   io::ColmapModel again;
-  check(io::parse_colmap("fuzz", out, format, &again, &error));
+  KEEPLESS_FUZZ_CHECK(io::parse_colmap("fuzz", out, format, &again, &error));
   const io::ColmapFiles twice = io::format_colmap(again, format);
-  check(twice.cameras == out.cameras && twice.images == out.images && twice.points3D == out.points3D);
+  KEEPLESS_FUZZ_CHECK(twice.cameras == out.cameras && twice.images == out.images && twice.points3D == out.points3D);
   // The other format carries the same model.
   const io::ColmapFormat other = format == io::ColmapFormat::kBinary ? io::ColmapFormat::kText : io::ColmapFormat::kBinary;
   io::ColmapModel converted;
-  check(io::parse_colmap("fuzz", io::format_colmap(model, other), other, &converted, &error));
+  KEEPLESS_FUZZ_CHECK(io::parse_colmap("fuzz", io::format_colmap(model, other), other, &converted, &error));
   const io::ColmapFiles back = io::format_colmap(converted, format);
-  check(back.cameras == out.cameras && back.images == out.images && back.points3D == out.points3D);
+  KEEPLESS_FUZZ_CHECK(back.cameras == out.cameras && back.images == out.images && back.points3D == out.points3D);
   return 0;
 }

@@ -111,6 +111,13 @@ class Fields {
   bool f64(std::size_t i, const char* what, double* out) {
     return parse_number(tokens_[i], out) || bad(i, what, "a finite number");
   }
+  // Fields first .. first + n - 1 into out[0 .. n - 1].
+  bool f64s(std::size_t first, std::size_t n, const char* what, double* out) {
+    for (std::size_t k = 0; k < n; ++k) {
+      if (!f64(first + k, what, &out[k])) return false;
+    }
+    return true;
+  }
   const std::string& token(std::size_t i) const { return tokens_[i]; }
 
  private:
@@ -127,6 +134,20 @@ class Fields {
   std::vector<std::string> tokens_;
 };
 
+// Calls parse(fields, line number, lines) for each record line; stops at
+// the first false.
+template <typename Parse>
+bool for_each_record(const std::string& name, const std::string& text, std::string* error, Parse parse) {
+  Lines lines(text);
+  std::string_view line;
+  std::uint64_t number = 0;
+  while (lines.next_record(&line, &number)) {
+    Fields f(name, line, number, error);
+    if (!parse(f, number, lines)) return false;
+  }
+  return true;
+}
+
 // Appends "%.17g" of v (what std::ostream with precision 17 prints).
 void put(std::string* s, double v) {
   char b[40];
@@ -139,11 +160,7 @@ void put(std::string* s, std::uint64_t v) { s->append(std::to_string(v)); }
 
 bool parse_cameras_text(const std::string& name, const std::string& text, ColmapModel* out,
                         Positions* pos, std::string* error) {
-  Lines lines(text);
-  std::string_view line;
-  std::uint64_t number = 0;
-  while (lines.next_record(&line, &number)) {
-    Fields f(name, line, number, error);
+  return for_each_record(name, text, error, [&](Fields& f, std::uint64_t number, Lines&) {
     if (!f.at_least(4, "CAMERA_ID MODEL WIDTH HEIGHT PARAMS[]")) return false;
     ColmapCamera c;
     const CameraModelInfo* info = camera_model_by_name(f.token(1));
@@ -157,34 +174,24 @@ bool parse_cameras_text(const std::string& name, const std::string& text, Colmap
       return false;
     }
     c.params.resize(info->num_params);
-    for (int k = 0; k < info->num_params; ++k) {
-      if (!f.f64(4 + k, "camera parameter", &c.params[k])) return false;
-    }
+    if (!f.f64s(4, c.params.size(), "camera parameter", c.params.data())) return false;
     out->cameras.push_back(std::move(c));
     pos->camera.push_back(number);
-  }
-  return true;
+    return true;
+  });
 }
 
 bool parse_images_text(const std::string& name, const std::string& text, ColmapModel* out,
                        Positions* pos, std::string* error) {
-  Lines lines(text);
-  std::string_view line;
-  std::uint64_t number = 0;
-  while (lines.next_record(&line, &number)) {
-    Fields f(name, line, number, error);
+  return for_each_record(name, text, error, [&](Fields& f, std::uint64_t number, Lines& lines) {
     if (!f.at_least(10, "IMAGE_ID QW QX QY QZ TX TY TZ CAMERA_ID NAME")) return false;
     ColmapImage im;
     if (!f.u32(0, "IMAGE_ID", &im.id)) return false;
-    for (int k = 0; k < 4; ++k) {
-      if (!f.f64(1 + k, "quaternion", &im.qvec[k])) return false;
-    }
-    for (int k = 0; k < 3; ++k) {
-      if (!f.f64(5 + k, "translation", &im.tvec[k])) return false;
-    }
+    if (!f.f64s(1, 4, "quaternion", im.qvec) || !f.f64s(5, 3, "translation", im.tvec)) return false;
     if (!f.u32(8, "CAMERA_ID", &im.camera_id)) return false;
     im.name = f.rest(9);
     pos->image.push_back(number);
+    std::string_view line;
     std::uint64_t points_line = 0;
     if (!lines.next(&line, &points_line)) {
       return f.fail("image " + std::to_string(im.id) + " has no POINTS2D line");
@@ -205,24 +212,18 @@ bool parse_images_text(const std::string& name, const std::string& text, ColmapM
     }
     pos->image_points.push_back(points_line);
     out->images.push_back(std::move(im));
-  }
-  return true;
+    return true;
+  });
 }
 
 bool parse_points_text(const std::string& name, const std::string& text, ColmapModel* out,
                        Positions* pos, std::string* error) {
-  Lines lines(text);
-  std::string_view line;
-  std::uint64_t number = 0;
-  while (lines.next_record(&line, &number)) {
-    Fields f(name, line, number, error);
+  return for_each_record(name, text, error, [&](Fields& f, std::uint64_t number, Lines&) {
     if (!f.at_least(8, "POINT3D_ID X Y Z R G B ERROR TRACK[]")) return false;
     if (f.size() % 2 != 0) return f.fail("TRACK needs (IMAGE_ID POINT2D_IDX) pairs");
     ColmapPoint3D p;
     if (!f.u64(0, "POINT3D_ID", &p.id)) return false;
-    for (int k = 0; k < 3; ++k) {
-      if (!f.f64(1 + k, "coordinate", &p.xyz[k])) return false;
-    }
+    if (!f.f64s(1, 3, "coordinate", p.xyz)) return false;
     for (int k = 0; k < 3; ++k) {
       if (!f.uint<std::uint8_t>(4 + k, "colour", 255, &p.rgb[k])) return false;
     }
@@ -237,57 +238,61 @@ bool parse_points_text(const std::string& name, const std::string& text, ColmapM
     out->points.push_back(std::move(p));
     pos->point.push_back(number);
     pos->point_track.push_back(number);
+    return true;
+  });
+}
+
+// Appends " v": every field after a record's first.
+template <typename T>
+void field(std::string* s, T v) {
+  *s += ' ';
+  put(s, v);
+}
+
+// COLMAP's header: the comment lines, then "# Number of <what>: n[, <mean_label>: mean]".
+std::string header(const char* comments, const char* what, std::size_t n, const char* mean_label,
+                   std::uint64_t observations) {
+  std::string s = comments;
+  s += "# Number of ";
+  s += what;
+  s += ": ";
+  put(&s, std::uint64_t{n});
+  if (mean_label != nullptr) {
+    s += ", ";
+    s += mean_label;
+    s += ": ";
+    put(&s, n == 0 ? 0.0 : static_cast<double>(observations) / static_cast<double>(n));
   }
-  return true;
+  s += '\n';
+  return s;
 }
 
 std::string format_text_cameras(const ColmapModel& m) {
-  std::string s =
-      "# Camera list with one line of data per camera:\n"
-      "#   CAMERA_ID, MODEL, WIDTH, HEIGHT, PARAMS[]\n"
-      "# Number of cameras: ";
-  put(&s, std::uint64_t{m.cameras.size()});
-  s += '\n';
+  std::string s = header("# Camera list with one line of data per camera:\n"
+                         "#   CAMERA_ID, MODEL, WIDTH, HEIGHT, PARAMS[]\n",
+                         "cameras", m.cameras.size(), nullptr, 0);
   for (const ColmapCamera& c : m.cameras) {
     put(&s, std::uint64_t{c.id});
     s += ' ';
     s += camera_model_by_id(c.model_id)->name;
-    s += ' ';
-    put(&s, c.width);
-    s += ' ';
-    put(&s, c.height);
-    for (double p : c.params) {
-      s += ' ';
-      put(&s, p);
-    }
+    field(&s, c.width);
+    field(&s, c.height);
+    for (double p : c.params) field(&s, p);
     s += '\n';
   }
   return s;
 }
 
 std::string format_text_images(const ColmapModel& m) {
-  const std::uint64_t obs = count_observations(m);
-  std::string s =
-      "# Image list with two lines of data per image:\n"
-      "#   IMAGE_ID, QW, QX, QY, QZ, TX, TY, TZ, CAMERA_ID, NAME\n"
-      "#   POINTS2D[] as (X, Y, POINT3D_ID)\n"
-      "# Number of images: ";
-  put(&s, std::uint64_t{m.images.size()});
-  s += ", mean observations per image: ";
-  put(&s, m.images.empty() ? 0.0 : static_cast<double>(obs) / static_cast<double>(m.images.size()));
-  s += '\n';
+  std::string s = header("# Image list with two lines of data per image:\n"
+                         "#   IMAGE_ID, QW, QX, QY, QZ, TX, TY, TZ, CAMERA_ID, NAME\n"
+                         "#   POINTS2D[] as (X, Y, POINT3D_ID)\n",
+                         "images", m.images.size(), "mean observations per image", count_observations(m));
   for (const ColmapImage& im : m.images) {
     put(&s, std::uint64_t{im.id});
-    for (double q : im.qvec) {
-      s += ' ';
-      put(&s, q);
-    }
-    for (double t : im.tvec) {
-      s += ' ';
-      put(&s, t);
-    }
-    s += ' ';
-    put(&s, std::uint64_t{im.camera_id});
+    for (double q : im.qvec) field(&s, q);
+    for (double t : im.tvec) field(&s, t);
+    field(&s, std::uint64_t{im.camera_id});
     s += ' ';
     s += im.name;
     s += '\n';
@@ -295,13 +300,11 @@ std::string format_text_images(const ColmapModel& m) {
       const ColmapPoint2D& p = im.points2D[k];
       if (k > 0) s += ' ';
       put(&s, p.x);
-      s += ' ';
-      put(&s, p.y);
-      s += ' ';
+      field(&s, p.y);
       if (p.point3D_id == kNoPoint3D) {
-        s += "-1";
+        s += " -1";
       } else {
-        put(&s, p.point3D_id);
+        field(&s, p.point3D_id);
       }
     }
     s += '\n';
@@ -310,32 +313,17 @@ std::string format_text_images(const ColmapModel& m) {
 }
 
 std::string format_text_points(const ColmapModel& m) {
-  const std::uint64_t obs = count_observations(m);
-  std::string s =
-      "# 3D point list with one line of data per point:\n"
-      "#   POINT3D_ID, X, Y, Z, R, G, B, ERROR, TRACK[] as (IMAGE_ID, POINT2D_IDX)\n"
-      "# Number of points: ";
-  put(&s, std::uint64_t{m.points.size()});
-  s += ", mean track length: ";
-  put(&s, m.points.empty() ? 0.0 : static_cast<double>(obs) / static_cast<double>(m.points.size()));
-  s += '\n';
+  std::string s = header("# 3D point list with one line of data per point:\n"
+                         "#   POINT3D_ID, X, Y, Z, R, G, B, ERROR, TRACK[] as (IMAGE_ID, POINT2D_IDX)\n",
+                         "points", m.points.size(), "mean track length", count_observations(m));
   for (const ColmapPoint3D& p : m.points) {
     put(&s, p.id);
-    for (double x : p.xyz) {
-      s += ' ';
-      put(&s, x);
-    }
-    for (std::uint8_t c : p.rgb) {
-      s += ' ';
-      put(&s, std::uint64_t{c});
-    }
-    s += ' ';
-    put(&s, p.error);
+    for (double x : p.xyz) field(&s, x);
+    for (std::uint8_t c : p.rgb) field(&s, std::uint64_t{c});
+    field(&s, p.error);
     for (const ColmapTrackElement& e : p.track) {
-      s += ' ';
-      put(&s, std::uint64_t{e.image_id});
-      s += ' ';
-      put(&s, std::uint64_t{e.point2D_idx});
+      field(&s, std::uint64_t{e.image_id});
+      field(&s, std::uint64_t{e.point2D_idx});
     }
     s += '\n';
   }
