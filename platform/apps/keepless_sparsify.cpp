@@ -58,8 +58,7 @@ struct Options {
   std::string decisions;  // empty: no decisions file
   core::Params params;
   core::WindowFileLimits limits;
-  keepless::sparsify::ModelOptions model;
-  bool map_path = false;  // a map flag was given
+  keepless::sparsify::ModelOptions model;  // the map flags (sparsify/model_run.hpp)
 };
 
 int usage_error(const std::string& reason) {
@@ -87,51 +86,12 @@ int parse_args(int argc, char** argv, Options* opt, bool* help) {
     if (i + 1 >= argc) return usage_error("missing value for " + flag);
     const char* value = argv[++i];
     const std::string bad = "bad value for " + flag + ": '" + value + "'";
-    namespace sp = keepless::sparsify;
+    std::string map_error;
     if (flag == "--window") {
       if (*value == '\0') return usage_error(bad);
       opt->window = value;
-      opt->model.input = sp::Input::kWindow;
-    } else if (flag == "--colmap" || flag == "--bal") {
-      if (*value == '\0' || !opt->model.path.empty()) return usage_error(bad + " (one input)");
-      opt->model.path = value;
-      opt->model.input = flag == "--colmap" ? sp::Input::kColmap : sp::Input::kBal;
-      opt->map_path = true;
-    } else if (flag == "--out" || flag == "--sim3") {
-      if (*value == '\0') return usage_error(bad);
-      (flag == "--out" ? opt->model.out : opt->model.sim3) = value;
-      opt->map_path = true;
-    } else if (flag == "--out-format") {
-      if (std::strcmp(value, "bin") != 0 && std::strcmp(value, "txt") != 0) return usage_error(bad + " (bin or txt)");
-      opt->model.out_format = value;
-      opt->map_path = true;
-    } else if (flag == "--mode") {
-      if (std::strcmp(value, "replay") != 0 && std::strcmp(value, "whole") != 0) {
-        return usage_error(bad + " (replay or whole)");
-      }
-      opt->model.mode = *value == 'r' ? sp::Mode::kReplay : sp::Mode::kWhole;
-      opt->model.mode_given = opt->map_path = true;
-    } else if (flag == "--order") {
-      const std::string o = value;
-      if (o != "name" && o != "id" && o != "file") return usage_error(bad + " (name, id or file)");
-      opt->model.order = o == "name" ? keepless::io::KeyframeOrder::kName
-                                     : (o == "id" ? keepless::io::KeyframeOrder::kId : keepless::io::KeyframeOrder::kFile);
-      opt->model.order_given = opt->map_path = true;
-    } else if (flag == "--K") {
-      if (!parse_limit(value, &opt->model.K)) return usage_error(bad + " (an integer >= 1)");
-      opt->map_path = true;
-    } else if (flag == "--min-obs-per-image") {
-      std::uint64_t f = 0;
-      if (!core::parse_uint64(value, &f) || f > std::numeric_limits<std::uint32_t>::max()) {
-        return usage_error(bad + " (an integer >= 0)");
-      }
-      opt->model.floor = static_cast<std::int64_t>(f);
-      opt->map_path = true;
-    } else if (flag == "--scale") {
-      double s = 0;
-      if (!core::parse_finite_double(value, &s) || !(s > 0)) return usage_error(bad + " (a number > 0)");
-      opt->model.scale = s;
-      opt->map_path = true;
+    } else if (keepless::sparsify::parse_map_flag(flag, value, &opt->model, &map_error)) {
+      if (!map_error.empty()) return usage_error(map_error);
     } else if (flag == "--decisions") {
       if (*value == '\0') return usage_error(bad);
       opt->decisions = value;
@@ -168,7 +128,10 @@ int parse_args(int argc, char** argv, Options* opt, bool* help) {
   if (opt->window.empty() == opt->model.path.empty()) {
     return usage_error("one of --window, --colmap, --bal is required");
   }
-  if (opt->model.path.empty()) opt->model.path = opt->window;
+  if (opt->model.path.empty()) {
+    opt->model.input = keepless::sparsify::Input::kWindow;
+    opt->model.path = opt->window;
+  }
   if (core::Sparsifier::validate(opt->params) != core::Status::kOk) {
     return usage_error("invalid parameters");
   }
@@ -283,7 +246,7 @@ int main(int argc, char** argv) {
     return 0;
   }
   try {
-    if (opt.map_path) {
+    if (opt.model.map_flags) {
       opt.model.params = opt.params;
       opt.model.limits = opt.limits;
       opt.model.decisions = opt.decisions;

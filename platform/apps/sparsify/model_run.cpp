@@ -169,6 +169,47 @@ double median(std::vector<std::uint32_t> v) {
 
 }  // namespace
 
+bool parse_map_flag(const std::string& flag, const char* value, ModelOptions* opt, std::string* error) {
+  const std::string v = value;
+  const std::string bad = "bad value for " + flag + ": '" + v + "'";
+  std::uint64_t n = 0;
+  error->clear();
+  if (flag == "--colmap" || flag == "--bal") {
+    if (v.empty() || !opt->path.empty()) *error = bad + " (one input)";
+    opt->path = v;
+    opt->input = flag == "--colmap" ? Input::kColmap : Input::kBal;
+  } else if (flag == "--out" || flag == "--sim3") {
+    if (v.empty()) *error = bad;
+    (flag == "--out" ? opt->out : opt->sim3) = v;
+  } else if (flag == "--out-format") {
+    if (v != "bin" && v != "txt") *error = bad + " (bin or txt)";
+    opt->out_format = v;
+  } else if (flag == "--mode") {
+    if (v != "replay" && v != "whole") *error = bad + " (replay or whole)";
+    opt->mode = v == "whole" ? Mode::kWhole : Mode::kReplay;
+    opt->mode_given = true;
+  } else if (flag == "--order") {
+    if (v != "name" && v != "id" && v != "file") *error = bad + " (name, id or file)";
+    opt->order = v == "id" ? io::KeyframeOrder::kId : (v == "file" ? io::KeyframeOrder::kFile : io::KeyframeOrder::kName);
+    opt->order_given = true;
+  } else if (flag == "--K" || flag == "--min-obs-per-image") {
+    const bool k = flag == "--K";
+    if (!core::parse_uint64(value, &n) || n < (k ? 1u : 0u) || n > UINT32_MAX) {
+      *error = bad + (k ? " (an integer >= 1)" : " (an integer >= 0)");
+    } else if (k) {
+      opt->K = static_cast<std::uint32_t>(n);
+    } else {
+      opt->floor = static_cast<std::int64_t>(n);
+    }
+  } else if (flag == "--scale") {
+    if (!core::parse_finite_double(value, &opt->scale) || !(opt->scale > 0)) *error = bad + " (a number > 0)";
+  } else {
+    return false;
+  }
+  opt->map_flags = true;
+  return true;
+}
+
 int run_model(const ModelOptions& opt) {
   if (opt.order_given && opt.order == io::KeyframeOrder::kName && opt.input != Input::kColmap) {
     std::fprintf(stderr, "keepless_sparsify: --order name needs --colmap (BAL cameras and window keyframes have no names)\n");

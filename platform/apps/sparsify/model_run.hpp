@@ -31,7 +31,14 @@ struct ModelOptions {
   std::int64_t floor = -1;   // --min-obs-per-image; -1: 30 for COLMAP/BAL, 0 for a window file
   core::Params params;
   core::WindowFileLimits limits;
+  bool map_flags = false;  // a flag above was given (parse_map_flag)
 };
+
+// Parses one of keepless_sparsify's map flags (--colmap, --bal, --out,
+// --out-format, --mode, --K, --order, --scale, --sim3, --min-obs-per-image)
+// into *options. False if `flag` is none of them; else true, with *error
+// empty or the reason its value is bad.
+bool parse_map_flag(const std::string& flag, const char* value, ModelOptions* options, std::string* error);
 
 // The default per-image floor for COLMAP and BAL inputs.
 constexpr std::uint32_t kDefaultFloor = 30;
