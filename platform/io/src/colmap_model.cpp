@@ -216,6 +216,16 @@ bool write_colmap_model(const std::string& dir, const ColmapModel& model, Colmap
     ::rmdir(tmp.c_str());
     return false;
   };
+  // The other format's files beside ours would be what COLMAP (and
+  // read_colmap_model) reads first, or be read instead of ours.
+  const detail::FileNames other =
+      detail::file_names(dir, format == ColmapFormat::kBinary ? ColmapFormat::kText : ColmapFormat::kBinary);
+  for (const std::string* f : {&other.cameras, &other.images, &other.points3D}) {
+    if (exists(*f)) {
+      *error = *f + ":0: a model in the other format is already there; write to another directory";
+      return false;
+    }
+  }
   if (::mkdir(tmp.c_str(), 0777) != 0) return io_error(tmp, errno);
   if (!exists(dir) && ::mkdir(dir.c_str(), 0777) != 0) return io_error(dir, errno);
   const std::pair<const std::string*, const std::string*> parts[] = {

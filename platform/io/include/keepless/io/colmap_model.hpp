@@ -98,6 +98,7 @@ bool read_colmap_model(const std::string& dir, ColmapModel* out, ColmapFormat* f
 
 // Writes the three files into a temporary directory beside DIR, then renames
 // them into DIR (created if absent): a failure leaves no partial file in DIR.
+// Refused when DIR holds a file of the other format (it would shadow ours).
 bool write_colmap_model(const std::string& dir, const ColmapModel& model, ColmapFormat format,
                         std::string* error);
 
