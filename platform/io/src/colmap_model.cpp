@@ -227,12 +227,16 @@ bool write_colmap_model(const std::string& dir, const ColmapModel& model, Colmap
     }
   }
   if (::mkdir(tmp.c_str(), 0777) != 0) return io_error(tmp, errno);
-  if (!exists(dir) && ::mkdir(dir.c_str(), 0777) != 0) return io_error(dir, errno);
   const std::pair<const std::string*, const std::string*> parts[] = {
       {&staged.cameras, &files.cameras}, {&staged.images, &files.images}, {&staged.points3D, &files.points3D}};
   for (const auto& [path, contents] : parts) {
     const int err = write_whole_file(*path, *contents);
     if (err != 0) return io_error(*path, err);
+  }
+  // A new directory: all three files at once. An existing one: file by file.
+  if (!exists(dir)) {
+    if (std::rename(tmp.c_str(), dir.c_str()) != 0) return io_error(dir, errno);
+    return true;
   }
   if (std::rename(staged.cameras.c_str(), final_names.cameras.c_str()) != 0 ||
       std::rename(staged.images.c_str(), final_names.images.c_str()) != 0 ||

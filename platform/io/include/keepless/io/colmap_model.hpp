@@ -97,7 +97,8 @@ bool read_colmap_model(const std::string& dir, ColmapModel* out, ColmapFormat* f
                        std::string* error);
 
 // Writes the three files into a temporary directory beside DIR, then renames
-// them into DIR (created if absent): a failure leaves no partial file in DIR.
+// it to DIR (when absent) or the files into DIR: a failure leaves no partial
+// file in DIR.
 // Refused when DIR holds a file of the other format (it would shadow ours).
 bool write_colmap_model(const std::string& dir, const ColmapModel& model, ColmapFormat format,
                         std::string* error);
