@@ -18,7 +18,6 @@
 
 #include <algorithm>
 #include <cstdlib>
-#include <regex>
 
 #include "keepless/io/colmap_model.hpp"
 #include "keepless/io/keyframes.hpp"
@@ -95,9 +94,9 @@ TEST_F(ColmapCheck, SparsifiedFixtureLoadsAndBundleAdjustsCloseToTheFullSolution
     const maps_test::Result a = colmap({"model_analyzer", "--path", path(dir)});
     ASSERT_EQ(a.status, 0) << a.err;
     const std::string text = a.out + a.err;
-    std::smatch match;
-    ASSERT_TRUE(std::regex_search(text, match, std::regex("Points: ([0-9]+)"))) << text;
-    EXPECT_EQ(std::stod(match[1]), kept) << dir;
+    const std::size_t at = text.find("Points: ");  // no std::regex: GCC 12 warns in it under ASan
+    ASSERT_NE(at, std::string::npos) << text;
+    EXPECT_EQ(std::strtod(text.c_str() + at + 8, nullptr), kept) << dir;
     EXPECT_NE(text.find("Registered images: 51"), std::string::npos) << text;
   }
 
