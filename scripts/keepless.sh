@@ -12,6 +12,7 @@ PACKAGES=(
   libeigen3-dev liblcm-dev liblcm-bin liblcm-java libglib2.0-dev
   libopencv-core-dev libopencv-features2d-dev libopencv-imgproc-dev libopencv-imgcodecs-dev
   libgtest-dev libgmock-dev libbenchmark-dev liblemon-dev libceres-dev
+  colmap  # the map tests' external checker (ctest -L colmap)
 )
 
 install_missing() {

@@ -4,6 +4,11 @@
 //                     [--scope window|newest] [--floor L] [--cost paper|authors|information]
 //                     [--image 640x480] [--max-keyframes N] [--max-points N]
 //                     [--max-observations N] [--max-pair-arcs N]
+//   keepless_sparsify --colmap DIR | --bal FILE [--mode replay|whole] [--K 20] [--order name|id|file]
+//                     [--out DIR|FILE] [--out-format bin|txt] [--scale S | --sim3 FILE]
+//                     [--min-obs-per-image F] (and the flags above; also with --window)
+// The map path (sparsify/model_run.hpp) runs when a map flag is given;
+// --window alone is the single-window path below, unchanged.
 //
 // The whole file is parsed and checked against the hard limits first, then a
 // Window and Sparsifier sized exactly to its needs decide it in one run.
@@ -33,6 +38,7 @@
 #include "keepless/core/window.hpp"
 #include "keepless/core/window_file.hpp"
 #include "keepless/platform/monotonic_clock.hpp"
+#include "sparsify/model_run.hpp"
 
 namespace {
 
@@ -45,13 +51,16 @@ constexpr const char* kUsage =
     "usage: keepless_sparsify --window FILE [--M 100] [--theta 0.5] [--box 64x48] "
     "[--decisions OUT] [--scope window|newest] [--floor 0] [--cost paper|authors|information] "
     "[--image 640x480] [--max-keyframes 10000] [--max-points 2000000] "
-    "[--max-observations 10000000] [--max-pair-arcs 50000000]";
+    "[--max-observations 10000000] [--max-pair-arcs 50000000]; or --colmap DIR | --bal FILE "
+    "(or --window FILE) [--mode replay|whole] [--K 20] [--order name|id|file] [--out DIR|FILE] "
+    "[--out-format bin|txt] [--scale S | --sim3 FILE] [--min-obs-per-image 30]";
 
 struct Options {
   std::string window;
   std::string decisions;  // empty: no decisions file
   core::Params params;
   core::WindowFileLimits limits;
+  keepless::sparsify::ModelOptions model;  // the map flags (sparsify/model_run.hpp)
 };
 
 int usage_error(const std::string& reason) {
@@ -79,9 +88,12 @@ int parse_args(int argc, char** argv, Options* opt, bool* help) {
     if (i + 1 >= argc) return usage_error("missing value for " + flag);
     const char* value = argv[++i];
     const std::string bad = "bad value for " + flag + ": '" + value + "'";
+    std::string map_error;
     if (flag == "--window") {
       if (*value == '\0') return usage_error(bad);
       opt->window = value;
+    } else if (keepless::sparsify::parse_map_flag(flag, value, &opt->model, &map_error)) {
+      if (!map_error.empty()) return usage_error(map_error);
     } else if (flag == "--decisions") {
       if (*value == '\0') return usage_error(bad);
       opt->decisions = value;
@@ -134,7 +146,13 @@ int parse_args(int argc, char** argv, Options* opt, bool* help) {
       return usage_error("unknown flag '" + flag + "'");
     }
   }
-  if (opt->window.empty()) return usage_error("--window is required");
+  if (opt->window.empty() == opt->model.path.empty()) {
+    return usage_error("one of --window, --colmap, --bal is required");
+  }
+  if (opt->model.path.empty()) {
+    opt->model.input = keepless::sparsify::Input::kWindow;
+    opt->model.path = opt->window;
+  }
   if (core::Sparsifier::validate(opt->params) != core::Status::kOk) {
     return usage_error("invalid parameters");
   }
@@ -253,6 +271,12 @@ int main(int argc, char** argv) {
     return 0;
   }
   try {
+    if (opt.model.map_flags) {
+      opt.model.params = opt.params;
+      opt.model.limits = opt.limits;
+      opt.model.decisions = opt.decisions;
+      return keepless::sparsify::run_model(opt.model);
+    }
     return run(opt);
   } catch (const std::exception& e) {  // allocation failure while sizing a huge input
     std::fprintf(stderr, "keepless_sparsify: %s\n", e.what());

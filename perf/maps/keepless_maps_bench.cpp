@@ -1,0 +1,350 @@
+// keepless_maps_bench: what map compression costs in accuracy on a real
+// reconstruction, checked by COLMAP's own bundle adjuster.
+//
+//   keepless_maps_bench [--data DIR] [--colmap BIN] [--M 30,100,200] [--K 20] [--seeds 5] [--work DIR]
+//
+// On the shared fixture (DIR/colmap_kitti06_first51, 51 KITTI 06 images):
+// the full model is re-solved by `colmap bundle_adjuster` (fixed intrinsics,
+// SOURCES.md's flags); then, per M, keepless replay and whole (each with the
+// per-image floor), and at replay's point count: random (--seeds seeds),
+// longest-track-first and `colmap point_filtering` (the --min_track_len
+// whose count is nearest). Each sparsified model is bundle-adjusted the same
+// way. Printed per row: points kept, min observations per image, BA time
+// and termination, camera-centre deviation from the full solution (max and
+// RMS, same gauge), and ATE (RMS) against the KITTI poses after the
+// fixture's similarity. Last line: a JSON summary.
+
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <array>
+#include <cinttypes>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <map>
+#include <numeric>
+#include <random>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "keepless/io/atomic_file.hpp"
+#include "keepless/io/colmap_model.hpp"
+#include "keepless/io/keyframes.hpp"
+#include "keepless/io/trajectory_alignment.hpp"
+#include "keepless/platform/monotonic_clock.hpp"
+#include "sparsify/modes.hpp"
+#include "sparsify/model_run.hpp"
+
+namespace {
+
+namespace io = keepless::io;
+namespace core = keepless::core;
+namespace sp = keepless::sparsify;
+
+struct Options {
+  std::string data = "../shared/data";
+  std::string colmap = "colmap";
+  std::vector<std::int64_t> Ms = {30, 100, 200};
+  std::uint32_t K = 20;
+  int seeds = 5;
+  std::string work;
+};
+
+struct Ba {
+  bool converged = false;
+  double seconds = 0;
+  io::ColmapModel model;
+};
+
+struct Row {
+  std::string method;
+  std::int64_t M = 0;
+  std::uint64_t points = 0;
+  std::uint32_t min_obs = 0;
+  double ba_s = 0;
+  bool converged = false;
+  double dev_max = 0, dev_rms = 0, ate = 0;
+};
+
+[[noreturn]] void die(const std::string& why) {
+  std::fprintf(stderr, "keepless_maps_bench: %s\n", why.c_str());
+  std::exit(1);
+}
+
+std::string quote(const std::string& s) { return "'" + s + "'"; }
+
+// Runs `colmap bundle_adjuster` on `in` into `out` (fixed intrinsics).
+Ba bundle_adjust(const Options& opt, const std::string& in, const std::string& out) {
+  ::mkdir(out.c_str(), 0777);
+  const std::string log = out + ".log";
+  const std::string cmd = "QT_QPA_PLATFORM=offscreen " + quote(opt.colmap) + " bundle_adjuster --input_path " +
+                          quote(in) + " --output_path " + quote(out) +
+                          " --BundleAdjustment.refine_focal_length 0 --BundleAdjustment.refine_principal_point 0"
+                          " --BundleAdjustment.refine_extra_params 0 > " + quote(log) + " 2>&1";
+  Ba ba;
+  const std::uint64_t t0 = keepless::platform::monotonic_ns();
+  const int rc = std::system(cmd.c_str());
+  ba.seconds = static_cast<double>(keepless::platform::monotonic_ns() - t0) / 1e9;
+  std::string text, error;
+  io::read_file(log, &text, &error);
+  ba.converged = rc == 0 && text.find("Termination : Convergence") != std::string::npos;
+  io::ColmapFormat format;
+  if (rc != 0 || !io::read_colmap_model(out, &ba.model, &format, &error)) {
+    die("bundle_adjuster failed on " + in + " (see " + log + ")");
+  }
+  return ba;
+}
+
+// KITTI camera centres by frame (3x4 camera-to-world, row-major, a line each).
+std::vector<std::array<double, 3>> read_kitti_centres(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) die("cannot read " + path);
+  std::vector<std::array<double, 3>> c;
+  double m[12];
+  while (true) {
+    for (double& v : m) in >> v;
+    if (!in) break;
+    c.push_back({m[3], m[7], m[11]});
+  }
+  return c;
+}
+
+// RMS ATE: the model's centres aligned to the KITTI frames named by its
+// images ("000012.png" = frame 12) by the best similarity (Umeyama), as the
+// fixture's own sim3_to_kitti_gt.txt was made.
+double ate(const io::ColmapModel& model, const std::vector<std::array<double, 3>>& gt) {
+  std::vector<std::array<double, 3>> est, ref;
+  for (const io::ColmapImage& im : model.images) {
+    const std::size_t frame = std::strtoul(im.name.c_str(), nullptr, 10);
+    if (frame >= gt.size()) die("no KITTI pose for " + im.name);
+    io::colmap_camera_centre(im, est.emplace_back().data());
+    ref.push_back(gt[frame]);
+  }
+  return io::aligned_deviation(ref, est).rms;
+}
+
+// Deviation of `model`'s centres from the full solution's, in metres: the
+// full solution through the fixture's similarity, `model` aligned onto it.
+io::AlignedDeviation deviation(const io::ColmapModel& full, const io::Similarity& sim, const io::ColmapModel& model) {
+  std::vector<std::array<double, 3>> ref, est;
+  io::matched_centres(full, model, &ref, &est);
+  for (auto& c : ref) {
+    const std::array<double, 3> u = c;
+    io::to_metric(sim, u.data(), c.data());
+  }
+  return io::aligned_deviation(ref, est);
+}
+
+std::uint32_t min_observations(const io::ColmapModel& m) {
+  const std::vector<std::uint32_t> n = io::observations_per_image(m);
+  return n.empty() ? 0 : *std::min_element(n.begin(), n.end());
+}
+
+std::vector<std::int64_t> parse_list(const char* s) {
+  std::vector<std::int64_t> v;
+  std::stringstream in(s);
+  std::string item;
+  while (std::getline(in, item, ',')) v.push_back(std::atoll(item.c_str()));
+  return v;
+}
+
+struct Bench {
+  Options opt;
+  io::ColmapModel original;
+  io::Similarity sim;
+  std::vector<std::array<double, 3>> gt;
+  io::ColmapModel full;  // the full model after BA
+  int runs = 0;
+
+  // Bundle-adjusts the original model minus `culled` and scores it.
+  Row score(const std::string& method, std::int64_t M, const std::vector<bool>& culled) {
+    io::ColmapModel m = original;
+    io::remove_points(&m, culled);
+    const std::string dir = opt.work + "/run" + std::to_string(runs++);
+    std::string error;
+    if (!io::write_colmap_model(dir, m, io::ColmapFormat::kBinary, &error)) die(error);
+    const Ba ba = bundle_adjust(opt, dir, dir + "_ba");
+    const io::AlignedDeviation d = deviation(full, sim, ba.model);
+    Row r{method, M, m.points.size(), min_observations(m), ba.seconds, ba.converged, d.max, d.rms, ate(ba.model, gt)};
+    std::printf("%-22s %5" PRId64 " %7" PRIu64 " %7u %8.2f %-5s %10.4f %10.4f %8.4f\n", r.method.c_str(), r.M, r.points,
+                r.min_obs, r.ba_s, r.converged ? "yes" : "NO", r.dev_max, r.dev_rms, r.ate);
+    std::fflush(stdout);
+    return r;
+  }
+
+  std::vector<bool> keepless_culls(sp::Mode mode, std::int64_t M, const io::Keyframes& kfs,
+                                   const std::vector<std::vector<core::PointId>>& images) {
+    core::Params params;
+    params.pair_capacity = M;
+    sp::ModeResult r;
+    if (sp::decide(kfs.file, mode, params, opt.K, &r) != core::Status::kOk) die("decide failed");
+    sp::apply_floor(images, sp::kDefaultFloor, &r.decisions);
+    std::vector<bool> culled(original.points.size());
+    for (std::size_t i = 0; i < culled.size(); ++i) {
+      const std::int64_t s = sp::find_decision(r.decisions, original.points[i].id);
+      culled[i] = s >= 0 && r.decisions[s].verdict == core::Verdict::kCull;
+    }
+    return culled;
+  }
+
+  // Keeps `order`'s first n points.
+  std::vector<bool> keep_first(const std::vector<std::size_t>& order, std::uint64_t n) const {
+    std::vector<bool> culled(original.points.size(), true);
+    for (std::uint64_t i = 0; i < n && i < order.size(); ++i) culled[order[i]] = false;
+    return culled;
+  }
+};
+
+struct Stat {
+  double mean = 0, sd = 0;
+};
+Stat stat(const std::vector<double>& v) {
+  Stat s;
+  for (double x : v) s.mean += x / v.size();
+  for (double x : v) s.sd += (x - s.mean) * (x - s.mean);
+  s.sd = v.size() > 1 ? std::sqrt(s.sd / (v.size() - 1)) : 0;
+  return s;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Bench b;
+  Options& opt = b.opt;
+  for (int i = 1; i + 1 < argc; i += 2) {
+    const std::string f = argv[i];
+    if (f == "--data") opt.data = argv[i + 1];
+    else if (f == "--colmap") opt.colmap = argv[i + 1];
+    else if (f == "--M") opt.Ms = parse_list(argv[i + 1]);
+    else if (f == "--K") opt.K = static_cast<std::uint32_t>(std::atoi(argv[i + 1]));
+    else if (f == "--seeds") opt.seeds = std::atoi(argv[i + 1]);
+    else if (f == "--work") opt.work = argv[i + 1];
+    else die("unknown flag " + f);
+  }
+  if (opt.work.empty()) {
+    char tmpl[] = "/tmp/keepless_maps_bench_XXXXXX";
+    if (::mkdtemp(tmpl) == nullptr) die("mkdtemp failed");
+    opt.work = tmpl;
+  }
+  const std::string fixture = opt.data + "/colmap_kitti06_first51";
+  std::string error;
+  io::ColmapFormat format;
+  if (!io::read_colmap_model(fixture + "/sparse", &b.original, &format, &error)) die(error);
+  if (!io::read_similarity(fixture + "/sim3_to_kitti_gt.txt", &b.sim, &error)) die(error);
+  b.gt = read_kitti_centres(opt.data + "/kitti06_first51_niconielsen/poses.txt");
+
+  std::printf("work dir %s\n", opt.work.c_str());
+  const Ba full = bundle_adjust(opt, fixture + "/sparse", opt.work + "/full_ba");
+  b.full = full.model;
+  const io::AlignedDeviation moved = deviation(b.full, b.sim, b.original);
+  std::printf("full model: %zu points, BA %.2f s (%s), ATE %.4f m (mapper's model %.4f m; BA moved centres by max %.4f m)\n",
+              b.original.points.size(), full.seconds, full.converged ? "converged" : "NOT converged",
+              ate(b.full, b.gt), ate(b.original, b.gt), moved.max);
+
+  // Keyframes (image-name order, metric) and each image's observations.
+  const io::Keyframes kfs = io::keyframes_from_colmap(b.original, io::KeyframeOrder::kName, b.sim);
+  std::vector<std::vector<core::PointId>> images;
+  {
+    std::map<std::uint32_t, const io::ColmapImage*> by_id;
+    for (const io::ColmapImage& im : b.original.images) by_id[im.id] = &im;
+    for (const core::Keyframe& kf : kfs.file.keyframes) {
+      auto& ids = images.emplace_back();
+      for (const io::ColmapPoint2D& p : by_id[static_cast<std::uint32_t>(kf.id)]->points2D) {
+        if (p.point3D_id != io::kNoPoint3D) ids.push_back(p.point3D_id);
+      }
+    }
+  }
+  // Longest track first (ties: lower id).
+  std::vector<std::size_t> longest(b.original.points.size());
+  std::iota(longest.begin(), longest.end(), 0);
+  std::stable_sort(longest.begin(), longest.end(), [&](std::size_t x, std::size_t y) {
+    const auto& p = b.original.points;
+    return p[x].track.size() != p[y].track.size() ? p[x].track.size() > p[y].track.size() : p[x].id < p[y].id;
+  });
+  // COLMAP's point_filtering: the count each --min_track_len leaves.
+  std::map<int, std::uint64_t> filter_count;
+  for (int t = 2; t <= 16; ++t) {
+    const std::string out = opt.work + "/filter" + std::to_string(t);
+    ::mkdir(out.c_str(), 0777);
+    const std::string cmd = "QT_QPA_PLATFORM=offscreen " + quote(opt.colmap) + " point_filtering --input_path " +
+                            quote(fixture + "/sparse") + " --output_path " + quote(out) + " --min_track_len " +
+                            std::to_string(t) + " > " + quote(out + ".log") + " 2>&1";
+    io::ColmapModel m;
+    if (std::system(cmd.c_str()) != 0 || !io::read_colmap_model(out, &m, &format, &error)) {
+      die("point_filtering failed (" + out + ".log)");
+    }
+    filter_count[t] = m.points.size();
+  }
+
+  std::printf("%-22s %5s %7s %7s %8s %-5s %10s %10s %8s\n", "method", "M", "points", "min_obs", "BA_s", "conv",
+              "dev_max_m", "dev_rms_m", "ATE_m");
+  std::vector<Row> rows;
+  std::string json = "{\"rows\":[";
+  const auto add_json = [&](const std::string& method, std::int64_t M, std::uint64_t points, double min_obs,
+                            double ba_s, double dev_max, double dev_rms, double ate_m, double ate_sd,
+                            int converged) {
+    char line[512];
+    std::snprintf(line, sizeof line,
+                  "%s{\"method\":\"%s\",\"M\":%" PRId64 ",\"points\":%" PRIu64
+                  ",\"min_obs\":%.1f,\"ba_s\":%.3f,\"dev_max_m\":%.5f,\"dev_rms_m\":%.5f,\"ate_m\":%.5f,"
+                  "\"ate_sd_m\":%.5f,\"converged\":%d}",
+                  json.back() == '[' ? "" : ",", method.c_str(), M, points, min_obs, ba_s, dev_max, dev_rms, ate_m,
+                  ate_sd, converged);
+    json += line;
+  };
+  const auto add_row = [&](const Row& r) {
+    add_json(r.method, r.M, r.points, r.min_obs, r.ba_s, r.dev_max, r.dev_rms, r.ate, 0, r.converged ? 1 : 0);
+  };
+  Row full_row{"full", 0, b.original.points.size(), min_observations(b.original), full.seconds, full.converged, 0, 0,
+               ate(b.full, b.gt)};
+  add_row(full_row);
+  for (const std::int64_t M : opt.Ms) {
+    const Row replay = b.score("keepless_replay", M, b.keepless_culls(sp::Mode::kReplay, M, kfs, images));
+    add_row(replay);
+    add_row(b.score("keepless_whole", M, b.keepless_culls(sp::Mode::kWhole, M, kfs, images)));
+    const std::uint64_t n = replay.points;
+    add_row(b.score("longest_track", M, b.keep_first(longest, n)));
+    std::vector<double> dmax, drms, at, mins, ba_s;
+    int converged = 0;
+    for (int seed = 1; seed <= opt.seeds; ++seed) {
+      std::vector<std::size_t> order(b.original.points.size());
+      std::iota(order.begin(), order.end(), 0);
+      std::mt19937_64 rng(static_cast<std::uint64_t>(seed));
+      std::shuffle(order.begin(), order.end(), rng);
+      const Row r = b.score("random_seed" + std::to_string(seed), M, b.keep_first(order, n));
+      dmax.push_back(r.dev_max);
+      drms.push_back(r.dev_rms);
+      at.push_back(r.ate);
+      mins.push_back(r.min_obs);
+      ba_s.push_back(r.ba_s);
+      converged += r.converged;
+    }
+    const Stat sm = stat(dmax), sr = stat(drms), sa = stat(at), smin = stat(mins);
+    std::printf("%-22s %5" PRId64 " %7" PRIu64 " %7.1f %8.2f %d/%d   %5.4f±%.4f %5.4f±%.4f %.4f±%.4f\n", "random (mean±sd)",
+                M, n, smin.mean, stat(ba_s).mean, converged, opt.seeds, sm.mean, sm.sd, sr.mean, sr.sd, sa.mean, sa.sd);
+    add_json("random", M, n, smin.mean, stat(ba_s).mean, sm.mean, sr.mean, sa.mean, sa.sd, converged);
+    // COLMAP's own filter, at the track length whose count is nearest.
+    int best = 2;
+    for (const auto& [t, count] : filter_count) {
+      const auto gap = [&](std::uint64_t c) { return c > n ? c - n : n - c; };
+      if (gap(count) < gap(filter_count[best])) best = t;
+    }
+    io::ColmapModel filtered;
+    if (!io::read_colmap_model(opt.work + "/filter" + std::to_string(best), &filtered, &format, &error)) die(error);
+    std::vector<bool> culled(b.original.points.size(), true);
+    {
+      std::map<std::uint64_t, bool> in;
+      for (const auto& p : filtered.points) in[p.id] = true;
+      for (std::size_t i = 0; i < culled.size(); ++i) culled[i] = in.count(b.original.points[i].id) == 0;
+    }
+    add_row(b.score("colmap_filter_len" + std::to_string(best), M, culled));
+  }
+  json += "],\"full_ba_s\":" + std::to_string(full.seconds) + ",\"K\":" + std::to_string(opt.K) +
+          ",\"seeds\":" + std::to_string(opt.seeds) + ",\"floor\":" + std::to_string(sp::kDefaultFloor) + "}";
+  std::printf("%s\n", json.c_str());
+  return 0;
+}

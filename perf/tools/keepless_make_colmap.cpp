@@ -1,0 +1,80 @@
+// keepless_make_colmap: a synthetic COLMAP binary model for scale runs.
+//
+//   keepless_make_colmap --out DIR [--images 1000] [--points 100000] [--seed 1]
+//
+// A PINHOLE camera (KITTI's intrinsics) drives straight down +z, 1 m per
+// image; each point is seen by a run of consecutive images (track length
+// 2 + a geometric draw, mean ~6, as on the KITTI fixture), lies ahead of
+// the last of them, and is projected exactly into each. Deterministic for a
+// seed (std::mt19937_64).
+
+#include <cstdio>
+#include <cstdlib>
+#include <random>
+#include <string>
+
+#include "keepless/io/colmap_model.hpp"
+
+int main(int argc, char** argv) {
+  namespace io = keepless::io;
+  std::string out;
+  std::uint32_t images = 1000, points = 100000;
+  std::uint64_t seed = 1;
+  for (int i = 1; i + 1 < argc; i += 2) {
+    const std::string f = argv[i];
+    if (f == "--out") out = argv[i + 1];
+    else if (f == "--images") images = static_cast<std::uint32_t>(std::strtoul(argv[i + 1], nullptr, 10));
+    else if (f == "--points") points = static_cast<std::uint32_t>(std::strtoul(argv[i + 1], nullptr, 10));
+    else if (f == "--seed") seed = std::strtoull(argv[i + 1], nullptr, 10);
+    else {
+      std::fprintf(stderr, "keepless_make_colmap: unknown flag %s\n", f.c_str());
+      return 2;
+    }
+  }
+  if (out.empty() || images < 2) {
+    std::fprintf(stderr, "usage: keepless_make_colmap --out DIR [--images N>=2] [--points N] [--seed S]\n");
+    return 2;
+  }
+  const double fx = 707.0912, cx = 601.8873, cy = 183.1104;
+  io::ColmapModel m;
+  m.cameras.push_back({1, 1, 1226, 370, {fx, fx, cx, cy}});
+  for (std::uint32_t i = 0; i < images; ++i) {
+    io::ColmapImage im;
+    im.id = i + 1;
+    im.tvec[2] = -static_cast<double>(i);  // centre (0, 0, i), no rotation
+    im.camera_id = 1;
+    char name[32];
+    std::snprintf(name, sizeof name, "%06u.png", i);
+    im.name = name;
+    m.images.push_back(im);
+  }
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  std::geometric_distribution<std::uint32_t> extra(0.25);
+  for (std::uint32_t p = 0; p < points; ++p) {
+    const std::uint32_t length = std::min<std::uint32_t>(2 + extra(rng), images);
+    const std::uint32_t first = static_cast<std::uint32_t>(unit(rng) * (images - length + 1));
+    const double last_z = first + length - 1.0;
+    io::ColmapPoint3D pt;
+    pt.id = p + 1;
+    pt.xyz[2] = last_z + 3 + 37 * unit(rng);
+    pt.xyz[0] = (unit(rng) - 0.5) * 0.8 * (pt.xyz[2] - first);
+    pt.xyz[1] = (unit(rng) - 0.5) * 0.25 * (pt.xyz[2] - first);
+    pt.rgb[0] = pt.rgb[1] = pt.rgb[2] = static_cast<std::uint8_t>(p % 256);
+    pt.error = 0.5;
+    for (std::uint32_t i = first; i < first + length; ++i) {
+      io::ColmapImage& im = m.images[i];
+      const double z = pt.xyz[2] - i;
+      pt.track.push_back({im.id, static_cast<std::uint32_t>(im.points2D.size())});
+      im.points2D.push_back({fx * pt.xyz[0] / z + cx, fx * pt.xyz[1] / z + cy, pt.id});
+    }
+    m.points.push_back(std::move(pt));
+  }
+  std::string error;
+  if (!io::write_colmap_model(out, m, io::ColmapFormat::kBinary, &error)) {
+    std::fprintf(stderr, "%s\n", error.c_str());
+    return 1;
+  }
+  std::printf("{\"images\":%u,\"points\":%u,\"out\":\"%s\"}\n", images, points, out.c_str());
+  return 0;
+}

@@ -1,0 +1,294 @@
+#include "model_run.hpp"
+
+#include <algorithm>
+#include <charconv>
+#include <cinttypes>
+#include <cstdio>
+#include <numeric>
+#include <unordered_map>
+
+#include "keepless/io/atomic_file.hpp"
+#include "keepless/io/bal_problem.hpp"
+#include "keepless/io/colmap_model.hpp"
+#include "keepless/platform/monotonic_clock.hpp"
+
+namespace keepless::sparsify {
+
+namespace {
+
+constexpr int kExitInput = 2;
+constexpr int kExitInternal = 1;
+
+const char* input_name(Input in) {
+  switch (in) {
+    case Input::kColmap: return "colmap";
+    case Input::kBal: return "bal";
+    case Input::kWindow: return "window";
+  }
+  return "?";
+}
+
+double ms_since(std::uint64_t start_ns) {
+  return static_cast<double>(platform::monotonic_ns() - start_ns) / 1e6;
+}
+
+// A model as read, with its keyframes in replay order and each image's
+// observations by point id (duplicates included) in the same order.
+struct Loaded {
+  io::ColmapModel colmap;
+  io::ColmapFormat format = io::ColmapFormat::kBinary;
+  io::BalProblem bal;
+  core::WindowFile window;
+  io::Keyframes keyframes;
+  std::vector<std::vector<core::PointId>> images;
+  std::uint64_t model_points = 0;
+};
+
+bool load(const ModelOptions& opt, Loaded* m, std::string* error) {
+  io::Similarity metric;
+  metric.scale = opt.scale;
+  if (!opt.sim3.empty() && !io::read_similarity(opt.sim3, &metric, error)) return false;
+  switch (opt.input) {
+    case Input::kColmap: {
+      if (!io::read_colmap_model(opt.path, &m->colmap, &m->format, error)) return false;
+      const io::KeyframeOrder order = opt.order_given ? opt.order : io::KeyframeOrder::kName;
+      m->keyframes = io::keyframes_from_colmap(m->colmap, order, metric);
+      std::unordered_map<std::uint32_t, const io::ColmapImage*> by_id;
+      for (const io::ColmapImage& im : m->colmap.images) by_id[im.id] = &im;
+      for (const core::Keyframe& kf : m->keyframes.file.keyframes) {
+        std::vector<core::PointId>& ids = m->images.emplace_back();
+        for (const io::ColmapPoint2D& p : by_id[static_cast<std::uint32_t>(kf.id)]->points2D) {
+          if (p.point3D_id != io::kNoPoint3D) ids.push_back(p.point3D_id);
+        }
+      }
+      m->model_points = m->colmap.points.size();
+      return true;
+    }
+    case Input::kBal: {
+      if (!io::read_bal(opt.path, &m->bal, error)) return false;
+      m->keyframes = io::keyframes_from_bal(m->bal, io::KeyframeOrder::kFile, metric);
+      m->images.resize(m->bal.num_cameras);
+      for (const io::BalObservation& o : m->bal.observations) m->images[o.camera].push_back(o.point);
+      m->model_points = m->bal.num_points;
+      return true;
+    }
+    case Input::kWindow: {
+      if (!core::read_window_file(opt.path, &m->window, error, opt.limits)) return false;
+      core::WindowFile& f = m->keyframes.file;
+      std::vector<std::size_t> order(m->window.keyframes.size());
+      std::iota(order.begin(), order.end(), 0);
+      if (opt.order_given && opt.order == io::KeyframeOrder::kId) {
+        std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+          return m->window.keyframes[a].id < m->window.keyframes[b].id;
+        });
+      }
+      for (const std::size_t k : order) {
+        f.keyframes.push_back(m->window.keyframes[k]);
+        f.keyframe_lines.push_back(m->window.keyframe_lines[k]);
+        f.observations.push_back(m->window.observations[k]);
+        core::Keyframe& kf = f.keyframes.back();
+        const double c[3] = {kf.centre[0], kf.centre[1], kf.centre[2]};
+        io::to_metric(metric, c, kf.centre);
+        std::vector<core::PointId>& ids = m->images.emplace_back();
+        for (const core::Observation& o : m->window.observations[k]) ids.push_back(o.point);
+      }
+      f.needs = m->window.needs;
+      m->model_points = f.needs.max_points;
+      return true;
+    }
+  }
+  return false;
+}
+
+// The model's own limits: the window file's reader checks them itself.
+bool check_limits(const ModelOptions& opt, const Loaded& m, std::string* error) {
+  const core::Capacities& n = m.keyframes.file.needs;
+  const auto over = [&](std::uint64_t have, std::uint32_t limit, const char* what, const char* flag) {
+    if (have <= limit) return false;
+    *error = opt.path + ":0: " + std::to_string(have) + " " + what + " exceed " + flag + " " + std::to_string(limit);
+    return true;
+  };
+  return !(over(m.keyframes.file.keyframes.size(), opt.limits.max_keyframes, "images", "--max-keyframes") ||
+           over(m.model_points, opt.limits.max_points, "points", "--max-points") ||
+           over(n.max_observations, opt.limits.max_observations, "observations", "--max-observations"));
+}
+
+std::string format_decisions(const std::vector<core::PointDecision>& decisions) {
+  std::string s;
+  char line[96];
+  for (const core::PointDecision& d : decisions) {
+    const int n = std::snprintf(line, sizeof line, "%" PRIu64 " %s %" PRId64 " %" PRId64 "\n", d.point,
+                                core::to_string(d.verdict), d.flow, d.capacity);
+    s.append(line, static_cast<std::size_t>(n));
+  }
+  return s;
+}
+
+bool is_culled(const std::vector<core::PointDecision>& decisions, core::PointId p) {
+  const std::int64_t s = find_decision(decisions, p);
+  return s >= 0 && decisions[s].verdict == core::Verdict::kCull;
+}
+
+// Writes the sparsified model in the input's format.
+bool write_model(const ModelOptions& opt, Loaded* m, const std::vector<core::PointDecision>& decisions,
+                 std::string* error) {
+  switch (opt.input) {
+    case Input::kColmap: {
+      std::vector<bool> culled(m->colmap.points.size());
+      for (std::size_t i = 0; i < culled.size(); ++i) culled[i] = is_culled(decisions, m->colmap.points[i].id);
+      io::remove_points(&m->colmap, culled);
+      io::ColmapFormat format = m->format;
+      if (opt.out_format == "bin") format = io::ColmapFormat::kBinary;
+      if (opt.out_format == "txt") format = io::ColmapFormat::kText;
+      return io::write_colmap_model(opt.out, m->colmap, format, error);
+    }
+    case Input::kBal: {
+      std::vector<bool> culled(m->bal.num_points);
+      for (std::uint32_t i = 0; i < m->bal.num_points; ++i) culled[i] = is_culled(decisions, i);
+      return io::write_file_atomically(opt.out, io::format_bal(io::remove_points(m->bal, culled)), error);
+    }
+    case Input::kWindow: {
+      core::WindowFile out = m->window;  // file order
+      for (auto& obs : out.observations) {
+        obs.erase(std::remove_if(obs.begin(), obs.end(),
+                                 [&](const core::Observation& o) { return is_culled(decisions, o.point); }),
+                  obs.end());
+      }
+      return io::write_file_atomically(opt.out, core::format_window_file(out), error);
+    }
+  }
+  return false;
+}
+
+double median(std::vector<std::uint32_t> v) {
+  if (v.empty()) return 0;
+  std::sort(v.begin(), v.end());
+  const std::size_t h = v.size() / 2;
+  return v.size() % 2 == 1 ? v[h] : 0.5 * (static_cast<double>(v[h - 1]) + v[h]);
+}
+
+}  // namespace
+
+bool parse_map_flag(const std::string& flag, const char* value, ModelOptions* opt, std::string* error) {
+  const std::string v = value;
+  const std::string bad = "bad value for " + flag + ": '" + v + "'";
+  std::uint64_t n = 0;
+  error->clear();
+  if (flag == "--colmap" || flag == "--bal") {
+    if (v.empty() || !opt->path.empty()) *error = bad + " (one input)";
+    opt->path = v;
+    opt->input = flag == "--colmap" ? Input::kColmap : Input::kBal;
+  } else if (flag == "--out" || flag == "--sim3") {
+    if (v.empty()) *error = bad;
+    (flag == "--out" ? opt->out : opt->sim3) = v;
+  } else if (flag == "--out-format") {
+    if (v != "bin" && v != "txt") *error = bad + " (bin or txt)";
+    opt->out_format = v;
+  } else if (flag == "--mode") {
+    if (v != "replay" && v != "whole") *error = bad + " (replay or whole)";
+    opt->mode = v == "whole" ? Mode::kWhole : Mode::kReplay;
+    opt->mode_given = true;
+  } else if (flag == "--order") {
+    if (v != "name" && v != "id" && v != "file") *error = bad + " (name, id or file)";
+    opt->order = v == "id" ? io::KeyframeOrder::kId : (v == "file" ? io::KeyframeOrder::kFile : io::KeyframeOrder::kName);
+    opt->order_given = true;
+  } else if (flag == "--K" || flag == "--min-obs-per-image") {
+    const bool k = flag == "--K";
+    if (!core::parse_uint64(value, &n) || n < (k ? 1u : 0u) || n > UINT32_MAX) {
+      *error = bad + (k ? " (an integer >= 1)" : " (an integer >= 0)");
+    } else if (k) {
+      opt->K = static_cast<std::uint32_t>(n);
+    } else {
+      opt->floor = static_cast<std::int64_t>(n);
+    }
+  } else if (flag == "--scale") {
+    if (!core::parse_finite_double(value, &opt->scale) || !(opt->scale > 0)) *error = bad + " (a number > 0)";
+  } else {
+    return false;
+  }
+  opt->map_flags = true;
+  return true;
+}
+
+int run_model(const ModelOptions& opt) {
+  if (opt.order_given && opt.order == io::KeyframeOrder::kName && opt.input != Input::kColmap) {
+    std::fprintf(stderr, "keepless_sparsify: --order name needs --colmap (BAL cameras and window keyframes have no names)\n");
+    return kExitInput;
+  }
+  if (!opt.out_format.empty() && opt.input != Input::kColmap) {
+    std::fprintf(stderr, "keepless_sparsify: --out-format applies to --colmap only\n");
+    return kExitInput;
+  }
+  const std::uint64_t t_parse = platform::monotonic_ns();
+  Loaded m;
+  std::string error;
+  if (!load(opt, &m, &error) || !check_limits(opt, m, &error)) {
+    std::fprintf(stderr, "%s\n", error.c_str());
+    return kExitInput;
+  }
+  const double parse_ms = ms_since(t_parse);
+
+  const Mode mode = opt.mode_given ? opt.mode : (opt.input == Input::kWindow ? Mode::kWhole : Mode::kReplay);
+  const std::uint32_t floor = opt.floor >= 0 ? static_cast<std::uint32_t>(opt.floor)
+                                             : (opt.input == Input::kWindow ? 0 : kDefaultFloor);
+  const std::uint64_t t_solve = platform::monotonic_ns();
+  ModeResult r;
+  const core::Status s = decide(m.keyframes.file, mode, opt.params, opt.K, &r);
+  const double solve_ms = ms_since(t_solve);
+  if (s != core::Status::kOk) {
+    std::fprintf(stderr, "keepless_sparsify: %s failed: %s\n", to_string(mode), core::to_string(s));
+    return kExitInternal;
+  }
+  const std::uint32_t restored = apply_floor(m.images, floor, &r.decisions);
+  const std::vector<std::uint32_t> per_image = kept_observations(m.images, r.decisions);
+  const double time_ms = ms_since(t_solve);
+  std::uint32_t culled = 0, kept = 0;
+  for (const core::PointDecision& d : r.decisions) {
+    culled += d.verdict == core::Verdict::kCull;
+    kept += d.verdict == core::Verdict::kKeep;
+  }
+
+  if (!opt.decisions.empty() && !io::write_file_atomically(opt.decisions, format_decisions(r.decisions), &error)) {
+    std::fprintf(stderr, "%s\n", error.c_str());
+    return kExitInput;
+  }
+  if (!opt.out.empty() && !write_model(opt, &m, r.decisions, &error)) {
+    std::fprintf(stderr, "%s\n", error.c_str());
+    return kExitInput;
+  }
+
+  const std::uint64_t points_kept = m.model_points - culled;
+  const std::uint32_t min_obs = per_image.empty() ? 0 : *std::min_element(per_image.begin(), per_image.end());
+  const double med_obs = median(per_image);
+  const io::KeyframeOrder order =
+      opt.order_given ? opt.order : (opt.input == Input::kColmap ? io::KeyframeOrder::kName : io::KeyframeOrder::kFile);
+  std::printf("%s", to_string(mode));
+  if (mode == Mode::kReplay) std::printf(" (K = %u, order %s)", opt.K, io::to_string(order));
+  std::printf(": kept %" PRIu64 " of %" PRIu64 " points (%.2f %%), observations per image min %u median %g, %.3f s\n",
+              points_kept, m.model_points, m.model_points ? 100.0 * points_kept / m.model_points : 100.0, min_obs,
+              med_obs, time_ms / 1e3);
+
+  char theta[32];
+  *std::to_chars(theta, theta + sizeof theta - 1, opt.params.theta).ptr = '\0';
+  const core::Summary& t = r.totals;
+  std::printf(
+      "{\"keyframes\":%u,\"points\":%u,\"evaluated\":%u,\"kept\":%u,\"culled\":%u,"
+      "\"skipped\":%u,\"pairs\":%u,\"arcs\":%u,\"max_flow\":%" PRId64 ",\"total_cost\":%" PRId64
+      ",\"M\":%" PRId64 ",\"theta\":%s,\"box_width\":%d,\"box_height\":%d,"
+      "\"parse_ms\":%.3f,\"build_ms\":0,\"solve_ms\":%.3f,\"memory_bytes\":%zu,"
+      "\"input\":\"%s\",\"format\":\"%s\",\"mode\":\"%s\",\"K\":%u,\"order\":\"%s\",\"slides\":%u,"
+      "\"images\":%zu,\"model_points\":%" PRIu64 ",\"points_kept\":%" PRIu64 ",\"kept_fraction\":%.6f,"
+      "\"min_obs_per_image\":%u,\"median_obs_per_image\":%g,\"obs_floor\":%u,\"floor_restored\":%u,"
+      "\"duplicate_observations\":%" PRIu64 ",\"time_ms\":%.3f}\n",
+      t.keyframes, t.points, t.evaluated, kept, culled, t.skipped, t.pairs, t.arcs, t.max_flow, t.total_cost,
+      opt.params.pair_capacity, theta, opt.params.box_width, opt.params.box_height, parse_ms, solve_ms,
+      r.memory_bytes, input_name(opt.input),
+      opt.input == Input::kColmap ? io::extension(m.format) : (opt.input == Input::kBal ? "bal" : "window"),
+      to_string(mode), mode == Mode::kReplay ? opt.K : t.keyframes, io::to_string(order), r.slides,
+      m.images.size(), m.model_points, points_kept,
+      m.model_points ? static_cast<double>(points_kept) / static_cast<double>(m.model_points) : 1.0, min_obs,
+      med_obs, floor, restored, m.keyframes.duplicates, time_ms);
+  return std::fflush(stdout) == 0 ? 0 : kExitInternal;
+}
+
+}  // namespace keepless::sparsify

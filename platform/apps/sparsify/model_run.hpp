@@ -1,0 +1,51 @@
+#pragma once
+// keepless_sparsify on a map: a COLMAP model, a BAL problem or a window
+// file in; its decisions (replay or whole, see modes.hpp) and the floor;
+// the sparsified map out in the input's format.
+
+#include <cstdint>
+#include <string>
+
+#include "keepless/core/config.hpp"
+#include "keepless/core/window_file.hpp"
+#include "keepless/io/keyframes.hpp"
+#include "modes.hpp"
+
+namespace keepless::sparsify {
+
+enum class Input { kColmap, kBal, kWindow };
+
+struct ModelOptions {
+  Input input = Input::kColmap;
+  std::string path;       // --colmap DIR / --bal FILE / --window FILE
+  std::string out;        // --out DIR|FILE; empty: none
+  std::string out_format;  // --out-format bin|txt (COLMAP); empty: the input's
+  std::string decisions;  // --decisions OUT; empty: none
+  Mode mode = Mode::kReplay;
+  bool mode_given = false;  // default: replay for COLMAP/BAL, whole for a window file
+  std::uint32_t K = 20;
+  io::KeyframeOrder order = io::KeyframeOrder::kName;
+  bool order_given = false;  // default: name for COLMAP, file order otherwise
+  std::string sim3;          // --sim3 FILE (wins over scale)
+  double scale = 1;          // --scale S
+  std::int64_t floor = -1;   // --min-obs-per-image; -1: 30 for COLMAP/BAL, 0 for a window file
+  core::Params params;
+  core::WindowFileLimits limits;
+  bool map_flags = false;  // a flag above was given (parse_map_flag)
+};
+
+// Parses one of keepless_sparsify's map flags (--colmap, --bal, --out,
+// --out-format, --mode, --K, --order, --scale, --sim3, --min-obs-per-image)
+// into *options. False if `flag` is none of them; else true, with *error
+// empty or the reason its value is bad.
+bool parse_map_flag(const std::string& flag, const char* value, ModelOptions* options, std::string* error);
+
+// The default per-image floor for COLMAP and BAL inputs.
+constexpr std::uint32_t kDefaultFloor = 30;
+
+// Runs it all; prints a line per mode and the JSON summary (last line) on
+// stdout. Returns the exit status: 0, 2 (bad input or flags; one stderr line
+// "FILE:OFFSET-or-LINE: reason"; nothing written), 1 (internal failure).
+int run_model(const ModelOptions& options);
+
+}  // namespace keepless::sparsify

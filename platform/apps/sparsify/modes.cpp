@@ -1,0 +1,247 @@
+#include "modes.hpp"
+
+#include <algorithm>
+#include <deque>
+#include <numeric>
+#include <unordered_map>
+
+#include "keepless/core/sparsifier.hpp"
+#include "keepless/core/window.hpp"
+
+namespace keepless::sparsify {
+
+namespace {
+
+core::Capacities at_least_one(core::Capacities c) {
+  c.max_keyframes = std::max<std::uint32_t>(c.max_keyframes, 1);
+  c.max_points = std::max<std::uint32_t>(c.max_points, 1);
+  c.max_observations = std::max<std::uint32_t>(c.max_observations, 1);
+  c.max_pair_arcs = std::max<std::uint32_t>(c.max_pair_arcs, 1);
+  return c;
+}
+
+// The largest window of K consecutive keyframes, before any cull (culls
+// only shrink a window): observations, distinct points, pair arcs.
+core::Capacities replay_capacities(const core::WindowFile& f, std::uint32_t K) {
+  core::Capacities c{std::min<std::uint32_t>(K, static_cast<std::uint32_t>(f.keyframes.size())), 0, 0, 0};
+  std::unordered_map<core::PointId, std::uint32_t> count;
+  std::uint64_t obs = 0, arcs = 0;
+  for (std::size_t i = 0; i < f.keyframes.size(); ++i) {
+    for (const core::Observation& o : f.observations[i]) arcs += count[o.point]++;
+    obs += f.observations[i].size();
+    if (i >= K) {
+      for (const core::Observation& o : f.observations[i - K]) {
+        auto it = count.find(o.point);
+        arcs -= --it->second;
+        if (it->second == 0) count.erase(it);
+      }
+      obs -= f.observations[i - K].size();
+    }
+    c.max_observations = std::max<std::uint32_t>(c.max_observations, static_cast<std::uint32_t>(obs));
+    c.max_points = std::max<std::uint32_t>(c.max_points, static_cast<std::uint32_t>(count.size()));
+    c.max_pair_arcs = std::max<std::uint32_t>(c.max_pair_arcs, static_cast<std::uint32_t>(arcs));
+  }
+  return at_least_one(c);
+}
+
+void add_totals(const core::Summary& s, core::Summary* t) {
+  t->pairs += s.pairs;
+  t->arcs += s.arcs;
+  t->max_flow += s.max_flow;
+  t->total_cost += s.total_cost;
+}
+
+// Final counts over the decisions.
+void count_verdicts(ModeResult* r, std::uint32_t keyframes) {
+  core::Summary& t = r->totals;
+  t.keyframes = keyframes;
+  t.points = static_cast<std::uint32_t>(r->decisions.size());
+  t.kept = t.culled = t.skipped = 0;
+  for (const core::PointDecision& d : r->decisions) {
+    t.kept += d.verdict == core::Verdict::kKeep;
+    t.culled += d.verdict == core::Verdict::kCull;
+    t.skipped += d.verdict == core::Verdict::kSkip;
+  }
+  t.evaluated = t.kept + t.culled;
+}
+
+core::Status whole(const core::WindowFile& f, const core::Params& params, ModeResult* out) {
+  const core::Capacities caps = at_least_one(f.needs);
+  core::Window window(caps);
+  core::Sparsifier sparsifier(caps, params);
+  for (std::size_t k = 0; k < f.keyframes.size(); ++k) {
+    const core::Status s = window.add_keyframe(f.keyframes[k], f.observations[k].data(),
+                                               static_cast<std::uint32_t>(f.observations[k].size()));
+    if (s != core::Status::kOk) return s;
+  }
+  const core::Status s = sparsifier.run(window);
+  if (s != core::Status::kOk) return s;
+  out->decisions.assign(sparsifier.decisions(), sparsifier.decisions() + sparsifier.decision_count());
+  out->totals = sparsifier.summary();
+  out->slides = 1;
+  out->capacities = caps;
+  out->memory_bytes = window.memory_bytes() + sparsifier.memory_bytes();
+  return core::Status::kOk;
+}
+
+core::Status replay(const core::WindowFile& f, const core::Params& params, std::uint32_t K, ModeResult* out) {
+  // Every point once, ascending id; slots index decisions.
+  std::vector<core::PointDecision>& decisions = out->decisions;
+  for (const auto& obs : f.observations) {
+    for (const core::Observation& o : obs) decisions.push_back({o.point, core::Verdict::kSkip, 0, 0});
+  }
+  std::sort(decisions.begin(), decisions.end(),
+            [](const core::PointDecision& a, const core::PointDecision& b) { return a.point < b.point; });
+  decisions.erase(std::unique(decisions.begin(), decisions.end(),
+                              [](const core::PointDecision& a, const core::PointDecision& b) { return a.point == b.point; }),
+                  decisions.end());
+  const auto slot_of = [&](core::PointId p) { return static_cast<std::uint32_t>(find_decision(decisions, p)); };
+
+  const core::Capacities caps = replay_capacities(f, K);
+  core::Window a(caps), b(caps);
+  core::Window* active = &a;
+  core::Window* spare = &b;
+  core::Sparsifier sparsifier(caps, params, core::SolveMode::kIncremental);
+  std::vector<bool> culled(decisions.size(), false);
+  // What each keyframe in the window holds now: observations and their slots.
+  const std::size_t n = f.keyframes.size();
+  std::vector<std::vector<core::Observation>> live(n);
+  std::vector<std::vector<std::uint32_t>> live_slots(n);
+  std::vector<bool> changed(n, false);  // lost points since it entered the active window
+  std::deque<std::size_t> members;
+  std::vector<core::PointId> culled_now;
+  for (std::size_t i = 0; i < n; ++i) {
+    for (const core::Observation& o : f.observations[i]) {
+      const std::uint32_t s = slot_of(o.point);
+      if (culled[s]) continue;
+      live[i].push_back(o);
+      live_slots[i].push_back(s);
+    }
+    // The spare window: the active one minus its oldest keyframe when full,
+    // unchanged keyframes copied (keeping their stamps, as the node's window
+    // does), plus the new keyframe.
+    spare->clear();
+    const std::size_t first = members.size() == K ? 1 : 0;
+    for (std::size_t m = first; m < members.size(); ++m) {
+      const std::size_t j = members[m];
+      const core::Status s = changed[j] ? spare->add_keyframe(f.keyframes[j], live[j].data(),
+                                                              static_cast<std::uint32_t>(live[j].size()))
+                                        : spare->copy_keyframe(*active, static_cast<std::uint32_t>(m));
+      if (s != core::Status::kOk) return s;
+    }
+    core::Status s =
+        spare->add_keyframe(f.keyframes[i], live[i].data(), static_cast<std::uint32_t>(live[i].size()));
+    if (s != core::Status::kOk) return s;
+    std::swap(active, spare);
+    if (first == 1) {
+      live[members.front()].clear();
+      live_slots[members.front()].clear();
+      members.pop_front();
+    }
+    members.push_back(i);
+    for (const std::size_t j : members) changed[j] = false;
+
+    s = sparsifier.update(*active);
+    if (s != core::Status::kOk) return s;
+    ++out->slides;
+    add_totals(sparsifier.summary(), &out->totals);
+    culled_now.clear();
+    const core::PointDecision* d = sparsifier.decisions();
+    for (std::uint32_t k = 0; k < sparsifier.decision_count(); ++k) {
+      if (d[k].verdict == core::Verdict::kSkip) continue;
+      const std::uint32_t slot = slot_of(d[k].point);
+      decisions[slot] = d[k];
+      if (d[k].verdict == core::Verdict::kCull) {
+        culled[slot] = true;
+        culled_now.push_back(d[k].point);
+      }
+    }
+    if (culled_now.empty()) continue;
+    for (const std::size_t j : members) {
+      std::size_t w = 0;
+      for (std::size_t r = 0; r < live[j].size(); ++r) {
+        if (culled[live_slots[j][r]]) continue;
+        live[j][w] = live[j][r];
+        live_slots[j][w] = live_slots[j][r];
+        ++w;
+      }
+      if (w != live[j].size()) changed[j] = true;
+      live[j].resize(w);
+      live_slots[j].resize(w);
+    }
+  }
+  out->capacities = caps;
+  out->memory_bytes = a.memory_bytes() + b.memory_bytes() + sparsifier.memory_bytes();
+  return core::Status::kOk;
+}
+
+}  // namespace
+
+const char* to_string(Mode mode) { return mode == Mode::kReplay ? "replay" : "whole"; }
+
+std::int64_t find_decision(const std::vector<core::PointDecision>& decisions, core::PointId point) {
+  const auto it = std::lower_bound(decisions.begin(), decisions.end(), point,
+                                   [](const core::PointDecision& d, core::PointId p) { return d.point < p; });
+  return it != decisions.end() && it->point == point ? it - decisions.begin() : -1;
+}
+
+core::Status decide(const core::WindowFile& keyframes, Mode mode, const core::Params& params, std::uint32_t K,
+                    ModeResult* out) {
+  *out = ModeResult{};
+  const core::Status s = mode == Mode::kWhole ? whole(keyframes, params, out) : replay(keyframes, params, K, out);
+  if (s == core::Status::kOk) count_verdicts(out, static_cast<std::uint32_t>(keyframes.keyframes.size()));
+  return s;
+}
+
+std::vector<std::uint32_t> kept_observations(const std::vector<std::vector<core::PointId>>& images,
+                                             const std::vector<core::PointDecision>& decisions) {
+  std::vector<std::uint32_t> n(images.size(), 0);
+  for (std::size_t i = 0; i < images.size(); ++i) {
+    for (const core::PointId p : images[i]) {
+      const std::int64_t s = find_decision(decisions, p);
+      n[i] += s < 0 || decisions[s].verdict != core::Verdict::kCull;
+    }
+  }
+  return n;
+}
+
+std::uint32_t apply_floor(const std::vector<std::vector<core::PointId>>& images, std::uint32_t floor,
+                          std::vector<core::PointDecision>* decisions) {
+  if (floor == 0) return 0;
+  // Slots of each image's observations, and each point's image list and size.
+  std::vector<std::vector<std::int64_t>> slots(images.size());
+  std::vector<std::uint32_t> track(decisions->size(), 0);
+  std::vector<std::vector<std::uint32_t>> seen_in(decisions->size());
+  for (std::size_t i = 0; i < images.size(); ++i) {
+    for (const core::PointId p : images[i]) {
+      const std::int64_t s = find_decision(*decisions, p);
+      slots[i].push_back(s);
+      if (s < 0) continue;
+      ++track[s];
+      seen_in[s].push_back(static_cast<std::uint32_t>(i));  // once per observation
+    }
+  }
+  std::vector<std::uint32_t> kept = kept_observations(images, *decisions);
+  std::uint32_t restored = 0;
+  std::vector<std::int64_t> candidates;
+  for (std::size_t i = 0; i < images.size(); ++i) {
+    if (kept[i] >= floor) continue;
+    candidates.clear();
+    for (const std::int64_t s : slots[i]) {
+      if (s >= 0 && (*decisions)[s].verdict == core::Verdict::kCull) candidates.push_back(s);
+    }
+    std::sort(candidates.begin(), candidates.end(), [&](std::int64_t a, std::int64_t b) {
+      return track[a] != track[b] ? track[a] > track[b] : (*decisions)[a].point < (*decisions)[b].point;
+    });
+    candidates.erase(std::unique(candidates.begin(), candidates.end()), candidates.end());
+    for (const std::int64_t s : candidates) {
+      if (kept[i] >= floor) break;
+      (*decisions)[s].verdict = core::Verdict::kKeep;
+      ++restored;
+      for (const std::uint32_t j : seen_in[s]) ++kept[j];
+    }
+  }
+  return restored;
+}
+
+}  // namespace keepless::sparsify

@@ -1,0 +1,113 @@
+#pragma once
+// COLMAP sparse models (cameras, images, points3D) in COLMAP's documented
+// layouts, binary (.bin, little-endian) and text (.txt), as COLMAP 3.8 reads
+// and writes them. Records keep their file order and values exactly, so a
+// model read and written in the same format is byte-identical (for files
+// COLMAP wrote; text numbers are written as COLMAP does, "%.17g").
+// Offline tooling: allocates freely, not on the decision path.
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace keepless::io {
+
+// COLMAP's "no 3D point" (kInvalidPoint3DId); "-1" in images.txt.
+constexpr std::uint64_t kNoPoint3D = ~std::uint64_t{0};
+
+// A camera model's COLMAP id and name and its parameter count, or nullptr.
+struct CameraModelInfo {
+  int id;
+  const char* name;
+  int num_params;
+};
+const CameraModelInfo* camera_model_by_id(int id);
+const CameraModelInfo* camera_model_by_name(const std::string& name);
+
+struct ColmapCamera {
+  std::uint32_t id = 0;
+  int model_id = 0;
+  std::uint64_t width = 0;
+  std::uint64_t height = 0;
+  std::vector<double> params;  // exactly the model's count
+};
+
+struct ColmapPoint2D {
+  double x = 0;
+  double y = 0;
+  std::uint64_t point3D_id = kNoPoint3D;
+};
+
+struct ColmapImage {
+  std::uint32_t id = 0;
+  double qvec[4] = {1, 0, 0, 0};  // world-to-camera rotation (w, x, y, z)
+  double tvec[3] = {0, 0, 0};     // world-to-camera translation
+  std::uint32_t camera_id = 0;
+  std::string name;
+  std::vector<ColmapPoint2D> points2D;
+};
+
+struct ColmapTrackElement {
+  std::uint32_t image_id = 0;
+  std::uint32_t point2D_idx = 0;
+};
+
+struct ColmapPoint3D {
+  std::uint64_t id = 0;
+  double xyz[3] = {0, 0, 0};
+  std::uint8_t rgb[3] = {0, 0, 0};
+  double error = 0;
+  std::vector<ColmapTrackElement> track;
+};
+
+struct ColmapModel {
+  std::vector<ColmapCamera> cameras;  // file order
+  std::vector<ColmapImage> images;
+  std::vector<ColmapPoint3D> points;
+};
+
+enum class ColmapFormat { kBinary, kText };
+const char* extension(ColmapFormat format);  // "bin" / "txt"
+
+// The three files' contents, in one format.
+struct ColmapFiles {
+  std::string cameras;
+  std::string images;
+  std::string points3D;
+};
+
+// Parses and cross-checks the three files (`dir` names them in errors as
+// DIR/cameras.bin etc.). On failure returns false and sets *error to one line
+// "FILE:OFFSET: reason" (binary, byte offset of the bad field) or
+// "FILE:LINE: reason" (text, 1-based). Checks: layout and counts against the
+// bytes present (a huge count cannot allocate), known camera models and
+// their parameter counts, finite numbers, unique ids, every image's camera,
+// and that images and tracks reference each other exactly (each 2D point
+// naming a 3D point appears once in that point's track, and back).
+bool parse_colmap(const std::string& dir, const ColmapFiles& files, ColmapFormat format,
+                  ColmapModel* out, std::string* error);
+
+// The model in COLMAP's layout; the text header comments carry the counts
+// and means COLMAP writes.
+ColmapFiles format_colmap(const ColmapModel& model, ColmapFormat format);
+
+// Reads DIR/{cameras,images,points3D}.bin, or the .txt files when the .bin
+// ones are absent (COLMAP's own preference).
+bool read_colmap_model(const std::string& dir, ColmapModel* out, ColmapFormat* format,
+                       std::string* error);
+
+// Writes the three files into a temporary directory beside DIR, then renames
+// it to DIR (when absent) or the files into DIR: a failure leaves no partial
+// file in DIR.
+// Refused when DIR holds a file of the other format (it would shadow ours).
+bool write_colmap_model(const std::string& dir, const ColmapModel& model, ColmapFormat format,
+                        std::string* error);
+
+// Removes the points whose `culled[i]` is set (i indexes model->points) and
+// sets every 2D point that referenced one to kNoPoint3D; all else unchanged.
+void remove_points(ColmapModel* model, const std::vector<bool>& culled);
+
+// Observations (2D points with a 3D point) per image, in model->images order.
+std::vector<std::uint32_t> observations_per_image(const ColmapModel& model);
+
+}  // namespace keepless::io

@@ -1,0 +1,44 @@
+#pragma once
+// Comparing camera centres up to a similarity (bundle adjustment leaves the
+// gauge, scale included, free): Umeyama's least-squares alignment, then the
+// residual distances. Header-only and the one Eigen user of keepless::io, so
+// the io library itself needs nothing beyond core; include it only where
+// Eigen3 is linked (tests, perf).
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <vector>
+
+namespace keepless::io {
+
+struct AlignedDeviation {
+  double max = 0;  // in `reference`'s units
+  double rms = 0;
+  double scale = 1;  // of the similarity mapping `estimate` onto `reference`
+};
+
+// `estimate[i]` and `reference[i]` are one camera's centres (at least 3).
+inline AlignedDeviation aligned_deviation(const std::vector<std::array<double, 3>>& reference,
+                                          const std::vector<std::array<double, 3>>& estimate) {
+  const Eigen::Index n = static_cast<Eigen::Index>(reference.size());
+  Eigen::Matrix3Xd ref(3, n), est(3, n);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    ref.col(i) = Eigen::Vector3d(reference[i].data());
+    est.col(i) = Eigen::Vector3d(estimate[i].data());
+  }
+  const Eigen::Matrix4d T = Eigen::umeyama(est, ref, true);
+  AlignedDeviation d;
+  d.scale = T.block<3, 1>(0, 0).norm();
+  double sum = 0;
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const double e = (T.block<3, 3>(0, 0) * est.col(i) + T.block<3, 1>(0, 3) - ref.col(i)).norm();
+    d.max = std::max(d.max, e);
+    sum += e * e;
+  }
+  d.rms = n > 0 ? std::sqrt(sum / static_cast<double>(n)) : 0;
+  return d;
+}
+
+}  // namespace keepless::io

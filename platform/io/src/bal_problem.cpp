@@ -1,0 +1,174 @@
+#include "keepless/io/bal_problem.hpp"
+
+#include <cinttypes>
+#include <cmath>
+#include <cstdio>
+
+#include "keepless/core/window_file.hpp"
+#include "keepless/io/atomic_file.hpp"
+#include "rotation.hpp"
+
+namespace keepless::io {
+
+namespace {
+
+struct Token {
+  std::size_t start;
+  std::size_t size;
+  std::uint64_t line;
+};
+
+std::vector<Token> tokenize(const std::string& text) {
+  std::vector<Token> tokens;
+  std::uint64_t line = 1;
+  std::size_t i = 0;
+  while (i < text.size()) {
+    const char c = text[i];
+    if (c == '\n') {
+      ++line;
+      ++i;
+    } else if (c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f') {
+      ++i;
+    } else {
+      const std::size_t start = i;
+      while (i < text.size() && text[i] != '\n' && text[i] != ' ' && text[i] != '\t' && text[i] != '\r' &&
+             text[i] != '\v' && text[i] != '\f') {
+        ++i;
+      }
+      tokens.push_back({start, i - start, line});
+    }
+  }
+  return tokens;
+}
+
+}  // namespace
+
+bool parse_bal(const std::string& name, const std::string& text, BalProblem* out, std::string* error) {
+  *out = BalProblem{};
+  const std::vector<Token> tokens = tokenize(text);
+  std::size_t next = 0;
+  std::string word;
+  const auto fail = [&](std::uint64_t line, const std::string& reason) {
+    *error = name + ":" + std::to_string(line) + ": " + reason;
+    return false;
+  };
+  const auto last_line = [&] { return tokens.empty() ? std::uint64_t{1} : tokens.back().line; };
+  // The next token into `word`, or an error naming what was missing.
+  const auto take = [&](const char* what) {
+    if (next >= tokens.size()) return fail(last_line(), std::string("truncated: missing ") + what);
+    word.assign(text, tokens[next].start, tokens[next].size);
+    ++next;
+    return true;
+  };
+  const auto line = [&] { return tokens[next - 1].line; };
+  const auto index = [&](const char* what, std::uint64_t limit, std::uint32_t* v) {
+    std::uint64_t x = 0;
+    if (!take(what)) return false;
+    if (!core::parse_uint64(word.c_str(), &x) || x >= limit) {
+      return fail(line(), std::string("bad ") + what + " '" + word.substr(0, 40) + "' (an integer below " +
+                              std::to_string(limit) + ")");
+    }
+    *v = static_cast<std::uint32_t>(x);
+    return true;
+  };
+  const auto number = [&](const char* what, double* v, std::string* keep) {
+    if (!take(what)) return false;
+    if (!core::parse_finite_double(word.c_str(), v)) {
+      return fail(line(), std::string("bad ") + what + " '" + word.substr(0, 40) + "' (a finite number)");
+    }
+    *keep = word;
+    return true;
+  };
+  std::uint32_t nobs = 0;
+  constexpr std::uint64_t kCount = UINT32_MAX;
+  if (!index("camera count", kCount, &out->num_cameras) || !index("point count", kCount, &out->num_points) ||
+      !index("observation count", kCount, &nobs)) {
+    return false;
+  }
+  const std::uint64_t needed = 3 + 4 * std::uint64_t{nobs} + 9 * std::uint64_t{out->num_cameras} +
+                               3 * std::uint64_t{out->num_points};
+  if (tokens.size() < needed) {
+    return fail(last_line(), "truncated: the counts need " + std::to_string(needed) + " values, the file has " +
+                                 std::to_string(tokens.size()));
+  }
+  if (tokens.size() > needed) return fail(tokens[needed].line, "values after the last point");
+  out->observations.resize(nobs);
+  for (BalObservation& o : out->observations) {
+    if (!index("camera index", out->num_cameras, &o.camera) || !index("point index", out->num_points, &o.point) ||
+        !number("observation x", &o.x, &o.x_text) || !number("observation y", &o.y, &o.y_text)) {
+      return false;
+    }
+  }
+  out->camera_params.resize(9 * std::size_t{out->num_cameras});
+  out->camera_text.resize(out->camera_params.size());
+  for (std::size_t i = 0; i < out->camera_params.size(); ++i) {
+    if (!number("camera parameter", &out->camera_params[i], &out->camera_text[i])) return false;
+  }
+  out->point_params.resize(3 * std::size_t{out->num_points});
+  out->point_text.resize(out->point_params.size());
+  for (std::size_t i = 0; i < out->point_params.size(); ++i) {
+    if (!number("point coordinate", &out->point_params[i], &out->point_text[i])) return false;
+  }
+  return true;
+}
+
+bool read_bal(const std::string& path, BalProblem* out, std::string* error) {
+  std::string text;
+  return read_file(path, &text, error) && parse_bal(path, text, out, error);
+}
+
+std::string format_bal(const BalProblem& p) {
+  std::string s = std::to_string(p.num_cameras) + " " + std::to_string(p.num_points) + " " +
+                  std::to_string(p.observations.size()) + "\n";
+  for (const BalObservation& o : p.observations) {
+    s += std::to_string(o.camera);
+    s += ' ';
+    s += std::to_string(o.point);
+    s += "     ";
+    s += o.x_text;
+    s += ' ';
+    s += o.y_text;
+    s += '\n';
+  }
+  for (const std::string& v : p.camera_text) {
+    s += v;
+    s += '\n';
+  }
+  for (const std::string& v : p.point_text) {
+    s += v;
+    s += '\n';
+  }
+  return s;
+}
+
+BalProblem remove_points(const BalProblem& p, const std::vector<bool>& culled) {
+  BalProblem out;
+  out.num_cameras = p.num_cameras;
+  out.camera_params = p.camera_params;
+  out.camera_text = p.camera_text;
+  std::vector<std::uint32_t> renumber(p.num_points, 0);
+  for (std::uint32_t i = 0; i < p.num_points; ++i) {
+    if (culled[i]) continue;
+    renumber[i] = out.num_points++;
+    for (int k = 0; k < 3; ++k) {
+      out.point_params.push_back(p.point_params[3 * std::size_t{i} + k]);
+      out.point_text.push_back(p.point_text[3 * std::size_t{i} + k]);
+    }
+  }
+  for (const BalObservation& o : p.observations) {
+    if (culled[o.point]) continue;
+    out.observations.push_back(o);
+    out.observations.back().point = renumber[o.point];
+  }
+  return out;
+}
+
+void bal_camera_centre(const BalProblem& p, std::uint32_t i, double centre[3]) {
+  const double* c = &p.camera_params[9 * std::size_t{i}];
+  const double minus_r[3] = {-c[0], -c[1], -c[2]};
+  double rt[3];
+  detail::angle_axis_rotate(minus_r, c + 3, rt);  // R^T t
+  for (int k = 0; k < 3; ++k) centre[k] = -rt[k];
+}
+
+}  // namespace keepless::io

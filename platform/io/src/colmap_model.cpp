@@ -1,0 +1,277 @@
+#include "keepless/io/colmap_model.hpp"
+
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <unordered_map>
+#include <unordered_set>
+
+#include "colmap_parse.hpp"
+#include "keepless/io/atomic_file.hpp"
+
+namespace keepless::io {
+
+namespace {
+
+// COLMAP's camera models (src/base/camera_models.h): id, name, parameters.
+// 0-10 are COLMAP 3.8's; 11 was added in later releases.
+constexpr CameraModelInfo kCameraModels[] = {
+    {0, "SIMPLE_PINHOLE", 3},  {1, "PINHOLE", 4},
+    {2, "SIMPLE_RADIAL", 4},   {3, "RADIAL", 5},
+    {4, "OPENCV", 8},          {5, "OPENCV_FISHEYE", 8},
+    {6, "FULL_OPENCV", 12},    {7, "FOV", 5},
+    {8, "SIMPLE_RADIAL_FISHEYE", 4}, {9, "RADIAL_FISHEYE", 5},
+    {10, "THIN_PRISM_FISHEYE", 12},  {11, "RAD_TAN_THIN_PRISM_FISHEYE", 16},
+};
+
+std::string at(const std::string& file, std::uint64_t pos) { return file + ":" + std::to_string(pos) + ": "; }
+
+// Images and tracks must reference each other exactly; COLMAP itself
+// assumes so (and crashes or mis-counts otherwise).
+bool check_model(const detail::FileNames& names, const detail::Positions& pos, const ColmapModel& m,
+                 std::string* error) {
+  const auto fail = [&](const std::string& file, std::uint64_t p, const std::string& reason) {
+    *error = at(file, p) + reason;
+    return false;
+  };
+  std::unordered_map<std::uint32_t, std::size_t> cameras, images;
+  std::unordered_map<std::uint64_t, std::size_t> points;
+  for (std::size_t i = 0; i < m.cameras.size(); ++i) {
+    if (!cameras.emplace(m.cameras[i].id, i).second) {
+      return fail(names.cameras, pos.camera[i], "duplicate camera id " + std::to_string(m.cameras[i].id));
+    }
+  }
+  for (std::size_t i = 0; i < m.images.size(); ++i) {
+    const ColmapImage& im = m.images[i];
+    if (!images.emplace(im.id, i).second) {
+      return fail(names.images, pos.image[i], "duplicate image id " + std::to_string(im.id));
+    }
+    if (cameras.count(im.camera_id) == 0) {
+      return fail(names.images, pos.image[i],
+                  "image " + std::to_string(im.id) + " names unknown camera " + std::to_string(im.camera_id));
+    }
+    // Names must survive the text format, which ends them at the line's end
+    // and trims them.
+    const auto blank = [](char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f'; };
+    if (im.name.empty() || blank(im.name.front()) || blank(im.name.back()) ||
+        im.name.find_first_of("\n\r") != std::string::npos) {
+      return fail(names.images, pos.image[i],
+                  "image " + std::to_string(im.id) + ": a name must be non-empty, on one line, without blanks at its ends");
+    }
+    if (im.qvec[0] == 0 && im.qvec[1] == 0 && im.qvec[2] == 0 && im.qvec[3] == 0) {
+      return fail(names.images, pos.image[i], "image " + std::to_string(im.id) + " has a zero quaternion");
+    }
+  }
+  for (std::size_t i = 0; i < m.points.size(); ++i) {
+    const std::uint64_t id = m.points[i].id;
+    if (id == kNoPoint3D) return fail(names.points3D, pos.point[i], "point3D id 2^64-1 is COLMAP's 'none'");
+    if (!points.emplace(id, i).second) {
+      return fail(names.points3D, pos.point[i], "duplicate point3D id " + std::to_string(id));
+    }
+  }
+  // Where 2D point k of image i is (binary: its point3D_id field).
+  const auto point2D_at = [&](std::size_t i, std::size_t k) {
+    return pos.binary ? pos.image_points[i] + 24 * k + 16 : pos.image_points[i];
+  };
+  std::vector<std::vector<bool>> in_track(m.images.size());
+  for (std::size_t i = 0; i < m.images.size(); ++i) {
+    const ColmapImage& im = m.images[i];
+    in_track[i].assign(im.points2D.size(), false);
+    for (std::size_t k = 0; k < im.points2D.size(); ++k) {
+      const std::uint64_t p = im.points2D[k].point3D_id;
+      if (p != kNoPoint3D && points.count(p) == 0) {
+        return fail(names.images, point2D_at(i, k),
+                    "image " + std::to_string(im.id) + " 2D point " + std::to_string(k) + " names unknown point3D " +
+                        std::to_string(p));
+      }
+    }
+  }
+  for (std::size_t j = 0; j < m.points.size(); ++j) {
+    const ColmapPoint3D& p = m.points[j];
+    for (std::size_t k = 0; k < p.track.size(); ++k) {
+      const ColmapTrackElement& e = p.track[k];
+      const std::uint64_t where = pos.binary ? pos.point_track[j] + 8 * k : pos.point_track[j];
+      const std::string what = "point3D " + std::to_string(p.id) + " track element " + std::to_string(k) + ": ";
+      const auto im = images.find(e.image_id);
+      if (im == images.end()) return fail(names.points3D, where, what + "unknown image " + std::to_string(e.image_id));
+      const ColmapImage& image = m.images[im->second];
+      const std::uint64_t idx_at = pos.binary ? where + 4 : where;  // the point2D_idx field
+      if (e.point2D_idx >= image.points2D.size()) {
+        return fail(names.points3D, idx_at,
+                    what + "image " + std::to_string(e.image_id) + " has no 2D point " + std::to_string(e.point2D_idx));
+      }
+      if (image.points2D[e.point2D_idx].point3D_id != p.id) {
+        return fail(names.points3D, idx_at,
+                    what + "image " + std::to_string(e.image_id) + " 2D point " + std::to_string(e.point2D_idx) +
+                        " does not name this point");
+      }
+      if (in_track[im->second][e.point2D_idx]) return fail(names.points3D, where, what + "repeated");
+      in_track[im->second][e.point2D_idx] = true;
+    }
+  }
+  for (std::size_t i = 0; i < m.images.size(); ++i) {
+    const ColmapImage& im = m.images[i];
+    for (std::size_t k = 0; k < im.points2D.size(); ++k) {
+      if (im.points2D[k].point3D_id != kNoPoint3D && !in_track[i][k]) {
+        return fail(names.images, point2D_at(i, k),
+                    "image " + std::to_string(im.id) + " 2D point " + std::to_string(k) + " is not in the track of point3D " +
+                        std::to_string(im.points2D[k].point3D_id));
+      }
+    }
+  }
+  return true;
+}
+
+bool exists(const std::string& path) {
+  struct stat st {};
+  return ::stat(path.c_str(), &st) == 0;
+}
+
+}  // namespace
+
+namespace detail {
+
+FileNames file_names(const std::string& dir, ColmapFormat format) {
+  const std::string ext = std::string(".") + extension(format);
+  const std::string base = dir.empty() ? "" : dir + "/";
+  return {base + "cameras" + ext, base + "images" + ext, base + "points3D" + ext};
+}
+
+std::uint64_t count_observations(const ColmapModel& m) {
+  std::uint64_t n = 0;
+  for (const ColmapImage& im : m.images) {
+    for (const ColmapPoint2D& p : im.points2D) n += p.point3D_id != kNoPoint3D;
+  }
+  return n;
+}
+
+}  // namespace detail
+
+const CameraModelInfo* camera_model_by_id(int id) {
+  for (const CameraModelInfo& c : kCameraModels) {
+    if (c.id == id) return &c;
+  }
+  return nullptr;
+}
+
+const CameraModelInfo* camera_model_by_name(const std::string& name) {
+  for (const CameraModelInfo& c : kCameraModels) {
+    if (name == c.name) return &c;
+  }
+  return nullptr;
+}
+
+const char* extension(ColmapFormat format) { return format == ColmapFormat::kBinary ? "bin" : "txt"; }
+
+bool parse_colmap(const std::string& dir, const ColmapFiles& files, ColmapFormat format, ColmapModel* out,
+                  std::string* error) {
+  *out = ColmapModel{};
+  const detail::FileNames names = detail::file_names(dir, format);
+  detail::Positions pos;
+  pos.binary = format == ColmapFormat::kBinary;
+  const bool ok =
+      pos.binary ? detail::parse_cameras_binary(names.cameras, files.cameras, out, &pos, error) &&
+                       detail::parse_images_binary(names.images, files.images, out, &pos, error) &&
+                       detail::parse_points_binary(names.points3D, files.points3D, out, &pos, error)
+                 : detail::parse_cameras_text(names.cameras, files.cameras, out, &pos, error) &&
+                       detail::parse_images_text(names.images, files.images, out, &pos, error) &&
+                       detail::parse_points_text(names.points3D, files.points3D, out, &pos, error);
+  return ok && check_model(names, pos, *out, error);
+}
+
+ColmapFiles format_colmap(const ColmapModel& model, ColmapFormat format) {
+  if (format == ColmapFormat::kBinary) {
+    return {detail::format_binary_cameras(model), detail::format_binary_images(model),
+            detail::format_binary_points(model)};
+  }
+  return {detail::format_text_cameras(model), detail::format_text_images(model), detail::format_text_points(model)};
+}
+
+bool read_colmap_model(const std::string& dir, ColmapModel* out, ColmapFormat* format, std::string* error) {
+  const detail::FileNames bin = detail::file_names(dir, ColmapFormat::kBinary);
+  *format = exists(bin.cameras) && exists(bin.images) && exists(bin.points3D) ? ColmapFormat::kBinary
+                                                                               : ColmapFormat::kText;
+  const detail::FileNames names = detail::file_names(dir, *format);
+  ColmapFiles files;
+  if (!read_file(names.cameras, &files.cameras, error) || !read_file(names.images, &files.images, error) ||
+      !read_file(names.points3D, &files.points3D, error)) {
+    return false;
+  }
+  return parse_colmap(dir, files, *format, out, error);
+}
+
+bool write_colmap_model(const std::string& dir, const ColmapModel& model, ColmapFormat format, std::string* error) {
+  const ColmapFiles files = format_colmap(model, format);
+  const std::string tmp = dir + ".tmp-" + std::to_string(::getpid());
+  const detail::FileNames staged = detail::file_names(tmp, format);
+  const detail::FileNames final_names = detail::file_names(dir, format);
+  const auto io_error = [&](const std::string& path, int err) {
+    *error = path + ":0: cannot write model: " + std::strerror(err);
+    std::remove(staged.cameras.c_str());
+    std::remove(staged.images.c_str());
+    std::remove(staged.points3D.c_str());
+    ::rmdir(tmp.c_str());
+    return false;
+  };
+  // The other format's files beside ours would be what COLMAP (and
+  // read_colmap_model) reads first, or be read instead of ours.
+  const detail::FileNames other =
+      detail::file_names(dir, format == ColmapFormat::kBinary ? ColmapFormat::kText : ColmapFormat::kBinary);
+  for (const std::string* f : {&other.cameras, &other.images, &other.points3D}) {
+    if (exists(*f)) {
+      *error = *f + ":0: a model in the other format is already there; write to another directory";
+      return false;
+    }
+  }
+  if (::mkdir(tmp.c_str(), 0777) != 0) return io_error(tmp, errno);
+  const std::pair<const std::string*, const std::string*> parts[] = {
+      {&staged.cameras, &files.cameras}, {&staged.images, &files.images}, {&staged.points3D, &files.points3D}};
+  for (const auto& [path, contents] : parts) {
+    const int err = write_whole_file(*path, *contents);
+    if (err != 0) return io_error(*path, err);
+  }
+  // A new directory: all three files at once. An existing one: file by file.
+  if (!exists(dir)) {
+    if (std::rename(tmp.c_str(), dir.c_str()) != 0) return io_error(dir, errno);
+    return true;
+  }
+  if (std::rename(staged.cameras.c_str(), final_names.cameras.c_str()) != 0 ||
+      std::rename(staged.images.c_str(), final_names.images.c_str()) != 0 ||
+      std::rename(staged.points3D.c_str(), final_names.points3D.c_str()) != 0) {
+    return io_error(dir, errno);
+  }
+  ::rmdir(tmp.c_str());
+  return true;
+}
+
+void remove_points(ColmapModel* model, const std::vector<bool>& culled) {
+  std::unordered_set<std::uint64_t> gone;
+  std::size_t kept = 0;
+  for (std::size_t i = 0; i < model->points.size(); ++i) {
+    if (culled[i]) {
+      gone.insert(model->points[i].id);
+    } else {
+      if (kept != i) model->points[kept] = std::move(model->points[i]);
+      ++kept;
+    }
+  }
+  model->points.resize(kept);
+  for (ColmapImage& im : model->images) {
+    for (ColmapPoint2D& p : im.points2D) {
+      if (p.point3D_id != kNoPoint3D && gone.count(p.point3D_id) != 0) p.point3D_id = kNoPoint3D;
+    }
+  }
+}
+
+std::vector<std::uint32_t> observations_per_image(const ColmapModel& model) {
+  std::vector<std::uint32_t> n(model.images.size(), 0);
+  for (std::size_t i = 0; i < model.images.size(); ++i) {
+    for (const ColmapPoint2D& p : model.images[i].points2D) n[i] += p.point3D_id != kNoPoint3D;
+  }
+  return n;
+}
+
+}  // namespace keepless::io

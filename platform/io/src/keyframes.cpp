@@ -1,0 +1,164 @@
+#include "keepless/io/keyframes.hpp"
+
+#include <algorithm>
+#include <numeric>
+#include <cmath>
+#include <unordered_map>
+#include <unordered_set>
+
+#include "keepless/io/atomic_file.hpp"
+#include "rotation.hpp"
+
+namespace keepless::io {
+
+void to_metric(const Similarity& s, const double c[3], double out[3]) {
+  for (int i = 0; i < 3; ++i) {
+    const double* r = s.rotation + 3 * i;
+    out[i] = s.scale * (r[0] * c[0] + r[1] * c[1] + r[2] * c[2]) + s.translation[i];
+  }
+}
+
+bool read_similarity(const std::string& path, Similarity* out, std::string* error) {
+  std::string text;
+  if (!read_file(path, &text, error)) return false;
+  double v[13];
+  std::size_t n = 0, at = 0, line = 1;
+  while (at < text.size()) {
+    const std::size_t end = std::min(text.find_first_of(" \t\r\n", at), text.size());
+    if (end == at) {
+      line += text[at] == '\n';
+      ++at;
+      continue;
+    }
+    const std::string word = text.substr(at, end - at);
+    if (n == 13) {
+      *error = path + ":" + std::to_string(line) + ": more than 13 numbers (s, R row-major, t)";
+      return false;
+    }
+    if (!core::parse_finite_double(word.c_str(), &v[n])) {
+      *error = path + ":" + std::to_string(line) + ": bad number '" + word.substr(0, 40) + "'";
+      return false;
+    }
+    ++n;
+    at = end;
+  }
+  if (n != 13) {
+    *error = path + ":" + std::to_string(line) + ": expected 13 numbers (s, R row-major, t), got " + std::to_string(n);
+    return false;
+  }
+  if (!(v[0] > 0)) {
+    *error = path + ":1: the scale must be positive";
+    return false;
+  }
+  out->scale = v[0];
+  std::copy(v + 1, v + 10, out->rotation);
+  std::copy(v + 10, v + 13, out->translation);
+  return true;
+}
+
+const char* to_string(KeyframeOrder order) {
+  switch (order) {
+    case KeyframeOrder::kName: return "name";
+    case KeyframeOrder::kId: return "id";
+    case KeyframeOrder::kFile: return "file";
+  }
+  return "?";
+}
+
+void colmap_camera_centre(const ColmapImage& image, double centre[3]) {
+  double r[9];
+  detail::quaternion_matrix(image.qvec, r);
+  const double* t = image.tvec;
+  for (int i = 0; i < 3; ++i) centre[i] = -(r[i] * t[0] + r[3 + i] * t[1] + r[6 + i] * t[2]);
+}
+
+void matched_centres(const ColmapModel& a, const ColmapModel& b, std::vector<std::array<double, 3>>* in_a,
+                     std::vector<std::array<double, 3>>* in_b) {
+  std::unordered_map<std::uint32_t, const ColmapImage*> in_b_by_id;
+  for (const ColmapImage& im : b.images) in_b_by_id[im.id] = &im;
+  in_a->clear();
+  in_b->clear();
+  for (const ColmapImage& im : a.images) {
+    const auto it = in_b_by_id.find(im.id);
+    if (it == in_b_by_id.end()) continue;
+    colmap_camera_centre(im, in_a->emplace_back().data());
+    colmap_camera_centre(*it->second, in_b->emplace_back().data());
+  }
+}
+
+Keyframes keyframes_from_colmap(const ColmapModel& model, KeyframeOrder order, const Similarity& to_metric_frame) {
+  std::vector<std::size_t> slots(model.images.size());
+  std::iota(slots.begin(), slots.end(), 0);
+  const auto& im = model.images;
+  if (order == KeyframeOrder::kName) {
+    std::stable_sort(slots.begin(), slots.end(), [&](std::size_t a, std::size_t b) {
+      return im[a].name != im[b].name ? im[a].name < im[b].name : im[a].id < im[b].id;
+    });
+  } else if (order == KeyframeOrder::kId) {
+    std::stable_sort(slots.begin(), slots.end(), [&](std::size_t a, std::size_t b) { return im[a].id < im[b].id; });
+  }
+  Keyframes out;
+  std::unordered_set<std::uint64_t> seen;
+  for (const std::size_t i : slots) {
+    const ColmapImage& image = im[i];
+    core::Keyframe kf;
+    kf.id = image.id;
+    double c[3];
+    colmap_camera_centre(image, c);
+    to_metric(to_metric_frame, c, kf.centre);
+    // Camera-to-model rotation, the conjugate of COLMAP's world-to-camera.
+    const double n = std::sqrt(image.qvec[0] * image.qvec[0] + image.qvec[1] * image.qvec[1] +
+                               image.qvec[2] * image.qvec[2] + image.qvec[3] * image.qvec[3]);
+    kf.orientation[0] = image.qvec[0] / n;
+    for (int k = 1; k < 4; ++k) kf.orientation[k] = -image.qvec[k] / n;
+    std::vector<core::Observation> obs;
+    seen.clear();
+    for (const ColmapPoint2D& p : image.points2D) {
+      if (p.point3D_id == kNoPoint3D) continue;
+      if (!seen.insert(p.point3D_id).second) {
+        ++out.duplicates;
+        continue;
+      }
+      obs.push_back({p.point3D_id, p.x, p.y});
+    }
+    out.file.keyframes.push_back(kf);
+    out.file.keyframe_lines.push_back(0);
+    out.file.observations.push_back(std::move(obs));
+  }
+  out.file.needs = core::compute_needs(out.file);
+  return out;
+}
+
+Keyframes keyframes_from_bal(const BalProblem& problem, KeyframeOrder /*order: index = id = file*/,
+                             const Similarity& to_metric_frame) {
+  Keyframes out;
+  out.file.keyframes.resize(problem.num_cameras);
+  out.file.keyframe_lines.assign(problem.num_cameras, 0);
+  out.file.observations.resize(problem.num_cameras);
+  for (std::uint32_t i = 0; i < problem.num_cameras; ++i) {
+    core::Keyframe& kf = out.file.keyframes[i];
+    kf.id = i;
+    double c[3];
+    bal_camera_centre(problem, i, c);
+    to_metric(to_metric_frame, c, kf.centre);
+    const double* r = &problem.camera_params[9 * std::size_t{i}];
+    const double theta = std::sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
+    if (theta > 0) {  // camera-to-world: the rotation by -r
+      const double s = std::sin(theta / 2) / theta;
+      kf.orientation[0] = std::cos(theta / 2);
+      for (int k = 0; k < 3; ++k) kf.orientation[k + 1] = -r[k] * s;
+    }
+  }
+  std::vector<std::unordered_set<std::uint32_t>> seen(problem.num_cameras);
+  for (const BalObservation& o : problem.observations) {
+    if (!seen[o.camera].insert(o.point).second) {
+      ++out.duplicates;
+      continue;
+    }
+    out.file.observations[o.camera].push_back({o.point, o.x, o.y});
+  }
+  out.file.needs = core::compute_needs(out.file);
+  return out;
+}
+
+}  // namespace keepless::io
