@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <algorithm>
 #include <cstring>
 #include <limits>
 #include <unordered_map>
@@ -197,6 +198,17 @@ bool WindowFileParser::within_memory() {
   return fail(text);
 }
 
+const char* WindowFileParser::line_problem(const char* data, std::size_t size, std::size_t before) {
+  // A NUL within the first max_line_bytes decides first, then the length.
+  const std::size_t room = limits_.max_line_bytes > before ? limits_.max_line_bytes - before : 0;
+  if (std::memchr(data, '\0', std::min(size, room)) != nullptr) return "NUL byte in line";
+  if (before + size > limits_.max_line_bytes) {
+    too_long_ = "line longer than " + std::to_string(limits_.max_line_bytes) + " bytes";
+    return too_long_.c_str();
+  }
+  return nullptr;
+}
+
 bool WindowFileParser::feed(const char* data, std::size_t size) {
   if (failed_) return false;
   const char* const stop = data + size;
@@ -204,17 +216,14 @@ bool WindowFileParser::feed(const char* data, std::size_t size) {
     const char* nl = static_cast<const char*>(std::memchr(data, '\n', static_cast<std::size_t>(stop - data)));
     const char* end = nl != nullptr ? nl : stop;
     const auto piece = static_cast<std::size_t>(end - data);
-    if (partial_.size() + piece > limits_.max_line_bytes) {
+    // The same verdict as feed_line on the whole line, however it is
+    // chunked, and at once, not after gigabytes of it.
+    if (const char* problem = line_problem(data, piece, partial_.size())) {
       ++line_no_;
-      return fail("line longer than " + std::to_string(limits_.max_line_bytes) + " bytes");
+      return fail(problem);
     }
     if (nl == nullptr) {  // the rest of this line comes with the next chunk
       partial_.append(data, piece);
-      // A NUL is an error now, not after gigabytes of them.
-      if (std::memchr(data, '\0', piece) != nullptr) {
-        ++line_no_;
-        return fail("NUL byte in line");
-      }
       return true;
     }
     if (partial_.empty()) {
@@ -233,8 +242,7 @@ bool WindowFileParser::feed(const char* data, std::size_t size) {
 bool WindowFileParser::feed_line(const char* data, std::size_t size) {
   if (failed_) return false;
   ++line_no_;
-  if (size > limits_.max_line_bytes) return fail("line longer than " + std::to_string(limits_.max_line_bytes) + " bytes");
-  if (std::memchr(data, '\0', size) != nullptr) return fail("NUL byte in line");
+  if (const char* problem = line_problem(data, size, 0)) return fail(problem);
   // Tokens are split in place, in a bounded copy of the line.
   char line[4097];
   char* buf = line;

@@ -112,12 +112,14 @@ int main(int argc, char** argv) {
   node.publish_status(true);
   const platform::NodeCounters& c = node.counters();
   std::fprintf(stderr,
-               "keepless_node: %s after %llu keyframes, %llu map events, %llu decisions, %llu rejected, "
-               "latency p50 %.3f ms p99 %.3f ms max %.3f ms\n",
+               "keepless_node: %s after %llu keyframes, %llu map events, %llu decisions (%llu skipped), "
+               "%llu rejected, %llu sequence gaps, latency p50 %.3f ms p99 %.3f ms max %.3f ms\n",
                g_stop ? "stopped by signal" : "done", static_cast<unsigned long long>(c.keyframes_received),
                static_cast<unsigned long long>(c.map_events_received),
                static_cast<unsigned long long>(c.decisions_published),
-               static_cast<unsigned long long>(c.messages_rejected), node.latency().quantile(0.5) / 1e6,
+               static_cast<unsigned long long>(c.keyframes_skipped),
+               static_cast<unsigned long long>(c.messages_rejected),
+               static_cast<unsigned long long>(node.order().sequence_gaps()), node.latency().quantile(0.5) / 1e6,
                node.latency().quantile(0.99) / 1e6, static_cast<double>(node.latency().max()) / 1e6);
   return 0;
 }

@@ -4,6 +4,7 @@
 #include <bitset>
 #include <cmath>
 
+#include "keepless/core/window_file.hpp"
 #include "keepless/map_event_ack_t.hpp"
 #include "keepless/platform/recent_ids.hpp"
 #include "keepless/status_t.hpp"
@@ -230,7 +231,7 @@ RejectReason check_keyframe(const keepless::keyframe_t& msg, const core::Window&
   }
   if (msg.image_width <= 0 || msg.image_height <= 0) return RejectReason::kInvalidField;
   // Float-derived quaternions are off by ~1e-7; anything far from unit is a bug upstream.
-  if (std::fabs(norm2 - 1.0) > 1e-3) return RejectReason::kInvalidField;
+  if (std::fabs(norm2 - 1.0) > core::kQuaternionNormTolerance) return RejectReason::kInvalidField;
   if (window.find_keyframe(static_cast<core::KeyframeId>(msg.keyframe_id)) >= 0) {
     return RejectReason::kDuplicateKeyframe;
   }

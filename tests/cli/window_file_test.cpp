@@ -355,6 +355,21 @@ TEST(WindowFileTest, StreamingInChunksGivesTheSameWindow) {
   }
 }
 
+// Found by window_file_fuzzer: a NUL early in a line that is also too long
+// was "NUL byte" when the line came in pieces and "line longer" when whole.
+TEST(WindowFileTest, ChunkingDoesNotChangeTheVerdictOnABadLine) {
+  WindowFileLimits limits;
+  limits.max_line_bytes = 64;
+  std::string line = "kf 1 " + std::string(100, ' ');
+  line[20] = '\0';
+  const std::string whole = parse_error(line + "\n", limits);
+  WindowFileParser parser("w.txt", limits);
+  EXPECT_TRUE(parser.feed(line.data(), 10));
+  EXPECT_FALSE(parser.feed(line.data() + 10, line.size() - 10));
+  EXPECT_EQ(parser.error(), whole);
+  EXPECT_EQ(whole, "w.txt:1: NUL byte in line");
+}
+
 // Issue 15, defect 5: memory followed the file, not the records. A line
 // without end is refused at max_line_bytes, a NUL at once, whatever follows.
 TEST(WindowFileTest, MemoryIsBoundedByTheLineNotTheInput) {

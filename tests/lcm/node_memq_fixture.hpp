@@ -117,6 +117,15 @@ class NodeOnMemq : public ::testing::Test {
     ASSERT_EQ(node_->counters().messages_rejected, 0u);
   }
 
+  // fill() on a node that culls nothing (M = 100): map-event edits alone
+  // shape the window.
+  void fill_without_culling() {
+    NodeConfig c = default_config();
+    c.params.pair_capacity = 100;
+    make_node(c);
+    fill();  // 10: 0..29, 11: 10..39, 12: 20..49
+  }
+
   std::uint64_t rejected(RejectReason r) const { return node_->counters().rejected[static_cast<int>(r)]; }
 
   // The bad message was counted under `r` alone and the window is as before;

@@ -74,10 +74,7 @@ TEST_F(NodeOnMemq, RejectsInfiniteKeypoint) {
 // Defect 2 (issue 15): one stale keyframe id dropped the whole event, its
 // deletions and merges included, and nobody was told.
 TEST_F(NodeOnMemq, AnUnknownKeyframeIdLosesNoValidItemAndIsAcknowledged) {
-  NodeConfig c = default_config();
-  c.params.pair_capacity = 100;  // nothing culled: the edit alone shapes the window
-  make_node(c);
-  fill();  // 10: 0..29, 11: 10..39, 12: 20..49
+  fill_without_culling();  // 10: 0..29, 11: 10..39, 12: 20..49
   keepless::map_event_t e = kt::make_event(4);
   e.deleted_point_id = kt::id_range(0, 10);  // ten deletions
   e.merged_from_id = {45};
@@ -108,10 +105,7 @@ TEST_F(NodeOnMemq, AnUnknownKeyframeIdLosesNoValidItemAndIsAcknowledged) {
 // Each bad merge or removal is refused alone, with its reason; every valid
 // item of the same event is applied.
 TEST_F(NodeOnMemq, BadMergeItemsAreRefusedOneByOne) {
-  NodeConfig c = default_config();
-  c.params.pair_capacity = 100;
-  make_node(c);
-  fill();
+  fill_without_culling();  // 10: 0..29, 11: 10..39, 12: 20..49
   keepless::map_event_t e = kt::make_event(4);
   e.deleted_point_id = {5};
   e.merged_from_id = {1, 2, 3, 3, 4, 6};
@@ -299,10 +293,7 @@ TEST_F(NodeOnMemq, CulledPointsLeaveTheWindow) {
 }
 
 TEST_F(NodeOnMemq, MapEventDeletesMergesAndRemoves) {
-  NodeConfig c = default_config();
-  c.params.pair_capacity = 100;  // nothing culled: the edits alone shape the window
-  make_node(c);
-  fill();  // 10: 0..29, 11: 10..39, 12: 20..49
+  fill_without_culling();  // 10: 0..29, 11: 10..39, 12: 20..49
   keepless::map_event_t e = kt::make_event(4);
   e.deleted_point_id = {0, 1, 12345};  // 12345 is not in the window: ignored
   e.merged_from_id = {21, 45};

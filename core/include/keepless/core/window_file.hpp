@@ -84,6 +84,9 @@ class WindowFileParser {
   bool keyframe_record(char** tokens, int values);
   bool observation_record(char** tokens);
   bool within_memory();
+  // Why a line of which `before` bytes came earlier and `size` bytes are
+  // here is refused, or null.
+  const char* line_problem(const char* data, std::size_t size, std::size_t before);
 
   std::string name_;
   WindowFileLimits limits_;
@@ -96,6 +99,7 @@ class WindowFileParser {
   std::uint64_t line_no_ = 0;
   std::string partial_;  // a line split across feed() chunks
   std::string error_;
+  std::string too_long_;
   bool failed_ = false;
 };
 
