@@ -30,14 +30,14 @@ if ! have_fuzzer; then
 fi
 
 build=build-fuzz
-harnesses=(window_file_fuzzer node_message_fuzzer)
 export CMAKE_CXX_COMPILER_LAUNCHER=${CMAKE_CXX_COMPILER_LAUNCHER:-$(command -v ccache || true)}
 cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=RelWithDebInfo \
-  -DCMAKE_C_COMPILER=clang-14 -DCMAKE_CXX_COMPILER=clang++-14 \
+  -DCMAKE_CXX_COMPILER=clang++-14 \
   -DKEEPLESS_FUZZ=ON -DKEEPLESS_BUILD_PERF=OFF -DKEEPLESS_WERROR=OFF \
   "-DCMAKE_CXX_FLAGS=-fsanitize=address,undefined,fuzzer-no-link -fno-sanitize-recover=all -fno-omit-frame-pointer" \
   "-DCMAKE_EXE_LINKER_FLAGS=-fsanitize=address,undefined" >/dev/null
-cmake --build "$build" -j"${FUZZ_BUILD_JOBS:-2}" --target "${harnesses[@]}"
+cmake --build "$build" -j"${FUZZ_BUILD_JOBS:-2}" --target keepless_fuzzers
+mapfile -t harnesses < "$build/tests/fuzz/harnesses.txt"
 
 status=0
 for h in "${harnesses[@]}"; do

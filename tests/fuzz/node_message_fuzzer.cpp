@@ -118,21 +118,28 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   static std::int64_t inputs = 0;
   static const bool fresh = std::getenv("KEEPLESS_FUZZ_FRESH_NODE") != nullptr;
   fz::Stream stream;
-  if (!shared || fresh) {
-    shared = std::make_unique<Node>(bus(), c);
-  } else {
-    stream.publisher_base = 4 * ++inputs;
+  if (shared && !fresh) {
+    // Ids far from the few an input builds (a bit flip can still forge one:
+    // then the node rightly refuses the reset as stale, and a fresh node is built).
+    stream.publisher_base = 0x5eed000000000000 + 4 * ++inputs;
     keepless::map_event_t reset{};
     reset.reset = true;
     reset.publisher_id = stream.publisher_base;
     const std::vector<std::uint8_t> b = keepless::testing::encode(reset);
+    heard.acks.clear();
     shared->handle_map_event(b.data(), static_cast<std::uint32_t>(b.size()));
+    pump();
+    const bool reset_done = heard.acks.size() == 1 && heard.acks[0].status == keepless::map_event_ack_t::STATUS_APPLIED;
+    if (!reset_done) shared.reset();
+  }
+  if (!shared || fresh) {
+    shared = std::make_unique<Node>(bus(), c);
+    stream.publisher_base = 0;
   }
   Node& node = *shared;
-  pump();
   heard.decisions.clear();
   heard.acks.clear();
-  check(node.window().keyframe_count() == 0, "the reset before the input did not empty the window");
+  check(node.window().keyframe_count() == 0, "the input does not start from an empty window");
   const core::Capacities caps = keepless::platform::window_capacities(c);
   keepless::platform::MessageLimits limits;
   limits.max_observations = c.max_observations;
