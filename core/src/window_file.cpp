@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <algorithm>
 #include <cstring>
 #include <limits>
 #include <unordered_map>
@@ -41,7 +42,9 @@ NumberError read_double(const char* text, double* out) {
   char* end = nullptr;
   const double value = std::strtod(text, &end);
   if (end == text || *end != '\0') return NumberError::kMalformed;
-  if (errno == ERANGE) return NumberError::kOutOfRange;
+  // glibc sets ERANGE for a subnormal result too; that is a finite double.
+  // Out of range: an overflow, or an underflow all the way to 0.
+  if (errno == ERANGE && (value == 0.0 || std::fabs(value) > 1.0)) return NumberError::kOutOfRange;
   if (!std::isfinite(value)) return NumberError::kNonFinite;
   // Plain decimal only: strtod would also take hex floats.
   for (const char* c = text; *c != '\0'; ++c) {
@@ -83,11 +86,6 @@ std::string number_problem(const char* what, const char* token, NumberError e) {
   }
 }
 
-struct PointEntry {
-  std::uint32_t index;  // order of first appearance
-  std::uint32_t views;  // keyframes observing it so far
-};
-
 // (keyframe index, point index) -> one 64-bit key; both are < 2^32 because
 // the limits are 32-bit.
 std::uint64_t observation_key(std::uint32_t kf_index, std::uint32_t point_index) {
@@ -106,7 +104,9 @@ void append_uint(std::string* s, std::uint64_t x) {
   s->append(buf, r.ptr);
 }
 
-void append_keyframe(std::string* s, const Keyframe& kf, const std::vector<Observation>& obs) {
+}  // namespace
+
+void append_window_keyframe(std::string* s, const Keyframe& kf, const std::vector<Observation>& obs) {
   s->append("kf ");
   append_uint(s, kf.id);
   for (double c : kf.centre) {
@@ -114,7 +114,9 @@ void append_keyframe(std::string* s, const Keyframe& kf, const std::vector<Obser
     append_double(s, c);
   }
   const double* q = kf.orientation;
-  if (!(q[0] == 1.0 && q[1] == 0.0 && q[2] == 0.0 && q[3] == 0.0)) {
+  // Bit-exact identity: a -0 component must be written to round-trip.
+  const auto plus_zero = [](double x) { return x == 0.0 && !std::signbit(x); };
+  if (!(q[0] == 1.0 && plus_zero(q[1]) && plus_zero(q[2]) && plus_zero(q[3]))) {
     for (int i = 0; i < 4; ++i) {
       s->push_back(' ');
       append_double(s, q[i]);
@@ -133,8 +135,6 @@ void append_keyframe(std::string* s, const Keyframe& kf, const std::vector<Obser
     s->push_back('\n');
   }
 }
-
-}  // namespace
 
 bool parse_uint64(const char* text, std::uint64_t* out) {
   return text != nullptr && read_uint64(text, out) == NumberError::kOk;
@@ -158,175 +158,241 @@ bool parse_box(const char* text, int* width, int* height) {
   return true;
 }
 
-bool parse_window_text(const std::string& name, std::string text, WindowFile* out,
-                       std::string* error, const WindowFileLimits& limits) {
-  *out = WindowFile{};
-  std::uint64_t line_no = 0;
-  const auto fail = [&](const std::string& reason) {
-    *error = name + ":" + std::to_string(line_no) + ": " + reason;
-    return false;
-  };
+// The parser's bytes per record held (hash-map nodes and buckets, the
+// stored observation), estimated for the memory limit.
+constexpr double kKeyframeBytes = 160;
+constexpr double kPointBytes = 48;
+constexpr double kObservationBytes = 24 + 48;
 
-  std::size_t lines = 0;
-  for (char c : text) lines += (c == '\n');
-  std::unordered_map<std::uint64_t, std::uint32_t> keyframe_index;  // id -> declaration index
-  std::unordered_map<std::uint64_t, PointEntry> points;             // id -> entry
-  std::unordered_map<std::uint64_t, std::uint64_t> observed;        // observation_key -> line
-  points.reserve(std::min<std::size_t>(lines + 1, limits.max_points + 1ULL));
-  observed.reserve(std::min<std::size_t>(lines + 1, limits.max_observations + 1ULL));
-  std::uint64_t observation_total = 0;
-  std::uint64_t pair_arcs = 0;
+WindowFileParser::WindowFileParser(std::string name, WindowFileLimits limits)
+    : name_(std::move(name)), limits_(std::move(limits)) {}
 
-  constexpr int kMaxTokens = 9;  // kf with orientation
-  char* tokens[kMaxTokens];
-  const std::size_t size = text.size();
-  std::size_t begin = 0;
-  while (begin < size) {
-    ++line_no;
-    const char* nl = static_cast<const char*>(std::memchr(text.data() + begin, '\n', size - begin));
-    const std::size_t end = nl != nullptr ? static_cast<std::size_t>(nl - text.data()) : size;
-    const std::size_t next = end + 1;
-    if (std::memchr(text.data() + begin, '\0', end - begin) != nullptr) {
-      return fail("NUL byte in line");
-    }
-    const char* hash = static_cast<const char*>(std::memchr(text.data() + begin, '#', end - begin));
-    const std::size_t stop = hash != nullptr ? static_cast<std::size_t>(hash - text.data()) : end;
+double WindowFileParser::bytes() const {
+  return kKeyframeBytes * static_cast<double>(file_.keyframes.size()) +
+         kPointBytes * static_cast<double>(points_.size()) +
+         kObservationBytes * static_cast<double>(observation_total_) + static_cast<double>(partial_.capacity());
+}
 
-    // Split [begin, stop) in place: each token ends with a written '\0'
-    // (text[size] is the string's own terminator, so writing '\0' is fine).
-    int count = 0;
-    std::size_t i = begin;
-    while (i < stop) {
-      while (i < stop && is_space(text[i])) ++i;
-      if (i >= stop) break;
-      const std::size_t start = i;
-      while (i < stop && !is_space(text[i])) ++i;
-      if (count < kMaxTokens) tokens[count] = &text[start];
-      ++count;
-      text[i] = '\0';
-      ++i;
-    }
-    begin = next;
-    if (count == 0) continue;
+bool WindowFileParser::fail(const std::string& reason) {
+  if (!failed_) error_ = name_ + ":" + std::to_string(line_no_) + ": " + reason;
+  failed_ = true;
+  return false;
+}
 
-    const int values = count - 1;
-    if (std::strcmp(tokens[0], "kf") == 0) {
-      if (values != 4 && values != 8) {
-        return fail("kf needs 4 or 8 values (kf_id cx cy cz [qw qx qy qz]), got " +
-                    std::to_string(values));
-      }
-      Keyframe kf;
-      NumberError e = read_uint64(tokens[1], &kf.id);
-      if (e != NumberError::kOk) return fail(id_problem("keyframe id", tokens[1], e));
-      static const char* const kNames[7] = {"cx", "cy", "cz", "qw", "qx", "qy", "qz"};
-      double* const fields[7] = {&kf.centre[0],      &kf.centre[1],      &kf.centre[2],
-                                 &kf.orientation[0], &kf.orientation[1], &kf.orientation[2],
-                                 &kf.orientation[3]};
-      for (int f = 0; f < values - 1; ++f) {
-        e = read_double(tokens[2 + f], fields[f]);
-        if (e != NumberError::kOk) return fail(number_problem(kNames[f], tokens[2 + f], e));
-      }
-      const auto found = keyframe_index.find(kf.id);
-      if (found != keyframe_index.end()) {
-        return fail("duplicate keyframe id " + std::to_string(kf.id) + " (first declared on line " +
-                    std::to_string(out->keyframe_lines[found->second]) + ")");
-      }
-      if (out->keyframes.size() + 1 > limits.max_keyframes) {
-        return fail("capacity exceeded: more than " + std::to_string(limits.max_keyframes) +
-                    " keyframes");
-      }
-      keyframe_index.emplace(kf.id, static_cast<std::uint32_t>(out->keyframes.size()));
-      out->keyframes.push_back(kf);
-      out->keyframe_lines.push_back(line_no);
-      out->observations.emplace_back();
-    } else if (std::strcmp(tokens[0], "obs") == 0) {
-      if (values != 4) {
-        return fail("obs needs 4 values (kf_id point_id u v), got " + std::to_string(values));
-      }
-      std::uint64_t kf_id = 0;
-      Observation obs;
-      NumberError e = read_uint64(tokens[1], &kf_id);
-      if (e != NumberError::kOk) return fail(id_problem("keyframe id", tokens[1], e));
-      e = read_uint64(tokens[2], &obs.point);
-      if (e != NumberError::kOk) return fail(id_problem("point id", tokens[2], e));
-      e = read_double(tokens[3], &obs.u);
-      if (e != NumberError::kOk) return fail(number_problem("u", tokens[3], e));
-      e = read_double(tokens[4], &obs.v);
-      if (e != NumberError::kOk) return fail(number_problem("v", tokens[4], e));
+void WindowFileParser::fail_at(std::uint64_t line, const std::string& reason) {
+  if (failed_) return;
+  line_no_ = line;
+  fail(reason);
+}
 
-      const auto kf = keyframe_index.find(kf_id);
-      if (kf == keyframe_index.end()) {
-        return fail("unknown keyframe " + std::to_string(kf_id) + " (no kf line before this one)");
-      }
-      const auto point = points.find(obs.point);
-      const bool new_point = point == points.end();
-      const std::uint32_t point_index =
-          new_point ? static_cast<std::uint32_t>(points.size()) : point->second.index;
-      const std::uint64_t key = observation_key(kf->second, point_index);
-      if (!new_point) {
-        const auto seen = observed.find(key);
-        if (seen != observed.end()) {
-          return fail("duplicate observation of point " + std::to_string(obs.point) +
-                      " by keyframe " + std::to_string(kf_id) + " (first on line " +
-                      std::to_string(seen->second) + ")");
-        }
-      }
-      if (observation_total + 1 > limits.max_observations) {
-        return fail("capacity exceeded: more than " + std::to_string(limits.max_observations) +
-                    " observations");
-      }
-      if (new_point && points.size() + 1 > limits.max_points) {
-        return fail("capacity exceeded: more than " + std::to_string(limits.max_points) +
-                    " distinct points");
-      }
-      // The n-th view of a point adds n-1 pairs: sum n(n-1)/2 incrementally.
-      const std::uint32_t views_before = new_point ? 0 : point->second.views;
-      if (pair_arcs + views_before > limits.max_pair_arcs) {
-        return fail("capacity exceeded: more than " + std::to_string(limits.max_pair_arcs) +
-                    " pair arcs");
-      }
-      if (new_point) {
-        points.emplace(obs.point, PointEntry{point_index, 1});
-      } else {
-        ++point->second.views;
-      }
-      observed.emplace(key, line_no);
-      pair_arcs += views_before;
-      ++observation_total;
-      out->observations[kf->second].push_back(obs);
-    } else {
-      return fail("unknown record " + shown(tokens[0]) + " (expected kf or obs)");
-    }
+bool WindowFileParser::within_memory() {
+  if (limits_.max_bytes == 0 || !limits_.solve_bytes) return true;
+  const Capacities needs{static_cast<std::uint32_t>(file_.keyframes.size()),
+                         static_cast<std::uint32_t>(points_.size()),
+                         static_cast<std::uint32_t>(observation_total_), static_cast<std::uint32_t>(pair_arcs_)};
+  const double need = bytes() + limits_.solve_bytes(needs);
+  if (need <= static_cast<double>(limits_.max_bytes)) return true;
+  char text[160];
+  std::snprintf(text, sizeof text, "memory limit exceeded: the window needs about %.0f MB, above the limit of %.0f MB",
+                need / 1048576.0, static_cast<double>(limits_.max_bytes) / 1048576.0);
+  return fail(text);
+}
+
+const char* WindowFileParser::line_problem(const char* data, std::size_t size, std::size_t before) {
+  // A NUL within the first max_line_bytes decides first, then the length.
+  const std::size_t room = limits_.max_line_bytes > before ? limits_.max_line_bytes - before : 0;
+  if (std::memchr(data, '\0', std::min(size, room)) != nullptr) return "NUL byte in line";
+  if (before + size > limits_.max_line_bytes) {
+    too_long_ = "line longer than " + std::to_string(limits_.max_line_bytes) + " bytes";
+    return too_long_.c_str();
   }
+  return nullptr;
+}
 
-  out->needs.max_keyframes = static_cast<std::uint32_t>(out->keyframes.size());
-  out->needs.max_points = static_cast<std::uint32_t>(points.size());
-  out->needs.max_observations = static_cast<std::uint32_t>(observation_total);
-  out->needs.max_pair_arcs = static_cast<std::uint32_t>(pair_arcs);
+bool WindowFileParser::feed(const char* data, std::size_t size) {
+  if (failed_) return false;
+  const char* const stop = data + size;
+  while (data < stop) {
+    const char* nl = static_cast<const char*>(std::memchr(data, '\n', static_cast<std::size_t>(stop - data)));
+    const char* end = nl != nullptr ? nl : stop;
+    const auto piece = static_cast<std::size_t>(end - data);
+    // The same verdict as feed_line on the whole line, however it is
+    // chunked, and at once, not after gigabytes of it.
+    if (const char* problem = line_problem(data, piece, partial_.size())) {
+      ++line_no_;
+      return fail(problem);
+    }
+    if (nl == nullptr) {  // the rest of this line comes with the next chunk
+      partial_.append(data, piece);
+      return true;
+    }
+    if (partial_.empty()) {
+      if (!feed_line(data, piece)) return false;
+    } else {
+      partial_.append(data, piece);
+      const bool ok = feed_line(partial_.data(), partial_.size());
+      partial_.clear();
+      if (!ok) return false;
+    }
+    data = nl + 1;
+  }
   return true;
 }
 
-bool read_window_file(const std::string& path, WindowFile* out, std::string* error,
-                      const WindowFileLimits& limits) {
-  *out = WindowFile{};
-  const auto fail = [&](const char* what, int err) {
-    *error = path + ":0: " + what + ": " + std::strerror(err);
-    return false;
-  };
-  std::FILE* f = std::fopen(path.c_str(), "rb");
-  if (f == nullptr) return fail("cannot open", errno);
-  std::string text;
-  char buf[1 << 16];
-  for (;;) {
-    const std::size_t n = std::fread(buf, 1, sizeof buf, f);
-    text.append(buf, n);
-    if (n < sizeof buf) break;
+bool WindowFileParser::feed_line(const char* data, std::size_t size) {
+  if (failed_) return false;
+  ++line_no_;
+  if (const char* problem = line_problem(data, size, 0)) return fail(problem);
+  // Tokens are split in place, in a bounded copy of the line.
+  char line[4097];
+  char* buf = line;
+  std::string big;
+  if (size + 1 > sizeof line) {
+    big.assign(data, size);
+    big.push_back('\0');
+    buf = big.data();
+  } else {
+    std::memcpy(line, data, size);
+    line[size] = '\0';
   }
-  const bool bad = std::ferror(f) != 0;
-  const int err = errno;
-  std::fclose(f);
-  if (bad) return fail("cannot read", err != 0 ? err : EIO);
-  return parse_window_text(path, std::move(text), out, error, limits);
+  return parse_record(buf, buf + size);
+}
+
+bool WindowFileParser::parse_record(char* begin, char* end) {
+  if (char* hash = static_cast<char*>(std::memchr(begin, '#', static_cast<std::size_t>(end - begin)))) end = hash;
+  constexpr int kMaxTokens = 9;  // kf with orientation
+  char* tokens[kMaxTokens];
+  int count = 0;
+  char* i = begin;
+  while (i < end) {
+    while (i < end && is_space(*i)) ++i;
+    if (i >= end) break;
+    char* start = i;
+    while (i < end && !is_space(*i)) ++i;
+    if (count < kMaxTokens) tokens[count] = start;
+    ++count;
+    *i = '\0';  // i <= end, and *end is the line's own terminator or '#'
+    ++i;
+  }
+  if (count == 0) return true;
+  const int values = count - 1;
+  if (std::strcmp(tokens[0], "kf") == 0) return keyframe_record(tokens, values);
+  if (std::strcmp(tokens[0], "obs") == 0) {
+    if (values != 4) return fail("obs needs 4 values (kf_id point_id u v), got " + std::to_string(values));
+    return observation_record(tokens);
+  }
+  return fail("unknown record " + shown(tokens[0]) + " (expected kf or obs)");
+}
+
+bool WindowFileParser::keyframe_record(char** tokens, int values) {
+  if (values != 4 && values != 8) {
+    return fail("kf needs 4 or 8 values (kf_id cx cy cz [qw qx qy qz]), got " + std::to_string(values));
+  }
+  Keyframe kf;
+  NumberError e = read_uint64(tokens[1], &kf.id);
+  if (e != NumberError::kOk) return fail(id_problem("keyframe id", tokens[1], e));
+  static const char* const kNames[7] = {"cx", "cy", "cz", "qw", "qx", "qy", "qz"};
+  double* const fields[7] = {&kf.centre[0],      &kf.centre[1],      &kf.centre[2],     &kf.orientation[0],
+                             &kf.orientation[1], &kf.orientation[2], &kf.orientation[3]};
+  for (int f = 0; f < values - 1; ++f) {
+    e = read_double(tokens[2 + f], fields[f]);
+    if (e != NumberError::kOk) return fail(number_problem(kNames[f], tokens[2 + f], e));
+  }
+  const double* q = kf.orientation;
+  const double norm2 = q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3];
+  if (!(std::fabs(norm2 - 1.0) <= kQuaternionNormTolerance)) {
+    char text[96];
+    std::snprintf(text, sizeof text, "orientation is not a unit quaternion (|q|^2 = %.6g)", norm2);
+    return fail(text);
+  }
+  const auto found = keyframe_index_.find(kf.id);
+  if (found != keyframe_index_.end()) {
+    return fail("duplicate keyframe id " + std::to_string(kf.id) + " (first declared on line " +
+                std::to_string(file_.keyframe_lines[found->second]) + ")");
+  }
+  if (file_.keyframes.size() + 1 > limits_.max_keyframes) {
+    return fail("capacity exceeded: more than " + std::to_string(limits_.max_keyframes) + " keyframes");
+  }
+  keyframe_index_.emplace(kf.id, static_cast<std::uint32_t>(file_.keyframes.size()));
+  file_.keyframes.push_back(kf);
+  file_.keyframe_lines.push_back(line_no_);
+  file_.observations.emplace_back();
+  return within_memory();
+}
+
+bool WindowFileParser::observation_record(char** tokens) {
+  std::uint64_t kf_id = 0;
+  Observation obs;
+  NumberError e = read_uint64(tokens[1], &kf_id);
+  if (e != NumberError::kOk) return fail(id_problem("keyframe id", tokens[1], e));
+  e = read_uint64(tokens[2], &obs.point);
+  if (e != NumberError::kOk) return fail(id_problem("point id", tokens[2], e));
+  e = read_double(tokens[3], &obs.u);
+  if (e != NumberError::kOk) return fail(number_problem("u", tokens[3], e));
+  e = read_double(tokens[4], &obs.v);
+  if (e != NumberError::kOk) return fail(number_problem("v", tokens[4], e));
+
+  const auto kf = keyframe_index_.find(kf_id);
+  if (kf == keyframe_index_.end()) {
+    return fail("unknown keyframe " + std::to_string(kf_id) + " (no kf line before this one)");
+  }
+  const auto point = points_.find(obs.point);
+  const bool new_point = point == points_.end();
+  const std::uint32_t point_index = new_point ? static_cast<std::uint32_t>(points_.size()) : point->second.index;
+  const std::uint64_t key = observation_key(kf->second, point_index);
+  if (!new_point) {
+    const auto seen = observed_.find(key);
+    if (seen != observed_.end()) {
+      return fail("duplicate observation of point " + std::to_string(obs.point) + " by keyframe " +
+                  std::to_string(kf_id) + " (first on line " + std::to_string(seen->second) + ")");
+    }
+  }
+  if (observation_total_ + 1 > limits_.max_observations) {
+    return fail("capacity exceeded: more than " + std::to_string(limits_.max_observations) + " observations");
+  }
+  if (new_point && points_.size() + 1 > limits_.max_points) {
+    return fail("capacity exceeded: more than " + std::to_string(limits_.max_points) + " distinct points");
+  }
+  // The n-th view of a point adds n-1 pairs: sum n(n-1)/2 incrementally.
+  const std::uint32_t views_before = new_point ? 0 : point->second.views;
+  if (pair_arcs_ + views_before > limits_.max_pair_arcs) {
+    return fail("capacity exceeded: more than " + std::to_string(limits_.max_pair_arcs) + " pair arcs");
+  }
+  if (new_point) {
+    points_.emplace(obs.point, PointEntry{point_index, 1});
+  } else {
+    ++point->second.views;
+  }
+  observed_.emplace(key, line_no_);
+  pair_arcs_ += views_before;
+  ++observation_total_;
+  file_.observations[kf->second].push_back(obs);
+  return within_memory();
+}
+
+bool WindowFileParser::finish(WindowFile* out) {
+  if (!failed_ && !partial_.empty()) {
+    const std::string last = std::move(partial_);
+    partial_.clear();
+    feed_line(last.data(), last.size());
+  }
+  if (failed_) return false;
+  file_.needs.max_keyframes = static_cast<std::uint32_t>(file_.keyframes.size());
+  file_.needs.max_points = static_cast<std::uint32_t>(points_.size());
+  file_.needs.max_observations = static_cast<std::uint32_t>(observation_total_);
+  file_.needs.max_pair_arcs = static_cast<std::uint32_t>(pair_arcs_);
+  *out = std::move(file_);
+  file_ = WindowFile{};
+  return true;
+}
+
+bool parse_window_text(const std::string& name, const std::string& text, WindowFile* out, std::string* error,
+                       const WindowFileLimits& limits) {
+  *out = WindowFile{};
+  WindowFileParser parser(name, limits);
+  if (parser.feed(text.data(), text.size()) && parser.finish(out)) return true;
+  *error = parser.error();
+  return false;
 }
 
 Capacities compute_needs(const WindowFile& file) {
@@ -350,29 +416,9 @@ Capacities compute_needs(const WindowFile& file) {
 std::string format_window_file(const WindowFile& file) {
   std::string s;
   for (std::size_t k = 0; k < file.keyframes.size(); ++k) {
-    append_keyframe(&s, file.keyframes[k], file.observations[k]);
+    append_window_keyframe(&s, file.keyframes[k], file.observations[k]);
   }
   return s;
-}
-
-bool write_window_file(const std::string& path, const WindowFile& file, std::string* error) {
-  std::FILE* f = std::fopen(path.c_str(), "wb");
-  if (f == nullptr) {
-    *error = path + ": cannot open for writing: " + std::strerror(errno);
-    return false;
-  }
-  // One keyframe at a time keeps the buffer small for a whole map.
-  std::string chunk;
-  bool ok = true;
-  for (std::size_t k = 0; ok && k < file.keyframes.size(); ++k) {
-    chunk.clear();
-    append_keyframe(&chunk, file.keyframes[k], file.observations[k]);
-    ok = std::fwrite(chunk.data(), 1, chunk.size(), f) == chunk.size();
-  }
-  const int err = errno;
-  ok = (std::fclose(f) == 0) && ok;
-  if (!ok) *error = path + ": write failed: " + std::strerror(err != 0 ? err : EIO);
-  return ok;
 }
 
 }  // namespace keepless::core

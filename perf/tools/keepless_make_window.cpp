@@ -14,6 +14,7 @@
 #include <unordered_map>
 
 #include "keepless/core/window_file.hpp"
+#include "keepless/platform/window_file_io.hpp"
 #include "synthetic_window.hpp"
 
 namespace {
@@ -78,7 +79,7 @@ int main(int argc, char** argv) {
 
   const keepless::core::WindowFile file = keepless::perf::make_synthetic_window(spec);
   std::string error;
-  if (!keepless::core::write_window_file(out, file, &error)) {
+  if (!keepless::platform::write_window_file(out, file, &error)) {
     std::fprintf(stderr, "keepless_make_window: %s\n", error.c_str());
     return 1;
   }

@@ -8,6 +8,8 @@
 #include <csignal>
 #include <cstring>
 #include <cstdio>
+#include <memory>
+#include <new>
 #include <string>
 
 #include "keepless/core/sparsifier.hpp"
@@ -60,7 +62,24 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "keepless_node: cannot open LCM URL '%s'\n", config.url.c_str());
     return 1;
   }
-  platform::Node node(bus, config);
+  // The fixed memory is checked against the limit before it is allocated.
+  const double need = platform::estimate_node_bytes(config);
+  if (need > static_cast<double>(config.max_memory_mb) * 1048576.0) {
+    std::fprintf(stderr,
+                 "keepless_node: these flags need about %.0f MB of fixed memory, above --max-memory-mb %llu "
+                 "(lower --window, --max-observations or --max-pair-arcs)\n",
+                 need / 1048576.0, static_cast<unsigned long long>(config.max_memory_mb));
+    return 2;
+  }
+  std::unique_ptr<platform::Node> owned;
+  try {
+    owned = std::make_unique<platform::Node>(bus, config);
+  } catch (const std::bad_alloc&) {
+    std::fprintf(stderr, "keepless_node: cannot allocate the fixed memory (about %.0f MB) for these flags\n",
+                 need / 1048576.0);
+    return 2;
+  }
+  platform::Node& node = *owned;
   if (!node.start()) {
     std::fprintf(stderr, "keepless_node: cannot subscribe on '%s'\n", config.url.c_str());
     return 1;
@@ -93,12 +112,14 @@ int main(int argc, char** argv) {
   node.publish_status(true);
   const platform::NodeCounters& c = node.counters();
   std::fprintf(stderr,
-               "keepless_node: %s after %llu keyframes, %llu map events, %llu decisions, %llu rejected, "
-               "latency p50 %.3f ms p99 %.3f ms max %.3f ms\n",
+               "keepless_node: %s after %llu keyframes, %llu map events, %llu decisions (%llu skipped), "
+               "%llu rejected, %llu sequence gaps, latency p50 %.3f ms p99 %.3f ms max %.3f ms\n",
                g_stop ? "stopped by signal" : "done", static_cast<unsigned long long>(c.keyframes_received),
                static_cast<unsigned long long>(c.map_events_received),
                static_cast<unsigned long long>(c.decisions_published),
-               static_cast<unsigned long long>(c.messages_rejected), node.latency().quantile(0.5) / 1e6,
+               static_cast<unsigned long long>(c.keyframes_skipped),
+               static_cast<unsigned long long>(c.messages_rejected),
+               static_cast<unsigned long long>(node.order().sequence_gaps()), node.latency().quantile(0.5) / 1e6,
                node.latency().quantile(0.99) / 1e6, static_cast<double>(node.latency().max()) / 1e6);
   return 0;
 }

@@ -3,15 +3,18 @@
 //   keepless_sparsify --window FILE [--M 100] [--theta 0.5] [--box 64x48] [--decisions OUT]
 //                     [--scope window|newest] [--floor L] [--cost paper|authors|information]
 //                     [--image 640x480] [--max-keyframes N] [--max-points N]
-//                     [--max-observations N] [--max-pair-arcs N]
+//                     [--max-observations N] [--max-pair-arcs N] [--max-memory-mb N]
 //   keepless_sparsify --colmap DIR | --bal FILE [--mode replay|whole] [--K 20] [--order name|id|file]
 //                     [--out DIR|FILE] [--out-format bin|txt] [--scale S | --sim3 FILE]
 //                     [--min-obs-per-image F] (and the flags above; also with --window)
 // The map path (sparsify/model_run.hpp) runs when a map flag is given;
 // --window alone is the single-window path below, unchanged.
 //
-// The whole file is parsed and checked against the hard limits first, then a
-// Window and Sparsifier sized exactly to its needs decide it in one run.
+// The file is parsed as a stream (memory follows the records, not the file)
+// and checked against the hard limits and, record by record, against the
+// memory the decision will need (--max-memory-mb), then a Window and
+// Sparsifier sized exactly to its needs decide it in one run. Only regular
+// files are read (a FIFO or a device is refused, never waited on).
 // Users' scripts read the output, so its shape is a contract:
 //   --decisions OUT: "<point_id> <keep|cull|skip> <flow> <capacity>" a line, by
 //   point id, written to OUT.tmp and renamed (never a partial OUT);
@@ -29,6 +32,7 @@
 #include <cstring>
 #include <exception>
 #include <limits>
+#include <new>
 #include <string>
 
 #include "keepless/core/config.hpp"
@@ -37,8 +41,10 @@
 #include "keepless/core/status.hpp"
 #include "keepless/core/window.hpp"
 #include "keepless/core/window_file.hpp"
+#include "keepless/platform/memory_estimate.hpp"
 #include "keepless/platform/monotonic_clock.hpp"
 #include "sparsify/model_run.hpp"
+#include "keepless/platform/window_file_io.hpp"
 
 namespace {
 
@@ -51,7 +57,7 @@ constexpr const char* kUsage =
     "usage: keepless_sparsify --window FILE [--M 100] [--theta 0.5] [--box 64x48] "
     "[--decisions OUT] [--scope window|newest] [--floor 0] [--cost paper|authors|information] "
     "[--image 640x480] [--max-keyframes 10000] [--max-points 2000000] "
-    "[--max-observations 10000000] [--max-pair-arcs 50000000]; or --colmap DIR | --bal FILE "
+    "[--max-observations 10000000] [--max-pair-arcs 50000000] [--max-memory-mb 2048]; or --colmap DIR | --bal FILE "
     "(or --window FILE) [--mode replay|whole] [--K 20] [--order name|id|file] [--out DIR|FILE] "
     "[--out-format bin|txt] [--scale S | --sim3 FILE] [--min-obs-per-image 30]";
 
@@ -61,6 +67,7 @@ struct Options {
   core::Params params;
   core::WindowFileLimits limits;
   keepless::sparsify::ModelOptions model;  // the map flags (sparsify/model_run.hpp)
+  std::uint64_t max_memory_mb = 2048;
 };
 
 int usage_error(const std::string& reason) {
@@ -99,9 +106,10 @@ int parse_args(int argc, char** argv, Options* opt, bool* help) {
       opt->decisions = value;
     } else if (flag == "--M") {
       std::uint64_t m = 0;
+      // The solver's capacities are int32.
       if (!core::parse_uint64(value, &m) || m < 1 ||
-          m > static_cast<std::uint64_t>(std::numeric_limits<std::int64_t>::max())) {
-        return usage_error(bad + " (an integer >= 1)");
+          m > static_cast<std::uint64_t>(std::numeric_limits<std::int32_t>::max())) {
+        return usage_error(bad + " (an integer in 1..2147483647)");
       }
       opt->params.pair_capacity = static_cast<std::int64_t>(m);
     } else if (flag == "--theta") {
@@ -142,6 +150,11 @@ int parse_args(int argc, char** argv, Options* opt, bool* help) {
       if (!parse_limit(value, &opt->limits.max_observations)) return usage_error(bad);
     } else if (flag == "--max-pair-arcs") {
       if (!parse_limit(value, &opt->limits.max_pair_arcs)) return usage_error(bad);
+    } else if (flag == "--max-memory-mb") {
+      if (!core::parse_uint64(value, &opt->max_memory_mb) || opt->max_memory_mb < 1 ||
+          opt->max_memory_mb > (1ull << 30)) {
+        return usage_error(bad);
+      }
     } else {
       return usage_error("unknown flag '" + flag + "'");
     }
@@ -198,7 +211,12 @@ int run(const Options& opt) {
   const std::uint64_t t_parse = keepless::platform::monotonic_ns();
   core::WindowFile file;
   std::string error;
-  if (!core::read_window_file(opt.window, &file, &error, opt.limits)) {
+  core::WindowFileLimits limits = opt.limits;
+  limits.max_bytes = opt.max_memory_mb << 20;
+  const keepless::platform::MemoryModel model =
+      keepless::platform::probe_memory_model(opt.params, core::SolveMode::kFromScratch, 1);
+  limits.solve_bytes = [&model](const core::Capacities& c) { return model.bytes(c); };
+  if (!keepless::platform::read_window_file(opt.window, &file, &error, limits)) {
     std::fprintf(stderr, "%s\n", error.c_str());
     return kExitInput;
   }
@@ -278,7 +296,11 @@ int main(int argc, char** argv) {
       return keepless::sparsify::run_model(opt.model);
     }
     return run(opt);
-  } catch (const std::exception& e) {  // allocation failure while sizing a huge input
+  } catch (const std::bad_alloc&) {  // below --max-memory-mb, but the machine has less
+    std::fprintf(stderr, "%s:0: cannot allocate the memory this window needs (lower --max-memory-mb)\n",
+                 opt.window.c_str());
+    return kExitInput;
+  } catch (const std::exception& e) {
     std::fprintf(stderr, "keepless_sparsify: %s\n", e.what());
     return kExitInternal;
   }

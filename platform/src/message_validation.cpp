@@ -4,6 +4,9 @@
 #include <bitset>
 #include <cmath>
 
+#include "keepless/core/window_file.hpp"
+#include "keepless/map_event_ack_t.hpp"
+#include "keepless/platform/recent_ids.hpp"
 #include "keepless/status_t.hpp"
 
 namespace keepless::platform {
@@ -20,6 +23,8 @@ static_assert(static_cast<int>(RejectReason::kDuplicateObservation) == S::REJECT
 static_assert(static_cast<int>(RejectReason::kOutOfOrder) == S::REJECT_OUT_OF_ORDER);
 static_assert(static_cast<int>(RejectReason::kUtimeBackwards) == S::REJECT_UTIME_BACKWARDS);
 static_assert(static_cast<int>(RejectReason::kWindowCapacity) == S::REJECT_WINDOW_CAPACITY);
+static_assert(static_cast<int>(RejectReason::kSequenceJump) == S::REJECT_SEQUENCE_JUMP);
+static_assert(static_cast<int>(RejectReason::kUtimeJump) == S::REJECT_UTIME_JUMP);
 static_assert(kRejectReasonCount == S::NUM_REJECT_REASONS);
 static_assert(kRejectReasonCount <= 16, "status_t.rejected has 16 entries");
 
@@ -36,6 +41,8 @@ const char* to_string(RejectReason r) {
     case RejectReason::kOutOfOrder: return "sequence out of order";
     case RejectReason::kUtimeBackwards: return "utime went backwards";
     case RejectReason::kWindowCapacity: return "window capacity exceeded";
+    case RejectReason::kSequenceJump: return "sequence jumped beyond the bound";
+    case RejectReason::kUtimeJump: return "utime jumped beyond the bound";
     case RejectReason::kNone: return "accepted";
   }
   return "?";
@@ -98,7 +105,7 @@ RejectReason check_keyframe_bytes(const void* data, std::size_t size, const Mess
   if (unmapped < 0) return RejectReason::kInvalidField;
   if (static_cast<std::uint32_t>(unmapped) > limits.max_unmapped) return RejectReason::kOversizeCount;
   at += 8 * static_cast<std::size_t>(unmapped);
-  if (size != at) return RejectReason::kTruncated;
+  if (size != at + wire::kKeyframeTrailerBytes) return RejectReason::kTruncated;
   return RejectReason::kNone;
 }
 
@@ -114,15 +121,111 @@ RejectReason check_map_event_bytes(const void* data, std::size_t size, const Mes
     if (static_cast<std::uint32_t>(n) > limits.max_event_ids) return RejectReason::kOversizeCount;
     ids += static_cast<std::size_t>(n) * (i == 1 ? 2 : 1);  // merges carry two ids
   }
-  if (size != wire::kMapEventHeaderBytes + 8 * ids) return RejectReason::kTruncated;
+  if (size != wire::kMapEventHeaderBytes + 8 * ids + wire::kMapEventTrailerBytes) return RejectReason::kTruncated;
   return RejectReason::kNone;
 }
 
-RejectReason check_order(const StreamOrder& order, std::int64_t sequence, std::int64_t utime) {
-  if (!order.started) return RejectReason::kNone;
-  if (sequence <= order.last_sequence) return RejectReason::kOutOfOrder;
-  if (utime < order.last_utime) return RejectReason::kUtimeBackwards;
+namespace {
+
+// (sequence, utime) strictly after (last_sequence, last_utime) within the
+// bounds. Differences in uint64: both operands are int64, so they cannot wrap.
+RejectReason follows(std::int64_t last_sequence, std::int64_t last_utime, std::int64_t sequence,
+                     std::int64_t utime, const OrderBounds& b) {
+  if (sequence <= last_sequence) return RejectReason::kOutOfOrder;
+  if (utime < last_utime) return RejectReason::kUtimeBackwards;
+  if (static_cast<std::uint64_t>(sequence) - static_cast<std::uint64_t>(last_sequence) > b.max_sequence_jump) {
+    return RejectReason::kSequenceJump;
+  }
+  if (static_cast<std::uint64_t>(utime) - static_cast<std::uint64_t>(last_utime) > b.max_utime_jump_us) {
+    return RejectReason::kUtimeJump;
+  }
   return RejectReason::kNone;
+}
+
+}  // namespace
+
+RejectReason check_order(const StreamOrder& order, std::int64_t sequence, std::int64_t utime,
+                         const OrderBounds& bounds) {
+  if (!order.started) return RejectReason::kNone;
+  return follows(order.last_sequence, order.last_utime, sequence, utime, bounds);
+}
+
+OrderTracker::OrderTracker(const OrderBounds& bounds, std::uint32_t max_publishers)
+    : bounds_(bounds), slots_(std::max<std::uint32_t>(max_publishers, 1)) {}
+
+const StreamOrder* OrderTracker::find(std::int64_t publisher) const {
+  for (std::uint32_t i = 0; i < active_; ++i) {
+    if (slots_[i].publisher == publisher) return &slots_[i];
+  }
+  return nullptr;
+}
+
+StreamOrder& OrderTracker::slot(std::int64_t publisher) {
+  if (const StreamOrder* o = find(publisher)) return const_cast<StreamOrder&>(*o);
+  ++seen_;
+  std::uint32_t i = active_;
+  if (active_ < slots_.size()) {
+    ++active_;
+  } else {  // evict the least recently used publisher
+    i = 0;
+    for (std::uint32_t j = 1; j < active_; ++j) {
+      if (slots_[j].last_used < slots_[i].last_used) i = j;
+    }
+    if (last_ == &slots_[i]) last_ = nullptr;
+  }
+  slots_[i] = StreamOrder{};
+  slots_[i].publisher = publisher;
+  return slots_[i];
+}
+
+OrderTracker::Verdict OrderTracker::check(std::int64_t publisher, std::int64_t sequence, std::int64_t utime) {
+  StreamOrder& o = slot(publisher);
+  o.last_used = ++tick_;
+  Verdict v;
+  v.reason = check_order(o, sequence, utime, bounds_);
+  if (v.reason == RejectReason::kNone) return v;
+  const bool continues = o.run_length > 0 &&
+                         follows(o.run_sequence, o.run_utime, sequence, utime, bounds_) == RejectReason::kNone;
+  if (!continues) {
+    o.run_length = 0;
+    o.run_interleaved = false;
+    o.run_reported = false;
+  }
+  ++o.run_length;
+  o.run_sequence = sequence;
+  o.run_utime = utime;
+  if (o.run_length < bounds_.restart_confirm) return v;
+  if (o.run_interleaved) {
+    if (!o.run_reported) ++conflicts_;
+    o.run_reported = true;
+    return v;
+  }
+  // Confirmed: the run is the publisher's order from now on.
+  v.went_back = sequence < o.last_sequence;
+  v.adopted = true;
+  v.reason = RejectReason::kNone;
+  o.last_sequence = sequence;
+  o.last_utime = utime;
+  o.run_length = 0;
+  ++restarts_;
+  return v;
+}
+
+void OrderTracker::accept(std::int64_t publisher, std::int64_t sequence, std::int64_t utime) {
+  StreamOrder& o = slot(publisher);
+  if (o.started && sequence > o.last_sequence) {
+    gaps_ += static_cast<std::uint64_t>(sequence) - static_cast<std::uint64_t>(o.last_sequence) - 1;
+  }
+  o.started = true;
+  o.last_sequence = sequence;
+  o.last_utime = utime;
+  if (o.run_length > 0) o.run_interleaved = true;
+  last_ = &o;
+}
+
+void OrderTracker::clear() {
+  active_ = 0;
+  last_ = nullptr;
 }
 
 RejectReason check_keyframe(const keepless::keyframe_t& msg, const core::Window& window,
@@ -161,7 +264,7 @@ RejectReason check_keyframe(const keepless::keyframe_t& msg, const core::Window&
   }
   if (msg.image_width <= 0 || msg.image_height <= 0) return RejectReason::kInvalidField;
   // Float-derived quaternions are off by ~1e-7; anything far from unit is a bug upstream.
-  if (std::fabs(norm2 - 1.0) > 1e-3) return RejectReason::kInvalidField;
+  if (std::fabs(norm2 - 1.0) > core::kQuaternionNormTolerance) return RejectReason::kInvalidField;
   if (window.find_keyframe(static_cast<core::KeyframeId>(msg.keyframe_id)) >= 0) {
     return RejectReason::kDuplicateKeyframe;
   }
@@ -171,8 +274,7 @@ RejectReason check_keyframe(const keepless::keyframe_t& msg, const core::Window&
   return RejectReason::kNone;
 }
 
-RejectReason check_map_event(const keepless::map_event_t& msg, const core::Window& window,
-                             std::uint64_t* scratch) {
+RejectReason check_map_event(const keepless::map_event_t& msg) {
   if (msg.num_deleted_points < 0 || msg.num_merged_points < 0 || msg.num_removed_keyframes < 0) {
     return RejectReason::kInvalidField;
   }
@@ -183,36 +285,62 @@ RejectReason check_map_event(const keepless::map_event_t& msg, const core::Windo
       msg.merged_into_id.size() != nm || msg.removed_keyframe_id.size() != nr) {
     return RejectReason::kInvalidField;
   }
-  if (msg.reset) return RejectReason::kNone;
+  return RejectReason::kNone;
+}
 
-  // Every removed keyframe is in the window, once.
-  std::bitset<1024> seen;
-  for (std::size_t i = 0; i < nr; ++i) {
-    const std::int32_t slot = window.find_keyframe(static_cast<core::KeyframeId>(msg.removed_keyframe_id[i]));
-    if (slot < 0) return RejectReason::kUnknownKeyframe;
-    if (static_cast<std::size_t>(slot) >= seen.size()) return RejectReason::kInvalidField;
-    if (seen.test(static_cast<std::size_t>(slot))) return RejectReason::kInvalidField;
-    seen.set(static_cast<std::size_t>(slot));
-  }
-
-  // Merges: no self-merge, each source once, no chains (a target is not a
-  // source), no merge into a point deleted by the same event.
+void split_map_event(const keepless::map_event_t& msg, const core::Window& window, const RecentIds* culled,
+                     std::uint64_t* scratch, MapEventItems& out) {
+  using A = keepless::map_event_ack_t;
+  out.merged = out.removed_count = out.refused = 0;
+  const auto refuse = [&](std::int64_t id, std::int8_t why) {
+    out.refused_id[out.refused] = id;
+    out.refused_reason[out.refused] = why;
+    ++out.refused;
+  };
+  const auto nd = static_cast<std::size_t>(msg.num_deleted_points);
+  const auto nm = static_cast<std::size_t>(msg.num_merged_points);
   std::uint64_t* deleted = scratch;
   std::uint64_t* from = scratch + nd;
   for (std::size_t i = 0; i < nd; ++i) deleted[i] = static_cast<std::uint64_t>(msg.deleted_point_id[i]);
-  for (std::size_t i = 0; i < nm; ++i) {
-    if (msg.merged_from_id[i] == msg.merged_into_id[i]) return RejectReason::kInvalidField;
-    from[i] = static_cast<std::uint64_t>(msg.merged_from_id[i]);
-  }
+  for (std::size_t i = 0; i < nm; ++i) from[i] = static_cast<std::uint64_t>(msg.merged_from_id[i]);
   std::sort(deleted, deleted + nd);
   std::sort(from, from + nm);
-  if (has_adjacent_equal(from, nm)) return RejectReason::kInvalidField;
   for (std::size_t i = 0; i < nm; ++i) {
-    const auto into = static_cast<std::uint64_t>(msg.merged_into_id[i]);
-    if (std::binary_search(from, from + nm, into)) return RejectReason::kInvalidField;
-    if (std::binary_search(deleted, deleted + nd, into)) return RejectReason::kInvalidField;
+    const std::int64_t f = msg.merged_from_id[i];
+    const std::int64_t t = msg.merged_into_id[i];
+    const auto source = std::equal_range(from, from + nm, static_cast<std::uint64_t>(f));
+    // A repeat: only then look back for an earlier item with this source.
+    const bool repeated = source.second - source.first > 1 &&
+                          std::find(msg.merged_from_id.begin(), msg.merged_from_id.begin() + static_cast<std::ptrdiff_t>(i), f) !=
+                              msg.merged_from_id.begin() + static_cast<std::ptrdiff_t>(i);
+    if (f == t) {
+      refuse(f, A::ITEM_MERGE_SELF);
+    } else if (repeated) {
+      refuse(f, A::ITEM_MERGE_REPEATED_SOURCE);
+    } else if (std::binary_search(from, from + nm, static_cast<std::uint64_t>(t))) {
+      refuse(f, A::ITEM_MERGE_CHAIN);
+    } else if (std::binary_search(deleted, deleted + nd, static_cast<std::uint64_t>(t))) {
+      refuse(f, A::ITEM_MERGE_INTO_DELETED);
+    } else if (culled != nullptr && culled->contains(static_cast<std::uint64_t>(t))) {
+      refuse(f, A::ITEM_MERGE_INTO_CULLED);
+    } else {
+      out.merged_from[out.merged] = f;
+      out.merged_into[out.merged] = t;
+      ++out.merged;
+    }
   }
-  return RejectReason::kNone;
+  std::bitset<1024> seen;  // window slots (--window <= 256)
+  for (const std::int64_t id : msg.removed_keyframe_id) {
+    const std::int32_t slot = window.find_keyframe(static_cast<core::KeyframeId>(id));
+    if (slot < 0 || static_cast<std::size_t>(slot) >= seen.size()) {
+      refuse(id, A::ITEM_REMOVE_UNKNOWN_KEYFRAME);
+    } else if (seen.test(static_cast<std::size_t>(slot))) {
+      refuse(id, A::ITEM_REMOVE_REPEATED);
+    } else {
+      seen.set(static_cast<std::size_t>(slot));
+      out.removed[out.removed_count++] = id;
+    }
+  }
 }
 
 }  // namespace keepless::platform

@@ -12,9 +12,11 @@
 #include "keepless/decision_t.hpp"
 #include "keepless/decision_timing_t.hpp"
 #include "keepless/keyframe_t.hpp"
+#include "keepless/map_event_ack_t.hpp"
 #include "keepless/map_event_t.hpp"
 #include "keepless/platform/decision_message.hpp"
 #include "keepless/platform/monotonic_clock.hpp"
+#include "keepless/platform/recent_ids.hpp"
 #include "keepless/platform/sliding_window.hpp"
 #include "keepless/status_t.hpp"
 
@@ -47,7 +49,9 @@ struct Node::Impl {
         sliding(capacities, c.max_observations, c.max_event_ids),
         // Incremental: each keyframe edits the previous window's network in
         // place; the decisions are run()'s, bit for bit.
-        sparsifier(capacities, c.params, core::SolveMode::kIncremental) {
+        sparsifier(capacities, c.params, core::SolveMode::kIncremental),
+        order(order_bounds(c), c.max_publishers),
+        culls(c.cull_memory != 0 ? c.cull_memory : capacities.max_points) {
     limits.max_observations = c.max_observations;
     limits.max_event_ids = c.max_event_ids;
     limits.max_unmapped = c.max_unmapped;
@@ -66,6 +70,18 @@ struct Node::Impl {
     event.merged_from_id.reserve(c.max_event_ids);
     event.merged_into_id.reserve(c.max_event_ids);
     event.removed_keyframe_id.reserve(c.max_event_ids);
+    merged_from.resize(c.max_event_ids);
+    merged_into.resize(c.max_event_ids);
+    removed.resize(c.max_event_ids);
+    ack.refused_id.resize(2 * std::size_t{c.max_event_ids});
+    ack.refused_reason.resize(2 * std::size_t{c.max_event_ids});
+    ack.num_refused = static_cast<std::int32_t>(ack.refused_id.size());
+    ack_out.resize(static_cast<std::size_t>(ack.getEncodedSize()));
+    // The largest keyframe_t the byte checks admit: observations, the optional
+    // depths, intrinsics and unmapped keypoints, then publisher_id.
+    pending.resize(wire::kKeyframeHeaderBytes + (wire::kKeyframeBytesPerObservation + 4) * c.max_observations +
+                   wire::kKeyframeOptionalCountBytes + 4 * 8 + 8 * std::size_t{c.max_unmapped} +
+                   wire::kKeyframeTrailerBytes);
     max_decision = reserve_decision(decision, capacities);
     observations.resize(c.max_observations);
     id_scratch.resize(std::max<std::size_t>(c.max_observations, 2 * std::size_t{c.max_event_ids}));
@@ -110,7 +126,22 @@ struct Node::Impl {
     publish_decision();
   }
 
-  void on_keyframe(const void* data, std::uint32_t size) {
+  // A refused run of messages became the publisher's order (OrderTracker);
+  // when it went back in sequence the VO restarted: its old map is gone, so
+  // is the window and the memory of culls.
+  void on_adopted(const OrderTracker::Verdict& v, std::int64_t sequence) {
+    if (!v.adopted || !v.went_back) return;
+    sliding.clear();
+    culls.clear();
+    if (!config.quiet) {
+      std::fprintf(stderr, "keepless_node: publisher restart recognised at seq %lld: window cleared\n",
+                   static_cast<long long>(sequence));
+    }
+  }
+
+  // `decide` false: a newer keyframe is already queued, so this one enters
+  // the window and is answered STATUS_SKIPPED at once.
+  void on_keyframe(const void* data, std::uint32_t size, bool decide) {
     const std::uint64_t t0 = monotonic_ns();
     ++counters.keyframes_received;
     RejectReason r = check_keyframe_bytes(data, size, limits);
@@ -129,17 +160,26 @@ struct Node::Impl {
       reject("keyframe_t", config.keyframe_channel, size, r, false, 0, 0);
       return;
     }
-    r = check_order(order, kf.sequence, kf.utime);
+    const OrderTracker::Verdict v = order.check(kf.publisher_id, kf.sequence, kf.utime);
+    on_adopted(v, kf.sequence);
+    r = v.reason;
     if (r == RejectReason::kNone) r = check_keyframe(kf, sliding.window(), id_scratch.data());
     const std::uint64_t t1 = monotonic_ns();
     if (r == RejectReason::kNone) {
+      // Points culled by a decision the VO may not have applied yet when it
+      // sent this keyframe stay culled.
       const auto n = static_cast<std::uint32_t>(kf.num_observations);
+      std::uint32_t kept = 0;
       for (std::uint32_t i = 0; i < n; ++i) {
-        observations[i].point = static_cast<core::PointId>(kf.point_id[i]);
-        observations[i].u = static_cast<double>(kf.u[i]);
-        observations[i].v = static_cast<double>(kf.v[i]);
-        observations[i].depth = kf.num_depths != 0 ? static_cast<double>(kf.depth[i]) : 0.0;
+        const auto point = static_cast<core::PointId>(kf.point_id[i]);
+        if (culls.contains(point)) continue;
+        observations[kept].point = point;
+        observations[kept].u = static_cast<double>(kf.u[i]);
+        observations[kept].v = static_cast<double>(kf.v[i]);
+        observations[kept].depth = kf.num_depths != 0 ? static_cast<double>(kf.depth[i]) : 0.0;
+        ++kept;
       }
+      counters.stale_observations += n - kept;
       core::Keyframe keyframe;
       keyframe.id = static_cast<core::KeyframeId>(kf.keyframe_id);
       std::copy(kf.centre, kf.centre + 3, keyframe.centre);
@@ -156,7 +196,7 @@ struct Node::Impl {
       }
       keyframe.unmapped = unmapped.data();
       keyframe.unmapped_count = m;
-      const core::Status s = sliding.push(keyframe, observations.data(), n);
+      const core::Status s = sliding.push(keyframe, observations.data(), kept);
       if (s != core::Status::kOk) r = reason_of(s);
     }
     if (r != RejectReason::kNone) {
@@ -165,10 +205,17 @@ struct Node::Impl {
       finish_timing(t0, t1, t1, t1, 0, 0);
       return;
     }
-    order.started = true;
-    order.last_sequence = kf.sequence;
-    order.last_utime = kf.utime;
+    order.accept(kf.publisher_id, kf.sequence, kf.utime);
     const std::uint64_t t2 = monotonic_ns();
+    if (!decide) {
+      ++counters.keyframes_skipped;
+      fill_rejected_decision(decision, request(), sliding.window(), RejectReason::kNone);
+      decision.status = keepless::decision_t::STATUS_SKIPPED;
+      decision.reject_reason = -1;
+      publish_decision();
+      finish_timing(t0, t1, t2, t2, 0, 0);
+      return;
+    }
 
     if (config.latency_target_ms > 0) {
       budget.clock = &clock;
@@ -192,11 +239,35 @@ struct Node::Impl {
     // The ids are the decision's own (int64 and uint64 may alias).
     if (n_culled > 0) {
       const auto* culled = reinterpret_cast<const core::PointId*>(decision.culled_point_id.data());
+      for (std::uint32_t i = 0; i < n_culled; ++i) culls.insert(culled[i]);
       const core::Status s = sliding.drop_points(culled, n_culled);
       if (s != core::Status::kOk) {
         std::fprintf(stderr, "keepless_node: dropping culled points failed: %s\n", core::to_string(s));
       }
     }
+  }
+
+  // Inside spin_once's drain a keyframe waits in `pending` until the next
+  // message shows whether it is the newest.
+  void receive_keyframe(const void* data, std::uint32_t size) {
+    if (!draining || size > pending.size()) {  // oversize: refused unread, pending stays the newest
+      on_keyframe(data, size, true);
+      return;
+    }
+    skip_pending();
+    std::copy_n(static_cast<const std::uint8_t*>(data), size, pending.begin());
+    pending_size = size;
+    has_pending = true;
+  }
+  void skip_pending() {
+    if (!has_pending) return;
+    has_pending = false;
+    on_keyframe(pending.data(), pending_size, false);
+  }
+  void decide_pending() {
+    if (!has_pending) return;
+    has_pending = false;
+    on_keyframe(pending.data(), pending_size, true);
   }
 
   void finish_timing(std::uint64_t t0, std::uint64_t t1, std::uint64_t t2, std::uint64_t t3,
@@ -218,6 +289,7 @@ struct Node::Impl {
   }
 
   void on_map_event(const void* data, std::uint32_t size) {
+    skip_pending();  // it was queued before this event
     ++counters.map_events_received;
     RejectReason r = check_map_event_bytes(data, size, limits);
     event.deleted_point_id.clear();
@@ -229,31 +301,66 @@ struct Node::Impl {
       reject("map_event_t", config.event_channel, size, r, false, 0, 0);
       return;
     }
-    if (!event.reset) r = check_order(order, event.sequence, event.utime);
-    if (r == RejectReason::kNone) r = check_map_event(event, sliding.window(), id_scratch.data());
-    if (r == RejectReason::kNone) {
-      if (event.reset) {
-        sliding.clear();
-      } else {
-        SlidingWindow::Edit e;
-        e.deleted = reinterpret_cast<const core::PointId*>(event.deleted_point_id.data());
-        e.deleted_count = static_cast<std::uint32_t>(event.num_deleted_points);
-        e.merged_from = reinterpret_cast<const core::PointId*>(event.merged_from_id.data());
-        e.merged_into = reinterpret_cast<const core::PointId*>(event.merged_into_id.data());
-        e.merged_count = static_cast<std::uint32_t>(event.num_merged_points);
-        e.removed = reinterpret_cast<const core::KeyframeId*>(event.removed_keyframe_id.data());
-        e.removed_count = static_cast<std::uint32_t>(event.num_removed_keyframes);
-        const core::Status s = sliding.edit(e);
-        if (s != core::Status::kOk) r = reason_of(s);
-      }
+    const OrderTracker::Verdict v = order.check(event.publisher_id, event.sequence, event.utime);
+    on_adopted(v, event.sequence);
+    r = v.reason;
+    if (r == RejectReason::kNone) r = check_map_event(event);
+    MapEventItems items;
+    items.merged_from = merged_from.data();
+    items.merged_into = merged_into.data();
+    items.removed = removed.data();
+    items.refused_id = ack.refused_id.data();
+    items.refused_reason = ack.refused_reason.data();
+    if (r == RejectReason::kNone && event.reset) {
+      sliding.clear();
+      culls.clear();
+    } else if (r == RejectReason::kNone) {
+      split_map_event(event, sliding.window(), &culls, id_scratch.data(), items);
+      SlidingWindow::Edit e;
+      e.deleted = reinterpret_cast<const core::PointId*>(event.deleted_point_id.data());
+      e.deleted_count = static_cast<std::uint32_t>(event.num_deleted_points);
+      e.merged_from = reinterpret_cast<const core::PointId*>(items.merged_from);
+      e.merged_into = reinterpret_cast<const core::PointId*>(items.merged_into);
+      e.merged_count = items.merged;
+      e.removed = reinterpret_cast<const core::KeyframeId*>(items.removed);
+      e.removed_count = items.removed_count;
+      const core::Status s = sliding.edit(e);
+      if (s != core::Status::kOk) r = reason_of(s);
     }
     if (r != RejectReason::kNone) {
       reject("map_event_t", config.event_channel, size, r, true, event.sequence, 0);
+      items = MapEventItems{};
+      publish_ack(r, items);
       return;
     }
-    order.started = true;
-    order.last_sequence = event.sequence;
-    order.last_utime = event.utime;
+    order.accept(event.publisher_id, event.sequence, event.utime);
+    counters.event_items_refused += items.refused;
+    publish_ack(r, items);
+  }
+
+  void publish_ack(RejectReason r, const MapEventItems& items) {
+    using A = keepless::map_event_ack_t;
+    ack.sequence = event.sequence;
+    ack.utime = event.utime;
+    ack.publisher_id = event.publisher_id;
+    ack.reset = event.reset;
+    ack.status = r != RejectReason::kNone ? A::STATUS_REJECTED : items.refused > 0 ? A::STATUS_PARTIAL
+                                                                                    : A::STATUS_APPLIED;
+    ack.reject_reason = r != RejectReason::kNone ? static_cast<std::int8_t>(r) : std::int8_t{-1};
+    const bool applied = r == RejectReason::kNone && !event.reset;
+    ack.deleted_applied = applied ? event.num_deleted_points : 0;
+    ack.merged_applied = static_cast<std::int32_t>(items.merged);
+    ack.removed_applied = static_cast<std::int32_t>(items.removed_count);
+    std::fill(std::begin(ack.refused), std::end(ack.refused), 0);
+    for (std::uint32_t i = 0; i < items.refused; ++i) ++ack.refused[static_cast<std::size_t>(ack.refused_reason[i])];
+    // Within the reserved size: no allocation.
+    ack.refused_id.resize(items.refused);
+    ack.refused_reason.resize(items.refused);
+    ack.num_refused = static_cast<std::int32_t>(items.refused);
+    const int len = ack.encode(ack_out.data(), 0, static_cast<int>(ack_out.size()));
+    if (len > 0) lcm.publish(config.event_ack_channel, ack_out.data(), static_cast<unsigned>(len));
+    ack.refused_id.resize(ack.refused_id.capacity());
+    ack.refused_reason.resize(ack.refused_reason.capacity());
   }
 
   void publish_status(bool final) {
@@ -271,7 +378,15 @@ struct Node::Impl {
     status.capacity_exceeded = static_cast<std::int64_t>(counters.capacity_exceeded);
     status.large_decisions = static_cast<std::int64_t>(counters.large_decisions);
     status.points_culled = static_cast<std::int64_t>(counters.points_culled);
-    status.last_sequence = order.started ? order.last_sequence : -1;
+    status.last_sequence = order.last_sequence();
+    status.sequence_gaps = static_cast<std::int64_t>(order.sequence_gaps());
+    status.keyframes_skipped = static_cast<std::int64_t>(counters.keyframes_skipped);
+    status.stream_restarts = static_cast<std::int64_t>(order.restarts());
+    status.stream_conflicts = static_cast<std::int64_t>(order.conflicts());
+    status.publishers_seen = static_cast<std::int64_t>(order.publishers_seen());
+    status.publishers_active = static_cast<std::int32_t>(order.publishers_active());
+    status.stale_observations = static_cast<std::int64_t>(counters.stale_observations);
+    status.event_items_refused = static_cast<std::int64_t>(counters.event_items_refused);
     const core::Window& w = sliding.window();
     status.window_keyframes = static_cast<std::int32_t>(w.keyframe_count());
     status.window_points = static_cast<std::int32_t>(w.distinct_points());
@@ -295,11 +410,13 @@ struct Node::Impl {
            kf.unmapped_u.capacity() * 8 + unmapped.size() * sizeof(core::Keypoint) +
            (event.deleted_point_id.capacity() + event.merged_from_id.capacity() +
             event.merged_into_id.capacity() + event.removed_keyframe_id.capacity()) * 8 +
-           (decision.window_keyframe_id.capacity() + decision.culled_point_id.capacity()) * 8;
+           (decision.window_keyframe_id.capacity() + decision.culled_point_id.capacity()) * 8 +
+           (merged_from.size() + merged_into.size() + removed.size()) * 8 + ack.refused_id.capacity() * 9 +
+           ack_out.size() + pending.size() + culls.memory_bytes() + order.memory_bytes();
   }
 
   static void keyframe_cb(const lcm_recv_buf_t* rbuf, const char*, void* user) {
-    static_cast<Impl*>(user)->on_keyframe(rbuf->data, rbuf->data_size);
+    static_cast<Impl*>(user)->receive_keyframe(rbuf->data, rbuf->data_size);
   }
   static void event_cb(const lcm_recv_buf_t* rbuf, const char*, void* user) {
     static_cast<Impl*>(user)->on_map_event(rbuf->data, rbuf->data_size);
@@ -327,7 +444,16 @@ struct Node::Impl {
   std::vector<std::uint8_t> out;
   std::array<std::uint8_t, 1024> small{};
   std::size_t max_decision = 0;
-  StreamOrder order;
+  OrderTracker order;
+  RecentIds culls;
+  keepless::map_event_ack_t ack{};
+  std::vector<std::uint8_t> ack_out;
+  std::vector<std::int64_t> merged_from, merged_into, removed;  // a map event's items to apply
+  // spin_once's drain: the newest keyframe waits here (raw bytes).
+  std::vector<std::uint8_t> pending;
+  std::uint32_t pending_size = 0;
+  bool has_pending = false;
+  bool draining = false;
   NodeCounters counters;
   LatencyHistogram latency;
   std::uint64_t start_ns = 0;
@@ -360,22 +486,34 @@ bool Node::start() {
 }
 
 int Node::spin_once(int timeout_ms) {
+  Impl& n = *impl_;
   const std::uint64_t now = monotonic_ns();
-  if (now >= impl_->next_status_ns) impl_->publish_status(false);
-  const std::uint64_t until_status_ms = (impl_->next_status_ns - std::min(impl_->next_status_ns, now)) / 1000000ull;
+  if (now >= n.next_status_ns) n.publish_status(false);
+  const std::uint64_t until_status_ms = (n.next_status_ns - std::min(n.next_status_ns, now)) / 1000000ull;
   const int wait = static_cast<int>(std::min<std::uint64_t>(static_cast<std::uint64_t>(std::max(timeout_ms, 0)),
                                                             until_status_ms));
-  return impl_->lcm.handleTimeout(wait);
+  // With a latency target, drain what is queued before deciding: only the
+  // newest keyframe is decided, the older ones are answered SKIPPED at once.
+  // (Without one, replays stay byte-for-byte: every keyframe is decided.)
+  n.draining = n.config.latency_target_ms > 0;
+  const int got = n.lcm.handleTimeout(wait);
+  lcm_t* l = n.lcm.getUnderlyingLCM();
+  for (std::uint32_t i = 0; got > 0 && n.draining && i < 2 * n.config.queue_capacity; ++i) {
+    if (lcm_handle_timeout(l, 0) <= 0) break;
+  }
+  n.draining = false;
+  n.decide_pending();
+  return got;
 }
 
 void Node::publish_status(bool final) { impl_->publish_status(final); }
 bool Node::finished() const { return impl_->finished; }
-void Node::handle_keyframe(const void* data, std::uint32_t size) { impl_->on_keyframe(data, size); }
+void Node::handle_keyframe(const void* data, std::uint32_t size) { impl_->on_keyframe(data, size, true); }
 void Node::handle_map_event(const void* data, std::uint32_t size) { impl_->on_map_event(data, size); }
 const core::Window& Node::window() const { return impl_->sliding.window(); }
 const NodeCounters& Node::counters() const { return impl_->counters; }
 const LatencyHistogram& Node::latency() const { return impl_->latency; }
-const StreamOrder& Node::order() const { return impl_->order; }
+const OrderTracker& Node::order() const { return impl_->order; }
 std::size_t Node::memory_bytes() const { return impl_->memory_bytes(); }
 std::size_t Node::max_decision_bytes() const { return impl_->max_decision; }
 

@@ -5,6 +5,8 @@
 #include <cstdlib>
 #include <cstring>
 
+#include "keepless/platform/memory_estimate.hpp"
+
 namespace keepless::platform {
 
 namespace {
@@ -52,6 +54,7 @@ std::string node_usage() {
          "  --decision-channel NAME   decision_t output (default KEEPLESS_DECISION)\n"
          "  --timing-channel NAME     decision_timing_t output (default KEEPLESS_DECISION_TIMING)\n"
          "  --status-channel NAME     status_t output (default KEEPLESS_STATUS)\n"
+         "  --event-ack-channel NAME  map_event_ack_t output (default KEEPLESS_MAP_EVENT_ACK)\n"
          "  --window K                keyframes in the sliding window (default 20)\n"
          "  --max-observations N      observations per keyframe_t accepted (default 2000)\n"
          "  --max-event-ids N         ids per list of a map_event_t accepted (default 1024)\n"
@@ -59,6 +62,14 @@ std::string node_usage() {
          "                            counts them)\n"
          "  --max-pair-arcs N         solver pair-arc capacity (default 0: worst case K*N*(K-1)/2;\n"
          "                            less saves memory, a window beyond it is answered 'capacity exceeded')\n"
+         "  --max-memory-mb N         refuse to start when the fixed memory would exceed N MB (default 1024)\n"
+         "  --max-sequence-jump N     refuse a sequence more than N above the publisher's last (default 1000000)\n"
+         "  --max-utime-jump-s X      refuse a utime more than X s above the publisher's last (default 600)\n"
+         "  --restart-confirm N       N consecutive refused messages in order among themselves become the\n"
+         "                            publisher's new order: a restart or a poisoned order (default 3, 2..64)\n"
+         "  --max-publishers N        publisher ids tracked, each with its own order (default 4)\n"
+         "  --cull-memory N           culled point ids remembered against in-flight keyframes\n"
+         "                            (default 0: the window's point capacity)\n"
          "  --M N                     pair -> sink capacity (default 100)\n"
          "  --theta X                 keep iff flow > X * n(n-1)/2 (default 0.5)\n"
          "  --box WxH                 spatial-diversity box in pixels (default 64x48)\n"
@@ -115,13 +126,14 @@ ParseResult parse_node_arguments(int argc, const char* const* argv, NodeConfig& 
       if (value.empty()) return bad("empty");
       config.url = value;
     } else if (flag == "--keyframe-channel" || flag == "--event-channel" || flag == "--decision-channel" ||
-               flag == "--timing-channel" || flag == "--status-channel") {
+               flag == "--timing-channel" || flag == "--status-channel" || flag == "--event-ack-channel") {
       if (value.empty()) return bad("empty channel name");
       std::string& target = flag == "--keyframe-channel" ? config.keyframe_channel
                             : flag == "--event-channel"  ? config.event_channel
                             : flag == "--decision-channel" ? config.decision_channel
                             : flag == "--timing-channel"   ? config.timing_channel
-                                                           : config.status_channel;
+                            : flag == "--status-channel"   ? config.status_channel
+                                                           : config.event_ack_channel;
       target = value;
     } else if (flag == "--window") {
       if (!parse_u64(value, 2, 256, n)) return bad("expected an integer in 2..256");
@@ -138,6 +150,25 @@ ParseResult parse_node_arguments(int argc, const char* const* argv, NodeConfig& 
     } else if (flag == "--max-pair-arcs") {
       if (!parse_u64(value, 0, 1u << 28, n)) return bad("expected an integer in 0..2^28");
       config.max_pair_arcs = static_cast<std::uint32_t>(n);
+    } else if (flag == "--max-memory-mb") {
+      if (!parse_u64(value, 1, 1u << 24, n)) return bad("expected an integer in 1..16777216");
+      config.max_memory_mb = n;
+    } else if (flag == "--max-sequence-jump") {
+      if (!parse_u64(value, 1, std::numeric_limits<std::int64_t>::max(), n)) return bad("expected an integer >= 1");
+      config.max_sequence_jump = n;
+    } else if (flag == "--max-utime-jump-s") {
+      double t = 0;
+      if (!parse_double(value, t) || t <= 0 || t > 1e9) return bad("expected seconds in (0, 1e9]");
+      config.max_utime_jump_s = t;
+    } else if (flag == "--restart-confirm") {
+      if (!parse_u64(value, 2, 64, n)) return bad("expected an integer in 2..64");
+      config.restart_confirm = static_cast<std::uint32_t>(n);
+    } else if (flag == "--max-publishers") {
+      if (!parse_u64(value, 1, 64, n)) return bad("expected an integer in 1..64");
+      config.max_publishers = static_cast<std::uint32_t>(n);
+    } else if (flag == "--cull-memory") {
+      if (!parse_u64(value, 0, 1u << 26, n)) return bad("expected an integer in 0..2^26");
+      config.cull_memory = static_cast<std::uint32_t>(n);
     } else if (flag == "--M") {
       if (!parse_u64(value, 1, 1u << 30, n)) return bad("expected an integer >= 1");
       config.params.pair_capacity = static_cast<std::int64_t>(n);
@@ -199,6 +230,14 @@ ParseResult parse_node_arguments(int argc, const char* const* argv, NodeConfig& 
   return ParseResult::kOk;
 }
 
+OrderBounds order_bounds(const NodeConfig& config) {
+  OrderBounds b;
+  b.max_sequence_jump = config.max_sequence_jump;
+  b.max_utime_jump_us = static_cast<std::uint64_t>(config.max_utime_jump_s * 1e6);
+  b.restart_confirm = config.restart_confirm;
+  return b;
+}
+
 core::Capacities window_capacities(const NodeConfig& config) {
   core::Capacities c;
   const std::uint64_t k = config.window;
@@ -211,6 +250,20 @@ core::Capacities window_capacities(const NodeConfig& config) {
   c.max_pair_arcs = config.max_pair_arcs != 0 ? config.max_pair_arcs
                                                : static_cast<std::uint32_t>(obs * (k - 1) / 2);
   return c;
+}
+
+}  // namespace keepless::platform
+
+namespace keepless::platform {
+
+double estimate_node_bytes(const NodeConfig& config) {
+  const core::Capacities caps = window_capacities(config);
+  const MemoryModel model = probe_memory_model(config.params, core::SolveMode::kIncremental, 2);
+  const double ids = config.cull_memory != 0 ? config.cull_memory : caps.max_points;
+  // Sliding-window scratch, message objects and buffers, decision arrays, cull memory.
+  const double messages = 80.0 * config.max_observations + 60.0 * config.max_event_ids +
+                          16.0 * (caps.max_points + caps.max_keyframes) + 8.0 * caps.max_points;
+  return model.bytes(caps) + messages + 40.0 * ids;
 }
 
 }  // namespace keepless::platform

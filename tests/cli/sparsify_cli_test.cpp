@@ -6,6 +6,7 @@
 #include <fcntl.h>
 #include <gtest/gtest.h>
 #include <spawn.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -24,6 +25,7 @@
 #include "keepless/core/config.hpp"
 #include "keepless/core/decision.hpp"
 #include "keepless/core/window_file.hpp"
+#include "keepless/platform/window_file_io.hpp"
 #include "reference_policies.hpp"
 #include "reference_sparsifier.hpp"
 
@@ -269,6 +271,7 @@ TEST_F(SparsifyCliTest, FlagErrorsPrintOneUsageLine) {
       {"--window", window, "--M", "-5"},
       {"--window", window, "--M", "1.5"},
       {"--window", window, "--M", "99999999999999999999"},
+      {"--window", window, "--M", "2147483648"},  // above the solver's int32 (issue 15: was exit 1)
       {"--window", window, "--theta", "1.5"},
       {"--window", window, "--theta", "-0.1"},
       {"--window", window, "--theta", "nan"},
@@ -408,7 +411,7 @@ void expect_matches_reference(const Result& r, const std::string& window, const 
   ASSERT_EQ(r.status, 0) << r.err;
   core::WindowFile file;
   std::string error;
-  ASSERT_TRUE(core::read_window_file(window, &file, &error)) << error;
+  ASSERT_TRUE(keepless::platform::read_window_file(window, &file, &error)) << error;
   std::vector<test::RefKeyframe> frames;
   for (std::size_t k = 0; k < file.keyframes.size(); ++k) {
     test::RefKeyframe f;
@@ -546,7 +549,7 @@ TEST_F(SparsifyCliTest, GeneratorWritesTracksOverConsecutiveKeyframes) {
   ASSERT_EQ(r.status, 0) << r.err;
   core::WindowFile file;
   std::string error;
-  ASSERT_TRUE(core::read_window_file(path("small.txt"), &file, &error)) << error;
+  ASSERT_TRUE(keepless::platform::read_window_file(path("small.txt"), &file, &error)) << error;
   EXPECT_EQ(file.keyframes.size(), 10u);    // the preset
   EXPECT_EQ(file.needs.max_points, 1500u);  // the override
   EXPECT_EQ(json_int(last_line(r.out), "points"), 1500);
@@ -588,6 +591,58 @@ TEST_F(SparsifyCliTest, MatchesReferenceOnGeneratedWindows) {
 }
 
 #endif  // KEEPLESS_MAKE_WINDOW_BIN
+
+
+// Issue 15, defect 5: a FIFO with no writer blocked open() forever and
+// /dev/zero ended in bad_alloc (exit 1). Neither is a regular file: refused
+// on line 0 at once.
+TEST_F(SparsifyCliTest, NonRegularFilesAreRefusedWithoutBlocking) {
+  const std::string fifo = path("fifo");
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  expect_error_result(sparsify({"--window", fifo, "--decisions", path("decisions.txt")}), fifo, 0,
+                      "not a regular file");
+  expect_error_result(sparsify({"--window", "/dev/zero", "--decisions", path("decisions.txt")}), "/dev/zero", 0,
+                      "not a regular file");
+}
+
+// A large file whose first line is bad costs one line, not the whole file.
+TEST_F(SparsifyCliTest, ALongFileWithABadFirstLineFailsOnLineOne) {
+  std::string text = "kf 1 0 0 0 x\n";
+  for (int i = 0; i < 200000; ++i) text += "obs 1 5 0 0\n";
+  expect_input_error(text, 1, "kf needs 4 or 8 values");
+  expect_input_error(std::string(1 << 20, 'k'), 1, "line longer than 4096 bytes");
+}
+
+// Issue 15, defect 6: 317 keyframes x 997 shared points (49.96M pair arcs)
+// is inside every default limit and ended in bad_alloc, exit 1. Its memory
+// is now checked record by record: the line that crosses --max-memory-mb is
+// the error, before anything is allocated for the solve.
+TEST_F(SparsifyCliTest, AWindowBeyondTheMemoryLimitFailsOnTheCrossingLine) {
+  std::string text;
+  for (int k = 0; k < 317; ++k) {
+    text += "kf " + std::to_string(k) + " " + std::to_string(k) + " 0 0\n";
+    for (int p = 0; p < 997; ++p) text += "obs " + std::to_string(k) + " " + std::to_string(p) + " 1 1\n";
+  }
+  const std::string window = write("huge.txt", text);
+  const Result r = sparsify({"--window", window, "--decisions", path("decisions.txt"), "--max-memory-mb", "64"});
+  EXPECT_EQ(r.status, 2) << r.err;
+  EXPECT_EQ(count_lines(r.err), 1u) << r.err;
+  EXPECT_NE(r.err.find("memory limit exceeded"), std::string::npos) << r.err;
+  const long line = std::strtol(r.err.c_str() + window.size() + 1, nullptr, 10);
+  EXPECT_GT(line, 1000) << r.err;
+  EXPECT_LT(line, 317 * 998) << "refused before the end of the file: " << r.err;
+  // The default limit refuses it too.
+  const Result d = sparsify({"--window", window});
+  EXPECT_EQ(d.status, 2) << d.err;
+  EXPECT_NE(d.err.find("memory limit exceeded"), std::string::npos) << d.err;
+}
+
+// Issue 15, defect 7: the node refuses zero and non-unit quaternions; so
+// does the offline tool.
+TEST_F(SparsifyCliTest, ZeroOrNonUnitQuaternionIsRefused) {
+  expect_input_error(std::string(kGoodHead) + "kf 30 0 0 0 0 0 0 0\n", 5, "not a unit quaternion");
+  expect_input_error(std::string(kGoodHead) + "kf 30 0 0 0 2 0 0 0\n", 5, "not a unit quaternion");
+}
 
 }  // namespace
 }  // namespace keepless

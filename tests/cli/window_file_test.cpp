@@ -1,6 +1,7 @@
 // The window-file reader and writer, in process.
 
 #include "keepless/core/window_file.hpp"
+#include "keepless/platform/window_file_io.hpp"
 
 #include <gtest/gtest.h>
 
@@ -9,6 +10,9 @@
 #include <cstdio>
 #include <cstring>
 #include <string>
+
+#include <sys/stat.h>
+#include <unistd.h>
 
 namespace keepless::core {
 namespace {
@@ -204,9 +208,9 @@ TEST(WindowFileTest, EachLimitFailsOnTheLineThatCrossesIt) {
 TEST(WindowFileTest, UnreadableFileIsLineZero) {
   WindowFile f;
   std::string error;
-  EXPECT_FALSE(read_window_file("/nonexistent/keepless/w.txt", &f, &error));
+  EXPECT_FALSE(platform::read_window_file("/nonexistent/keepless/w.txt", &f, &error));
   EXPECT_EQ(error.rfind("/nonexistent/keepless/w.txt:0: ", 0), 0u) << error;
-  EXPECT_FALSE(read_window_file("/", &f, &error));  // a directory
+  EXPECT_FALSE(platform::read_window_file("/", &f, &error));  // a directory
   EXPECT_EQ(error.rfind("/:0: ", 0), 0u) << error;
 }
 
@@ -229,8 +233,15 @@ TEST(WindowFileTest, WriteThenReadIsBitIdentical) {
     Keyframe kf;
     kf.id = k == 0 ? 18446744073709551615ULL : k * 1000;
     for (double& c : kf.centre) c = any_finite();
-    if (k % 2 == 1) {
-      for (double& q : kf.orientation) q = any_finite();
+    if (k % 2 == 1) {  // any bits, then made unit (the reader refuses others)
+      double n2 = 0;
+      for (double& q : kf.orientation) {
+        int exponent = 0;
+        q = std::frexp(any_finite(), &exponent);  // mantissa bits, magnitude in [0.5, 1)
+        n2 += q * q;
+      }
+      for (double& q : kf.orientation) q /= std::sqrt(n2);
+      kf.orientation[1] = -kf.orientation[1];
     }
     f.keyframes.push_back(kf);
     f.observations.emplace_back();
@@ -265,9 +276,9 @@ TEST(WindowFileTest, WriteThenReadIsBitIdentical) {
   // The file writer produces the same bytes as the formatter.
   const std::string path = ::testing::TempDir() + "keepless_window_file_test.txt";
   std::string error;
-  ASSERT_TRUE(write_window_file(path, f, &error)) << error;
+  ASSERT_TRUE(platform::write_window_file(path, f, &error)) << error;
   WindowFile h;
-  ASSERT_TRUE(read_window_file(path, &h, &error)) << error;
+  ASSERT_TRUE(platform::read_window_file(path, &h, &error)) << error;
   EXPECT_EQ(format_window_file(h), text);
   std::remove(path.c_str());
 }
@@ -325,6 +336,111 @@ TEST(WindowFileTest, ParseBox) {
                           "2147483648x1", "6.4x48", ""}) {
     EXPECT_FALSE(parse_box(bad, &w, &h)) << bad;
   }
+}
+
+// Chunk boundaries anywhere give the same window as one piece.
+TEST(WindowFileTest, StreamingInChunksGivesTheSameWindow) {
+  const std::string text =
+      "# w\nkf 1 0.5 0 0\nobs 1 7 1.25 2\n\nkf 2 1 0 0 1 0 0 0 # c\nobs 2 7 3 4\nobs 1 8 5 6";  // no final newline
+  const std::string whole = format_window_file(parse_ok(text));
+  for (std::size_t step : {1u, 2u, 3u, 7u, 64u}) {
+    WindowFileParser parser("w.txt");
+    for (std::size_t i = 0; i < text.size(); i += step) {
+      ASSERT_TRUE(parser.feed(text.data() + i, std::min(step, text.size() - i))) << parser.error();
+    }
+    WindowFile f;
+    ASSERT_TRUE(parser.finish(&f)) << parser.error();
+    EXPECT_EQ(format_window_file(f), whole) << "chunks of " << step;
+    EXPECT_EQ(f.needs.max_observations, 3u);
+  }
+}
+
+// Found by window_file_fuzzer: a NUL early in a line that is also too long
+// was "NUL byte" when the line came in pieces and "line longer" when whole.
+TEST(WindowFileTest, ChunkingDoesNotChangeTheVerdictOnABadLine) {
+  WindowFileLimits limits;
+  limits.max_line_bytes = 64;
+  std::string line = "kf 1 " + std::string(100, ' ');
+  line[20] = '\0';
+  const std::string whole = parse_error(line + "\n", limits);
+  WindowFileParser parser("w.txt", limits);
+  EXPECT_TRUE(parser.feed(line.data(), 10));
+  EXPECT_FALSE(parser.feed(line.data() + 10, line.size() - 10));
+  EXPECT_EQ(parser.error(), whole);
+  EXPECT_EQ(whole, "w.txt:1: NUL byte in line");
+}
+
+// Issue 15, defect 5: memory followed the file, not the records. A line
+// without end is refused at max_line_bytes, a NUL at once, whatever follows.
+TEST(WindowFileTest, MemoryIsBoundedByTheLineNotTheInput) {
+  WindowFileParser parser("w.txt");
+  const std::string chunk(1 << 16, '1');
+  bool ok = true;
+  int fed = 0;
+  for (; fed < 1000 && ok; ++fed) ok = parser.feed(chunk.data(), chunk.size());
+  EXPECT_FALSE(ok);
+  EXPECT_EQ(fed, 1) << "refused in the first chunk";
+  EXPECT_EQ(parser.error(), "w.txt:1: line longer than 4096 bytes");
+  EXPECT_LT(parser.bytes(), 8192.0);
+  WindowFileParser nul("w.txt");
+  const std::string zeros(100, '\0');
+  EXPECT_FALSE(nul.feed(zeros.data(), zeros.size()));
+  EXPECT_EQ(nul.error(), "w.txt:1: NUL byte in line");
+}
+
+TEST(WindowFileTest, MemoryLimitFailsOnTheLineThatCrossesIt) {
+  WindowFileLimits limits;
+  limits.solve_bytes = [](const Capacities& c) { return 1000.0 * c.max_observations; };
+  limits.max_bytes = 3500;  // the parser's own bytes push the third observation over
+  const std::string error = parse_error("kf 1 0 0 0\nobs 1 1 0 0\nobs 1 2 0 0\nobs 1 3 0 0\n", limits);
+  EXPECT_EQ(error_line(error), 4) << error;
+  EXPECT_NE(error.find("memory limit exceeded"), std::string::npos) << error;
+  limits.max_bytes = 0;  // unchecked
+  parse_ok("kf 1 0 0 0\nobs 1 1 0 0\nobs 1 2 0 0\nobs 1 3 0 0\n", limits);
+}
+
+// Issue 15, defect 7: the identity test with == dropped the sign of -0.
+TEST(WindowFileTest, NegativeZeroOrientationRoundTrips) {
+  WindowFile f;
+  Keyframe kf;
+  kf.id = 1;
+  kf.orientation[0] = 1.0;
+  kf.orientation[2] = -0.0;
+  f.keyframes.push_back(kf);
+  f.observations.emplace_back();
+  const WindowFile g = parse_ok(format_window_file(f));
+  ASSERT_EQ(g.keyframes.size(), 1u);
+  EXPECT_EQ(bits(g.keyframes[0].orientation[2]), bits(-0.0));
+  EXPECT_EQ(format_window_file(g), format_window_file(f));
+}
+
+// Issue 15, defect 7: 4e-320 is a finite (subnormal) double.
+TEST(WindowFileTest, SubnormalsAreAccepted) {
+  const WindowFile f = parse_ok("kf 1 4e-320 0 0\nobs 1 2 1e-310 0\n");
+  EXPECT_EQ(f.keyframes[0].centre[0], 4e-320);
+  EXPECT_EQ(f.observations[0][0].u, 1e-310);
+  EXPECT_NE(parse_error("kf 1 1e309 0 0\n").find("out of double range"), std::string::npos);
+}
+
+TEST(WindowFileTest, ZeroOrNonUnitQuaternionIsRefused) {
+  EXPECT_NE(parse_error("kf 1 0 0 0 0 0 0 0\n").find("not a unit quaternion"), std::string::npos);
+  EXPECT_NE(parse_error("kf 1 0 0 0 1 1 0 0\n").find("not a unit quaternion"), std::string::npos);
+  parse_ok("kf 1 0 0 0 0.70710678 0 0.70710678 0\n");
+}
+
+TEST(WindowFileTest, NonRegularFilesAreRefusedWithoutBlocking) {
+  char dir[] = "/tmp/keepless_wf_XXXXXX";
+  ASSERT_NE(::mkdtemp(dir), nullptr);
+  const std::string fifo = std::string(dir) + "/fifo";
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  WindowFile f;
+  std::string error;
+  EXPECT_FALSE(platform::read_window_file(fifo, &f, &error));  // no writer: must not block
+  EXPECT_EQ(error.rfind(fifo + ":0: not a regular file", 0), 0u) << error;
+  EXPECT_FALSE(platform::read_window_file("/dev/zero", &f, &error));
+  EXPECT_EQ(error.rfind("/dev/zero:0: not a regular file", 0), 0u) << error;
+  ::unlink(fifo.c_str());
+  ::rmdir(dir);
 }
 
 }  // namespace

@@ -29,9 +29,10 @@ TEST(LcmMessages, KeyframeRoundTrip) {
   m.orientation[0] = std::sqrt(0.5);
   m.orientation[3] = std::sqrt(0.5);
   m.u[1] = 12.5f;
+  m.publisher_id = -77;
   const auto bytes = kt::encode(m);
   ASSERT_EQ(bytes.size(), wire::kKeyframeHeaderBytes + 3 * wire::kKeyframeBytesPerObservation +
-                              wire::kKeyframeOptionalCountBytes);
+                              wire::kKeyframeOptionalCountBytes + wire::kKeyframeTrailerBytes);
 
   keepless::keyframe_t d{};
   ASSERT_EQ(d.decode(bytes.data(), 0, static_cast<int>(bytes.size())), static_cast<int>(bytes.size()));
@@ -44,6 +45,7 @@ TEST(LcmMessages, KeyframeRoundTrip) {
   EXPECT_EQ(d.point_id, m.point_id);
   EXPECT_EQ(d.u, m.u);
   EXPECT_EQ(d.v, m.v);
+  EXPECT_EQ(d.publisher_id, -77);
   // Re-encoding the decoded message gives the same bytes.
   EXPECT_EQ(kt::encode(d), bytes);
 }
@@ -54,7 +56,7 @@ TEST(LcmMessages, KeyframeCountAtFixedOffset) {
     for (int i = 0; i < n; ++i) ids.push_back(i);
     const auto bytes = kt::encode(kt::make_keyframe(1, 1, ids));
     ASSERT_EQ(bytes.size(), wire::kKeyframeHeaderBytes + wire::kKeyframeBytesPerObservation * n +
-                                wire::kKeyframeOptionalCountBytes);
+                                wire::kKeyframeOptionalCountBytes + wire::kKeyframeTrailerBytes);
     EXPECT_EQ(be32_at(bytes, wire::kKeyframeCountOffset), n);
   }
 }
@@ -72,7 +74,8 @@ TEST(LcmMessages, KeyframeOptionalFields) {
   m.unmapped_v = {30.0f, 40.0f};
   const auto bytes = kt::encode(m);
   ASSERT_EQ(bytes.size(), wire::kKeyframeHeaderBytes + 3 * wire::kKeyframeBytesPerObservation +
-                              wire::kKeyframeOptionalCountBytes + 3 * 4 + 4 * 8 + 2 * 8);
+                              wire::kKeyframeOptionalCountBytes + 3 * 4 + 4 * 8 + 2 * 8 +
+                              wire::kKeyframeTrailerBytes);
   keepless::keyframe_t d{};
   ASSERT_EQ(d.decode(bytes.data(), 0, static_cast<int>(bytes.size())), static_cast<int>(bytes.size()));
   EXPECT_EQ(d.depth, m.depth);
@@ -102,8 +105,9 @@ TEST(LcmMessages, KeyframeOptionalFields) {
   EXPECT_EQ(check(kt::encode(bad)), RejectReason::kInvalidField);
   bad = m;
   auto negative = kt::encode(bad);
-  // num_unmapped sits 4 + 16 bytes (its two floats each) before the end.
-  negative[negative.size() - 20] = 0xff;
+  // num_unmapped sits 4 + 16 bytes (its two floats each) + the 8-byte
+  // publisher_id before the end.
+  negative[negative.size() - 28] = 0xff;
   EXPECT_EQ(check(negative), RejectReason::kInvalidField);
 }
 
@@ -132,7 +136,10 @@ TEST(LcmMessages, MapEventRoundTripAndOffsets) {
   e.removed_keyframe_id = {99};
   kt::finalize(e);
   const auto bytes = kt::encode(e);
-  ASSERT_EQ(bytes.size(), wire::kMapEventHeaderBytes + 8 * (2 + 2 * 3 + 1));
+  e.publisher_id = 5;
+  const auto with_id = kt::encode(e);
+  ASSERT_EQ(with_id.size(), bytes.size());
+  ASSERT_EQ(bytes.size(), wire::kMapEventHeaderBytes + 8 * (2 + 2 * 3 + 1) + wire::kMapEventTrailerBytes);
   EXPECT_EQ(be32_at(bytes, wire::kMapEventCountOffset), 2);
   EXPECT_EQ(be32_at(bytes, wire::kMapEventCountOffset + 4), 3);
   EXPECT_EQ(be32_at(bytes, wire::kMapEventCountOffset + 8), 1);

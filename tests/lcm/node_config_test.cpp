@@ -7,7 +7,11 @@
 #include <vector>
 
 #include "keepless/platform/latency_histogram.hpp"
+#include "keepless/platform/node.hpp"
 #include "keepless/platform/node_config.hpp"
+
+#include <lcm/lcm-cpp.hpp>
+#include <utility>
 
 using keepless::platform::LatencyHistogram;
 using keepless::platform::NodeConfig;
@@ -144,6 +148,55 @@ TEST(NodeConfig, ParsesThePolicyFlags) {
     NodeConfig d;
     EXPECT_EQ(parse(bad, d, error), ParseResult::kError) << bad[0] << " " << bad[1];
   }
+}
+
+TEST(NodeConfig, ParsesTheReliabilityFlags) {
+  NodeConfig c;
+  std::string error;
+  ASSERT_EQ(parse({"--event-ack-channel", "ACK", "--max-memory-mb", "64", "--max-sequence-jump", "50",
+                   "--max-utime-jump-s", "2.5", "--restart-confirm", "5", "--max-publishers", "2",
+                   "--cull-memory", "100"},
+                  c, error),
+            ParseResult::kOk)
+      << error;
+  EXPECT_EQ(c.event_ack_channel, "ACK");
+  EXPECT_EQ(c.max_memory_mb, 64u);
+  const keepless::platform::OrderBounds b = keepless::platform::order_bounds(c);
+  EXPECT_EQ(b.max_sequence_jump, 50u);
+  EXPECT_EQ(b.max_utime_jump_us, 2500000u);
+  EXPECT_EQ(b.restart_confirm, 5u);
+  EXPECT_EQ(c.max_publishers, 2u);
+  EXPECT_EQ(c.cull_memory, 100u);
+  for (const auto& bad : std::vector<std::vector<std::string>>{{"--restart-confirm", "1"},
+                                                               {"--max-sequence-jump", "0"},
+                                                               {"--max-utime-jump-s", "-1"},
+                                                               {"--max-publishers", "0"},
+                                                               {"--max-memory-mb", "0"}}) {
+    NodeConfig d;
+    EXPECT_EQ(parse(bad, d, error), ParseResult::kError) << bad[0] << " " << bad[1];
+  }
+}
+
+// The estimate keepless_node checks against --max-memory-mb before
+// allocating is the node's own figure, within a few percent.
+TEST(NodeConfig, MemoryEstimateMatchesTheNode) {
+  for (const auto& [window, obs] : std::vector<std::pair<std::uint32_t, std::uint32_t>>{{8, 256}, {10, 500}, {20, 2000}}) {
+    NodeConfig c;
+    c.url = "memq://";
+    c.window = window;
+    c.max_observations = obs;
+    lcm::LCM bus("memq://");
+    const keepless::platform::Node node(bus, c);
+    const double actual = static_cast<double>(node.memory_bytes());
+    const double estimate = keepless::platform::estimate_node_bytes(c);
+    EXPECT_NEAR(estimate / actual, 1.0, 0.05) << "window " << window << " obs " << obs << ": " << estimate
+                                                << " estimated, " << actual << " actual";
+  }
+  // Issue 15, defect 6: passed flag validation, then aborted in bad_alloc.
+  NodeConfig huge;
+  huge.window = 256;
+  huge.max_observations = 4096;
+  EXPECT_GT(keepless::platform::estimate_node_bytes(huge), 1024.0 * 1048576.0);
 }
 
 }  // namespace

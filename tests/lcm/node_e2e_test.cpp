@@ -228,3 +228,20 @@ TEST(NodeEndToEnd, RecordedBusReplaysToIdenticalDecisions) {
 }
 
 }  // namespace
+
+namespace {
+
+// Issue 15, defect 6: these flags passed validation and the node aborted in
+// bad_alloc (rc 134). Now the fixed memory is checked before it is allocated.
+TEST(NodeEndToEnd, FlagsBeyondTheMemoryLimitExitTwoBeforeAllocating) {
+  TempDir tmp;
+  kt::ChildProcess node(target_argv({KEEPLESS_NODE_BIN, "--url", "memq://", "--window", "256",
+                                     "--max-observations", "4096"}),
+                        tmp.file("node.log"));
+  ASSERT_TRUE(node.started());
+  ASSERT_TRUE(node.wait(60000));
+  EXPECT_EQ(node.exit_code(), 2) << node.log();
+  EXPECT_NE(node.log().find("--max-memory-mb"), std::string::npos) << node.log();
+}
+
+}  // namespace

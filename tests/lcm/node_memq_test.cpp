@@ -16,7 +16,7 @@
 #include "keepless/decision_timing_t.hpp"
 #include "keepless/platform/node.hpp"
 #include "keepless/status_t.hpp"
-#include "message_builders.hpp"
+#include "node_memq_fixture.hpp"
 #include "reference_node.hpp"
 
 namespace kt = keepless::testing;
@@ -26,117 +26,9 @@ using keepless::platform::RejectReason;
 
 namespace {
 
-struct WindowSnapshot {
-  struct Obs {
-    std::uint64_t point;
-    double u, v;
-    bool operator==(const Obs& o) const { return point == o.point && u == o.u && v == o.v; }
-  };
-  std::vector<std::uint64_t> ids;
-  std::vector<std::vector<Obs>> obs;
-  bool operator==(const WindowSnapshot& o) const { return ids == o.ids && obs == o.obs; }
-};
-
-WindowSnapshot snapshot(const keepless::core::Window& w) {
-  WindowSnapshot s;
-  for (std::uint32_t i = 0; i < w.keyframe_count(); ++i) {
-    s.ids.push_back(w.keyframe(i).id);
-    std::vector<WindowSnapshot::Obs> o;
-    for (std::uint32_t j = 0; j < w.observation_count(i); ++j) {
-      o.push_back({w.observations(i)[j].point, w.observations(i)[j].u, w.observations(i)[j].v});
-    }
-    s.obs.push_back(o);
-  }
-  return s;
-}
-
-class NodeOnMemq : public ::testing::Test {
- protected:
-  void SetUp() override { make_node(default_config()); }
-
-  static NodeConfig default_config() {
-    NodeConfig c;
-    c.url = "memq://";
-    c.latency_target_ms = 0;  // decisions compared with the library must not depend on timing
-    c.window = 4;
-    c.max_observations = 64;
-    c.max_event_ids = 16;
-    c.params.pair_capacity = 5;  // small M so windows cull something
-    c.status_period_ms = 3600 * 1000;
-    c.quiet = true;
-    return c;
-  }
-
-  void make_node(const NodeConfig& c) {
-    config_ = c;
-    node_.reset();
-    bus_ = std::make_unique<lcm::LCM>("memq://");
-    ASSERT_TRUE(bus_->good());
-    node_ = std::make_unique<Node>(*bus_, config_);
-    ASSERT_TRUE(node_->start());
-    decisions_.clear();
-    statuses_.clear();
-    // subscribeFunction, not the member-function subscribe: GCC's UBSan
-    // misreports LCM's pointer-to-member call in lcm-cpp-impl.hpp.
-    bus_->subscribeFunction(config_.decision_channel, &NodeOnMemq::on_decision, this);
-    bus_->subscribeFunction(config_.status_channel, &NodeOnMemq::on_status, this);
-  }
-
-  static void on_decision(const lcm::ReceiveBuffer*, const std::string&, const keepless::decision_t* d,
-                          NodeOnMemq* self) {
-    self->decisions_.push_back(*d);
-  }
-  static void on_status(const lcm::ReceiveBuffer*, const std::string&, const keepless::status_t* s,
-                        NodeOnMemq* self) {
-    self->statuses_.push_back(*s);
-  }
-
-  void pump() {
-    for (int i = 0; i < 1000 && bus_->handleTimeout(0) > 0; ++i) {
-    }
-  }
-  void send_bytes(const std::string& channel, const std::vector<std::uint8_t>& bytes) {
-    bus_->publish(channel, bytes.data(), static_cast<unsigned>(bytes.size()));
-    pump();
-  }
-  void send(const keepless::keyframe_t& m) { send_bytes(config_.keyframe_channel, kt::encode(m)); }
-  void send(keepless::map_event_t e) {
-    kt::finalize(e);
-    send_bytes(config_.event_channel, kt::encode(e));
-  }
-
-  // Three overlapping keyframes, sequences 1..3, ids 10..12.
-  void fill() {
-    send(kt::make_keyframe(1, 10, kt::id_range(0, 30)));
-    send(kt::make_keyframe(2, 11, kt::id_range(10, 30)));
-    send(kt::make_keyframe(3, 12, kt::id_range(20, 30)));
-    ASSERT_EQ(node_->window().keyframe_count(), 3u);
-    ASSERT_EQ(decisions_.size(), 3u);
-    ASSERT_EQ(node_->counters().messages_rejected, 0u);
-  }
-
-  std::uint64_t rejected(RejectReason r) const { return node_->counters().rejected[static_cast<int>(r)]; }
-
-  // The bad message was counted under `r` alone and the window is as before;
-  // the next valid keyframe is still accepted.
-  void expect_rejected_only(RejectReason r, const WindowSnapshot& before) {
-    EXPECT_EQ(rejected(r), 1u) << to_string(r);
-    EXPECT_EQ(node_->counters().messages_rejected, 1u);
-    EXPECT_TRUE(snapshot(node_->window()) == before) << "window changed";
-    const std::size_t decisions_before = decisions_.size();
-    send(kt::make_keyframe(100, 50, kt::id_range(25, 30)));
-    ASSERT_EQ(decisions_.size(), decisions_before + 1);
-    EXPECT_EQ(decisions_.back().status, keepless::decision_t::STATUS_OPTIMAL);
-    EXPECT_EQ(decisions_.back().keyframe_id, 50);
-    EXPECT_EQ(node_->window().find_keyframe(50), 3);
-  }
-
-  NodeConfig config_;
-  std::unique_ptr<lcm::LCM> bus_;
-  std::unique_ptr<Node> node_;
-  std::vector<keepless::decision_t> decisions_;
-  std::vector<keepless::status_t> statuses_;
-};
+using kt::NodeOnMemq;
+using kt::snapshot;
+using kt::WindowSnapshot;
 
 // --- one test per rejection reason ---------------------------------------
 
@@ -179,13 +71,60 @@ TEST_F(NodeOnMemq, RejectsInfiniteKeypoint) {
   expect_rejected_only(RejectReason::kNonFinite, before);
 }
 
-TEST_F(NodeOnMemq, RejectsUnknownKeyframe) {
-  fill();
-  const WindowSnapshot before = snapshot(node_->window());
+// Defect 2 (issue 15): one stale keyframe id dropped the whole event, its
+// deletions and merges included, and nobody was told.
+TEST_F(NodeOnMemq, AnUnknownKeyframeIdLosesNoValidItemAndIsAcknowledged) {
+  fill_without_culling();  // 10: 0..29, 11: 10..39, 12: 20..49
   keepless::map_event_t e = kt::make_event(4);
-  e.removed_keyframe_id = {11, 999};  // 11 is known, 999 is not: nothing is removed
+  e.deleted_point_id = kt::id_range(0, 10);  // ten deletions
+  e.merged_from_id = {45};
+  e.merged_into_id = {500};
+  e.removed_keyframe_id = {999, 11};  // 999 is stale, 11 is in the window
   send(e);
-  expect_rejected_only(RejectReason::kUnknownKeyframe, before);
+  EXPECT_EQ(node_->counters().messages_rejected, 0u);
+  const keepless::core::Window& w = node_->window();
+  ASSERT_EQ(w.keyframe_count(), 2u) << "keyframe 11 removed";
+  EXPECT_EQ(w.observation_count(0), 20u) << "all ten deletions applied";
+  bool renamed = false;
+  for (std::uint32_t j = 0; j < w.observation_count(1); ++j) renamed |= w.observations(1)[j].point == 500u;
+  EXPECT_TRUE(renamed) << "the merge applied";
+  ASSERT_EQ(acks_.size(), 1u);
+  const keepless::map_event_ack_t& a = acks_.back();
+  EXPECT_EQ(a.sequence, 4);
+  EXPECT_EQ(a.status, keepless::map_event_ack_t::STATUS_PARTIAL);
+  EXPECT_EQ(a.deleted_applied, 10);
+  EXPECT_EQ(a.merged_applied, 1);
+  EXPECT_EQ(a.removed_applied, 1);
+  ASSERT_EQ(a.num_refused, 1);
+  EXPECT_EQ(a.refused_id[0], 999);
+  EXPECT_EQ(a.refused_reason[0], keepless::map_event_ack_t::ITEM_REMOVE_UNKNOWN_KEYFRAME);
+  EXPECT_EQ(a.refused[keepless::map_event_ack_t::ITEM_REMOVE_UNKNOWN_KEYFRAME], 1);
+  EXPECT_EQ(node_->counters().event_items_refused, 1u);
+}
+
+// Each bad merge or removal is refused alone, with its reason; every valid
+// item of the same event is applied.
+TEST_F(NodeOnMemq, BadMergeItemsAreRefusedOneByOne) {
+  fill_without_culling();  // 10: 0..29, 11: 10..39, 12: 20..49
+  keepless::map_event_t e = kt::make_event(4);
+  e.deleted_point_id = {5};
+  e.merged_from_id = {1, 2, 3, 3, 4, 6};
+  e.merged_into_id = {1, 7, 2, 8, 5, 9};  // self, ok, chain (2 is a source), repeat, into deleted, ok
+  e.removed_keyframe_id = {10, 10};
+  send(e);
+  ASSERT_EQ(acks_.size(), 1u);
+  const keepless::map_event_ack_t& a = acks_.back();
+  using A = keepless::map_event_ack_t;
+  EXPECT_EQ(a.status, A::STATUS_PARTIAL);
+  EXPECT_EQ(a.merged_applied, 2);  // 2 -> 7 and 6 -> 9
+  EXPECT_EQ(a.refused[A::ITEM_MERGE_SELF], 1);
+  EXPECT_EQ(a.refused[A::ITEM_MERGE_CHAIN], 1);
+  EXPECT_EQ(a.refused[A::ITEM_MERGE_REPEATED_SOURCE], 1);
+  EXPECT_EQ(a.refused[A::ITEM_MERGE_INTO_DELETED], 1);
+  EXPECT_EQ(a.refused[A::ITEM_REMOVE_REPEATED], 1);
+  EXPECT_EQ(a.removed_applied, 1);
+  EXPECT_EQ(node_->window().find_keyframe(10), -1);
+  EXPECT_EQ(node_->counters().messages_rejected, 0u);
 }
 
 TEST_F(NodeOnMemq, RejectsDuplicateObservation) {
@@ -285,12 +224,8 @@ TEST_F(NodeOnMemq, RejectsNegativeCountAndBadFields) {
   m = kt::make_keyframe(4, 13, kt::id_range(0, 5));
   m.orientation[0] = 2;  // not a unit quaternion
   send(m);
-  keepless::map_event_t e = kt::make_event(4);
-  e.merged_from_id = {1, 2};
-  e.merged_into_id = {2, 3};  // a chain
-  send(e);
-  EXPECT_EQ(rejected(RejectReason::kInvalidField), 4u);
-  EXPECT_EQ(node_->counters().messages_rejected, 4u);
+  EXPECT_EQ(rejected(RejectReason::kInvalidField), 3u);
+  EXPECT_EQ(node_->counters().messages_rejected, 3u);
   EXPECT_TRUE(snapshot(node_->window()) == before);
 }
 
@@ -358,10 +293,7 @@ TEST_F(NodeOnMemq, CulledPointsLeaveTheWindow) {
 }
 
 TEST_F(NodeOnMemq, MapEventDeletesMergesAndRemoves) {
-  NodeConfig c = default_config();
-  c.params.pair_capacity = 100;  // nothing culled: the edits alone shape the window
-  make_node(c);
-  fill();  // 10: 0..29, 11: 10..39, 12: 20..49
+  fill_without_culling();  // 10: 0..29, 11: 10..39, 12: 20..49
   keepless::map_event_t e = kt::make_event(4);
   e.deleted_point_id = {0, 1, 12345};  // 12345 is not in the window: ignored
   e.merged_from_id = {21, 45};
@@ -385,11 +317,14 @@ TEST_F(NodeOnMemq, MapEventDeletesMergesAndRemoves) {
   }
   EXPECT_EQ(w.observations(1)[24].point, 500u);  // 45 was 26th in keyframe 12, 21 (2nd) merged away
 
-  keepless::map_event_t reset = kt::make_event(1);  // a reset restarts sequence checking
+  keepless::map_event_t reset = kt::make_event(5);  // order-checked like any message
   reset.reset = true;
   send(reset);
   EXPECT_EQ(node_->window().keyframe_count(), 0u);
-  send(kt::make_keyframe(2, 10, kt::id_range(0, 5)));
+  ASSERT_EQ(acks_.size(), 2u);
+  EXPECT_EQ(acks_.back().status, keepless::map_event_ack_t::STATUS_APPLIED);
+  EXPECT_TRUE(acks_.back().reset);
+  send(kt::make_keyframe(6, 10, kt::id_range(0, 5)));
   EXPECT_EQ(node_->window().keyframe_count(), 1u);
   EXPECT_EQ(node_->counters().messages_rejected, 0u);
 }
@@ -422,6 +357,7 @@ TEST_F(NodeOnMemq, BudgetExhaustedCullsNothing) {
 TEST_F(NodeOnMemq, WindowCapacityIsAnsweredNotFatal) {
   NodeConfig c = default_config();
   c.max_pair_arcs = 50;  // far below what four overlapping keyframes need
+  c.params.pair_capacity = 100;  // nothing culled, so every keyframe keeps all 40 points
   make_node(c);
   for (int i = 0; i < 4; ++i) send(kt::make_keyframe(i + 1, i, kt::id_range(0, 40)));
   ASSERT_EQ(decisions_.size(), 4u);

@@ -39,6 +39,8 @@ class ReferenceNode {
     std::copy(m.centre, m.centre + 3, f.kf.centre);
     std::copy(m.orientation, m.orientation + 4, f.kf.orientation);
     for (int i = 0; i < m.num_observations; ++i) {
+      // The node's memory of culls: a culled point never comes back.
+      if (ever_culled_.count(static_cast<core::PointId>(m.point_id[i])) > 0) continue;
       core::Observation o;
       o.point = static_cast<core::PointId>(m.point_id[i]);
       o.u = m.u[i];
@@ -87,6 +89,7 @@ class ReferenceNode {
       if (s.decisions()[i].verdict == core::Verdict::kCull) {
         d.culled.push_back(static_cast<std::int64_t>(s.decisions()[i].point));
         culled.insert(s.decisions()[i].point);
+        ever_culled_.insert(s.decisions()[i].point);
       }
     }
     for (Frame& fr : frames_) {
@@ -102,6 +105,7 @@ class ReferenceNode {
   void apply(const keepless::map_event_t& e) {
     if (e.reset) {
       frames_.clear();
+      ever_culled_.clear();
       return;
     }
     const std::set<std::int64_t> deleted(e.deleted_point_id.begin(), e.deleted_point_id.end());
@@ -136,6 +140,7 @@ class ReferenceNode {
   core::Params params_;
   std::uint32_t k_;
   std::deque<Frame> frames_;
+  std::set<core::PointId> ever_culled_;
 };
 
 // Field-by-field comparison with a node decision.

@@ -15,6 +15,7 @@
 #include "keepless/io/bal_problem.hpp"
 #include "keepless/io/colmap_model.hpp"
 #include "keepless/io/keyframes.hpp"
+#include "keepless/platform/window_file_io.hpp"
 #include "maps_support.hpp"
 #include "sparsify/modes.hpp"
 
@@ -214,7 +215,7 @@ TEST_F(SparsifyMaps, BalAndWindowInputsAreWrittenBackInTheirFormat) {
   r = sparsify({"--window", path("w.txt"), "--mode", "replay", "--K", "2", "--M", "1", "--out", path("w_out.txt")});
   ASSERT_EQ(r.status, 0) << r.err;
   core::WindowFile w;
-  ASSERT_TRUE(core::read_window_file(path("w_out.txt"), &w, &error)) << error;
+  ASSERT_TRUE(keepless::platform::read_window_file(path("w_out.txt"), &w, &error)) << error;
   EXPECT_EQ(w.keyframes.size(), 3u);
   EXPECT_EQ(json_number(last_line(r.out), "obs_floor"), 0);  // no floor by default for window files
   // Without map flags, --window is today's single-window path.

@@ -10,6 +10,7 @@
 #include "keepless/io/atomic_file.hpp"
 #include "keepless/io/bal_problem.hpp"
 #include "keepless/io/colmap_model.hpp"
+#include "keepless/platform/window_file_io.hpp"
 #include "keepless/platform/monotonic_clock.hpp"
 
 namespace keepless::sparsify {
@@ -73,7 +74,7 @@ bool load(const ModelOptions& opt, Loaded* m, std::string* error) {
       return true;
     }
     case Input::kWindow: {
-      if (!core::read_window_file(opt.path, &m->window, error, opt.limits)) return false;
+      if (!platform::read_window_file(opt.path, &m->window, error, opt.limits)) return false;
       core::WindowFile& f = m->keyframes.file;
       std::vector<std::size_t> order(m->window.keyframes.size());
       std::iota(order.begin(), order.end(), 0);

@@ -3,7 +3,8 @@
 // buffers, validates them before they touch the window, slides the window,
 // updates the sparsifier (Sparsifier::update: the previous window's network
 // edited in place, run()'s decisions), publishes decision_t
-// (+ decision_timing_t), and a periodic status_t. Everything is allocated in
+// (+ decision_timing_t), answers map events with map_event_ack_t, and
+// publishes a periodic status_t. Everything is allocated in
 // the constructor; handling a message allocates nothing (LCM's own C library
 // aside).
 
@@ -32,6 +33,9 @@ struct NodeCounters {
   std::uint64_t capacity_exceeded = 0;
   std::uint64_t large_decisions = 0;  // above one LCM datagram
   std::uint64_t points_culled = 0;
+  std::uint64_t keyframes_skipped = 0;    // answered STATUS_SKIPPED
+  std::uint64_t stale_observations = 0;   // observations of recently culled points dropped
+  std::uint64_t event_items_refused = 0;  // map-event items refused (acknowledged)
 };
 
 class Node {
@@ -58,7 +62,7 @@ class Node {
   const core::Window& window() const;
   const NodeCounters& counters() const;
   const LatencyHistogram& latency() const;
-  const StreamOrder& order() const;
+  const OrderTracker& order() const;
   std::size_t memory_bytes() const;
   // Largest decision_t this node can publish, bytes.
   std::size_t max_decision_bytes() const;

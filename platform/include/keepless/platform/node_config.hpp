@@ -8,6 +8,7 @@
 #include <string>
 
 #include "keepless/core/config.hpp"
+#include "keepless/platform/message_validation.hpp"
 
 namespace keepless::platform {
 
@@ -18,12 +19,24 @@ struct NodeConfig {
   std::string decision_channel = "KEEPLESS_DECISION";
   std::string timing_channel = "KEEPLESS_DECISION_TIMING";
   std::string status_channel = "KEEPLESS_STATUS";
+  std::string event_ack_channel = "KEEPLESS_MAP_EVENT_ACK";  // map_event_ack_t output
 
   std::uint32_t window = 20;               // K: keyframes in the window (ORB-SLAM2-sized local map)
   std::uint32_t max_observations = 2000;   // per keyframe_t; larger messages are refused unread
   std::uint32_t max_event_ids = 1024;      // per list of a map_event_t
   std::uint32_t max_unmapped = 0;          // unmapped keypoints per keyframe_t (cost authors); more: refused
   std::uint32_t max_pair_arcs = 0;         // point -> pair arcs; 0: the worst case of K full keyframes
+  // Refused at start (exit 2) when the fixed memory would exceed it.
+  std::uint64_t max_memory_mb = 1024;
+
+  // Stream-order policy (message_validation.hpp, OrderTracker).
+  std::uint64_t max_sequence_jump = 1000000;  // messages
+  double max_utime_jump_s = 600;
+  std::uint32_t restart_confirm = 3;  // refused in-order messages that become the new order
+  std::uint32_t max_publishers = 4;   // publisher ids with their own order
+  // Culled point ids remembered (a keyframe already in flight cannot bring
+  // them back); 0: the window's point capacity.
+  std::uint32_t cull_memory = 0;
 
   core::Params params;  // M, theta, box, scope, floor, cost model
   std::uint64_t budget_work_units = std::numeric_limits<std::uint64_t>::max();
@@ -48,10 +61,17 @@ enum class ParseResult : std::uint8_t { kOk = 0, kHelp, kError };
                                                NodeConfig& config, std::string& error);
 std::string node_usage();
 
+OrderBounds order_bounds(const NodeConfig& config);
+
 // The window's fixed capacities for `config`, sized for the worst case of K
 // full keyframes (every observation a distinct point; for pair arcs, every
 // point in every keyframe unless max_pair_arcs caps it), so a message within
 // the limits never overflows the window.
 core::Capacities window_capacities(const NodeConfig& config);
+
+// The node's fixed memory for `config`, predicted before allocating it
+// (memory_estimate.hpp: the window pair, the sparsifier, the message buffers
+// and the cull memory); keepless_node refuses to start above --max-memory-mb.
+double estimate_node_bytes(const NodeConfig& config);
 
 }  // namespace keepless::platform

@@ -38,7 +38,7 @@ class SlidingWindow {
 
   // Deletes points, merges points (from[i] -> into[i]; a keyframe left with
   // two observations of one point keeps the first in its order), removes
-  // keyframes. Inputs as validated by check_map_event. Atomic.
+  // keyframes. Inputs as split by split_map_event (the valid items). Atomic.
   struct Edit {
     const core::PointId* deleted = nullptr;
     std::uint32_t deleted_count = 0;

@@ -1,0 +1,30 @@
+#pragma once
+// The bytes a Window and a Sparsifier sized to some Capacities will take,
+// known before allocating them, so a tool can refuse an input or a flag set
+// whose fixed memory exceeds its limit (exit 2) instead of dying in
+// bad_alloc. Measured on small probe instances (kilobytes) and extrapolated:
+// linear in points, observations and pair arcs, quadratic in keyframes
+// (keyframe pairs).
+
+#include <cstddef>
+#include <cstdint>
+
+#include "keepless/core/config.hpp"
+#include "keepless/core/sparsifier.hpp"
+
+namespace keepless::platform {
+
+struct MemoryModel {
+  double base = 0;
+  double per_keyframe = 0;
+  double per_keyframe_pair = 0;  // per K(K-1)/2
+  double per_point = 0;
+  double per_observation = 0;
+  double per_pair_arc = 0;
+  double bytes(const core::Capacities& c) const;
+};
+
+// `windows` Windows plus one Sparsifier(params, mode) per capacity set.
+MemoryModel probe_memory_model(const core::Params& params, core::SolveMode mode, std::uint32_t windows);
+
+}  // namespace keepless::platform

@@ -1,0 +1,52 @@
+#include "keepless/platform/memory_estimate.hpp"
+
+#include "keepless/core/window.hpp"
+
+namespace keepless::platform {
+
+double MemoryModel::bytes(const core::Capacities& c) const {
+  const double k = c.max_keyframes;
+  return base + per_keyframe * k + per_keyframe_pair * k * (k - 1) / 2 + per_point * c.max_points +
+         per_observation * c.max_observations + per_pair_arc * c.max_pair_arcs;
+}
+
+namespace {
+
+double measure(const core::Capacities& c, const core::Params& params, core::SolveMode mode, std::uint32_t windows) {
+  const core::Window w(c);
+  const core::Sparsifier s(c, params, mode);
+  return static_cast<double>(windows * w.memory_bytes() + s.memory_bytes());
+}
+
+}  // namespace
+
+MemoryModel probe_memory_model(const core::Params& params, core::SolveMode mode, std::uint32_t windows) {
+  // Probes large enough that rounding inside the containers is noise.
+  constexpr std::uint32_t kStep = 4096;
+  const core::Capacities base{8, kStep, kStep, kStep};
+  const double b = measure(base, params, mode, windows);
+  const auto slope = [&](core::Capacities c, std::uint32_t core::Capacities::*field) {
+    c.*field += kStep;
+    return (measure(c, params, mode, windows) - b) / kStep;
+  };
+  MemoryModel m;
+  m.per_point = slope(base, &core::Capacities::max_points);
+  m.per_observation = slope(base, &core::Capacities::max_observations);
+  m.per_pair_arc = slope(base, &core::Capacities::max_pair_arcs);
+  // Keyframes: f(8), f(16), f(24) fix a linear and a pair term.
+  core::Capacities c16 = base, c24 = base;
+  c16.max_keyframes = 16;
+  c24.max_keyframes = 24;
+  const double f16 = measure(c16, params, mode, windows), f24 = measure(c24, params, mode, windows);
+  const auto pairs = [](double k) { return k * (k - 1) / 2; };
+  // f(k) = base' + a k + p pairs(k): two differences, two unknowns.
+  const double d1 = f16 - b, d2 = f24 - f16;
+  const double p1 = pairs(16) - pairs(8), p2 = pairs(24) - pairs(16);
+  m.per_keyframe_pair = (d2 - d1) / (p2 - p1);
+  m.per_keyframe = (d1 - m.per_keyframe_pair * p1) / 8;
+  m.base = b - m.per_keyframe * 8 - m.per_keyframe_pair * pairs(8) - m.per_point * kStep -
+           m.per_observation * kStep - m.per_pair_arc * kStep;
+  return m;
+}
+
+}  // namespace keepless::platform

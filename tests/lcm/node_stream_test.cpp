@@ -1,0 +1,266 @@
+// Issue 15 on memq://: no message locks the node out (the stream-order
+// policy), map events lose nothing and are answered, a VO that runs ahead of
+// the decisions cannot bring culled points back, and queued keyframes are
+// answered at once with the newest decided.
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cstdint>
+#include <limits>
+#include <set>
+#include <vector>
+
+#include "node_memq_fixture.hpp"
+
+namespace {
+
+namespace kt = keepless::testing;
+using kt::NodeOnMemq;
+using kt::snapshot;
+using kt::WindowSnapshot;
+using keepless::decision_t;
+using keepless::map_event_ack_t;
+using keepless::platform::NodeConfig;
+using keepless::platform::RejectReason;
+
+constexpr std::int64_t kMax = std::numeric_limits<std::int64_t>::max();
+
+class StreamOnMemq : public NodeOnMemq {
+ protected:
+  keepless::status_t status() {
+    node_->publish_status(false);
+    pump();
+    return statuses_.back();
+  }
+  // Keyframe `sequence` of publisher `publisher`, id unique per (publisher, sequence).
+  static keepless::keyframe_t keyframe(std::int64_t publisher, std::int64_t sequence) {
+    keepless::keyframe_t m = kt::make_keyframe(sequence, publisher * 100000 + sequence, kt::id_range(sequence, 20));
+    m.publisher_id = publisher;
+    return m;
+  }
+  std::size_t accepted_since(std::size_t first) const {
+    std::size_t n = 0;
+    for (std::size_t i = first; i < decisions_.size(); ++i) n += decisions_[i].status == decision_t::STATUS_OPTIMAL;
+    return n;
+  }
+};
+
+// --- the stream-order policy -------------------------------------------------
+
+// Defect 1: sequence = INT64_MAX was accepted and locked out every later keyframe.
+TEST_F(StreamOnMemq, ASequenceJumpIsRefusedWithoutMovingTheOrder) {
+  fill();
+  const WindowSnapshot before = snapshot(node_->window());
+  keepless::keyframe_t jump = kt::make_keyframe(4, 13, kt::id_range(0, 5));
+  jump.sequence = kMax;
+  send(jump);
+  ASSERT_EQ(decisions_.size(), 4u);
+  EXPECT_EQ(decisions_.back().reject_reason, keepless::status_t::REJECT_SEQUENCE_JUMP);
+  EXPECT_EQ(rejected(RejectReason::kSequenceJump), 1u);
+  EXPECT_TRUE(snapshot(node_->window()) == before);
+  EXPECT_EQ(node_->order().last_sequence(), 3);
+  for (int i = 0; i < 20; ++i) send(kt::make_keyframe(4 + i, 20 + i, kt::id_range(i, 10)));
+  EXPECT_EQ(accepted_since(4), 20u) << "every later valid keyframe is decided";
+}
+
+TEST_F(StreamOnMemq, AUtimeJumpIsRefusedWithoutMovingTheOrder) {
+  fill();
+  keepless::keyframe_t m = kt::make_keyframe(4, 13, kt::id_range(0, 5));
+  m.utime = kMax;
+  send(m);
+  EXPECT_EQ(rejected(RejectReason::kUtimeJump), 1u);
+  for (int i = 0; i < 20; ++i) send(kt::make_keyframe(4 + i, 20 + i, kt::id_range(i, 10)));
+  EXPECT_EQ(accepted_since(4), 20u);
+}
+
+TEST_F(StreamOnMemq, JumpBoundsAreConfigurable) {
+  NodeConfig c = default_config();
+  c.max_sequence_jump = 10;
+  c.max_utime_jump_s = 1;
+  make_node(c);
+  send(kt::make_keyframe(1, 1, {}));
+  send(kt::make_keyframe(12, 2, {}));  // 11 above: refused
+  keepless::keyframe_t m = kt::make_keyframe(11, 3, {});  // 10 above, but utime 1.1 s on: refused
+  m.utime = kt::make_keyframe(1, 1, {}).utime + 1100000;
+  send(m);
+  send(kt::make_keyframe(11, 4, {}));  // 10 above, 1 s on: accepted
+  EXPECT_EQ(rejected(RejectReason::kSequenceJump), 1u);
+  EXPECT_EQ(rejected(RejectReason::kUtimeJump), 1u);
+  EXPECT_EQ(node_->order().last_sequence(), 11);
+}
+
+// The first message has nothing to be checked against; if it is absurd, the
+// valid stream after it becomes the order after --restart-confirm messages.
+TEST_F(StreamOnMemq, APoisonedFirstMessageIsOutvotedByTheStream) {
+  keepless::keyframe_t poison = kt::make_keyframe(1, 999, kt::id_range(0, 5));
+  poison.sequence = kMax;
+  send(poison);
+  for (int i = 1; i <= 10; ++i) send(kt::make_keyframe(i, i, kt::id_range(i, 10)));
+  ASSERT_EQ(decisions_.size(), 11u);
+  EXPECT_EQ(rejected(RejectReason::kOutOfOrder), 2u) << "refused until the run of 3 is confirmed";
+  EXPECT_EQ(accepted_since(1), 8u);
+  EXPECT_EQ(node_->order().restarts(), 1u);
+  EXPECT_EQ(node_->window().find_keyframe(999), -1) << "the restart cleared the poisoned window";
+}
+
+// Defect 1: a VO restarting without a reset was refused until its counter
+// passed the old maximum (60 of 60).
+TEST_F(StreamOnMemq, APublisherRestartIsServedWithinAFewMessages) {
+  for (int i = 1; i <= 60; ++i) send(kt::make_keyframe(i, 1000 + i, kt::id_range(i, 10)));
+  const std::size_t first = decisions_.size();
+  for (int i = 1; i <= 60; ++i) send(kt::make_keyframe(i, i, kt::id_range(5000 + i, 10)));
+  EXPECT_EQ(accepted_since(first), 58u);
+  EXPECT_EQ(rejected(RejectReason::kOutOfOrder), 2u);
+  EXPECT_EQ(node_->order().restarts(), 1u);
+  // Effect on the window: the old run's keyframes left with the restart.
+  for (std::uint32_t k = 0; k < node_->window().keyframe_count(); ++k) {
+    EXPECT_LE(node_->window().keyframe(k).id, 60u);
+  }
+  EXPECT_EQ(status().stream_restarts, 1);
+}
+
+// A new publisher id is a new order: served from its first message.
+TEST_F(StreamOnMemq, ANewPublisherIdIsServedAtOnce) {
+  for (int i = 1; i <= 10; ++i) send(keyframe(1, 100 + i));
+  for (int i = 1; i <= 10; ++i) send(keyframe(2, i));
+  EXPECT_EQ(accepted_since(0), 20u);
+  EXPECT_EQ(node_->counters().messages_rejected, 0u);
+  EXPECT_EQ(status().publishers_seen, 2);
+}
+
+// Defect 1: of two publishers on one channel the one slightly behind was
+// starved (199 of 200). With publisher ids both are served.
+TEST_F(StreamOnMemq, TwoPublishersOnOneChannelAreBothServed) {
+  for (int i = 0; i < 100; ++i) {
+    send(keyframe(7, 200 + i));
+    send(keyframe(8, 195 + i));
+  }
+  EXPECT_EQ(accepted_since(0), 200u);
+  const keepless::status_t s = status();
+  EXPECT_EQ(s.publishers_active, 2);
+  EXPECT_EQ(s.messages_rejected, 0);
+}
+
+// Without ids two streams look like one: the one behind is refused, but
+// detected and counted, and never takes over from the live one.
+TEST_F(StreamOnMemq, TwoStreamsOnOneIdAreDetectedAndCounted) {
+  for (int i = 0; i < 100; ++i) {
+    send(kt::make_keyframe(200 + i, 10000 + i, kt::id_range(i, 10)));
+    send(kt::make_keyframe(195 + i, 20000 + i, kt::id_range(i, 10)));
+  }
+  std::size_t first_stream = 0;
+  for (const decision_t& d : decisions_) first_stream += d.keyframe_id < 20000 && d.status == decision_t::STATUS_OPTIMAL;
+  EXPECT_EQ(first_stream, 100u) << "the live stream is never displaced";
+  EXPECT_GE(node_->order().conflicts(), 1u);
+  EXPECT_GE(status().stream_conflicts, 1);
+}
+
+// Defect 2: a reset with sequence 0 wiped the window.
+TEST_F(StreamOnMemq, AStaleResetIsRefused) {
+  fill();
+  const WindowSnapshot before = snapshot(node_->window());
+  keepless::map_event_t reset = kt::make_event(0);
+  reset.reset = true;
+  send(reset);
+  EXPECT_TRUE(snapshot(node_->window()) == before);
+  EXPECT_EQ(rejected(RejectReason::kOutOfOrder), 1u);
+  ASSERT_EQ(acks_.size(), 1u);
+  EXPECT_EQ(acks_.back().status, map_event_ack_t::STATUS_REJECTED);
+  EXPECT_EQ(acks_.back().reject_reason, keepless::status_t::REJECT_OUT_OF_ORDER);
+}
+
+// Defect 3: status had no counter for messages the node never saw.
+TEST_F(StreamOnMemq, SequenceGapsAreCounted) {
+  send(kt::make_keyframe(1, 1, {}));
+  send(kt::make_keyframe(2, 2, {}));
+  send(kt::make_keyframe(5, 3, {}));    // 3, 4 lost
+  keepless::map_event_t e = kt::make_event(10);  // 6..9 lost
+  send(e);
+  send(kt::make_keyframe(3, 4, {}));    // late: refused, not a gap
+  EXPECT_EQ(node_->order().sequence_gaps(), 6u);
+  EXPECT_EQ(status().sequence_gaps, 6);
+}
+
+// --- in-flight safety ----------------------------------------------------------
+
+// Defect 4: a VO one keyframe ahead (it sends keyframe k+1 before it has
+// decision k) brought culled ids back into the window.
+TEST_F(StreamOnMemq, AVoOneKeyframeAheadCannotBringCulledPointsBack) {
+  std::set<std::int64_t> vo_map;  // the VO's live points
+  for (std::int64_t p = 0; p < 40; ++p) vo_map.insert(p);
+  std::set<std::int64_t> culled;
+  std::size_t applied = 0;
+  std::int64_t next_point = 40;
+  for (int k = 0; k < 12; ++k) {
+    // The VO observes its live points (and some new ones)...
+    std::vector<std::int64_t> ids(vo_map.begin(), vo_map.end());
+    if (ids.size() > 40) ids.erase(ids.begin(), ids.end() - 40);
+    for (int j = 0; j < 8; ++j) ids.push_back(next_point++);
+    send(kt::make_keyframe(k + 1, k, ids));
+    for (std::int64_t id : ids) vo_map.insert(id);
+    // ... and applies the decision before the last one (it is one ahead).
+    if (decisions_.size() >= 2) {
+      for (; applied + 1 < decisions_.size(); ++applied) {
+        for (std::int64_t id : decisions_[applied].culled_point_id) vo_map.erase(id);
+      }
+    }
+    for (const decision_t& d : decisions_) culled.insert(d.culled_point_id.begin(), d.culled_point_id.end());
+    const keepless::core::Window& w = node_->window();
+    for (std::uint32_t s = 0; s < w.keyframe_count(); ++s) {
+      for (std::uint32_t j = 0; j < w.observation_count(s); ++j) {
+        EXPECT_EQ(culled.count(static_cast<std::int64_t>(w.observations(s)[j].point)), 0u)
+            << "culled point " << w.observations(s)[j].point << " back in the window after keyframe " << k;
+      }
+    }
+  }
+  ASSERT_FALSE(culled.empty()) << "the stream must cull";
+  EXPECT_GT(node_->counters().stale_observations, 0u) << "in-flight keyframes named culled points";
+}
+
+TEST_F(StreamOnMemq, AMergeIntoACulledPointIsRefused) {
+  for (int i = 0; i < 6; ++i) send(kt::make_keyframe(i + 1, i, kt::id_range(0, 40)));
+  std::int64_t victim = -1;
+  for (const decision_t& d : decisions_) {
+    if (d.num_culled > 0) victim = d.culled_point_id[0];
+  }
+  ASSERT_GE(victim, 0);
+  keepless::map_event_t e = kt::make_event(7);
+  e.merged_from_id = {1000};
+  e.merged_into_id = {victim};
+  send(e);
+  ASSERT_EQ(acks_.size(), 1u);
+  EXPECT_EQ(acks_.back().refused[map_event_ack_t::ITEM_MERGE_INTO_CULLED], 1);
+  EXPECT_EQ(acks_.back().merged_applied, 0);
+}
+
+// --- queued keyframes ------------------------------------------------------------
+
+// Defect 3: queued keyframes were decided oldest first, each one late. With
+// a latency target, spin_once drains the queue, decides the newest and
+// answers the older ones at once: each exactly one answer, nothing culled.
+TEST_F(StreamOnMemq, QueuedKeyframesAreSkippedAndTheNewestDecided) {
+  NodeConfig c = default_config();
+  c.latency_target_ms = 60000;  // drains, but never fires
+  make_node(c);
+  for (int i = 0; i < 6; ++i) {
+    keepless::keyframe_t m = kt::make_keyframe(i + 1, i, kt::id_range(0, 40));
+    const std::vector<std::uint8_t> b = kt::encode(m);
+    bus_->publish(c.keyframe_channel, b.data(), static_cast<unsigned>(b.size()));  // queued, not handled
+  }
+  ASSERT_GT(node_->spin_once(0), 0);
+  pump();
+  ASSERT_EQ(decisions_.size(), 6u);
+  for (int i = 0; i < 5; ++i) {
+    EXPECT_EQ(decisions_[i].sequence, i + 1);
+    EXPECT_EQ(decisions_[i].status, decision_t::STATUS_SKIPPED);
+    EXPECT_EQ(decisions_[i].num_culled, 0);
+  }
+  EXPECT_EQ(decisions_[5].status, decision_t::STATUS_OPTIMAL);
+  EXPECT_GT(decisions_[5].num_culled, 0) << "the newest is decided over the whole window";
+  EXPECT_EQ(node_->counters().keyframes_skipped, 5u);
+  EXPECT_EQ(node_->window().keyframe_count(), 4u);
+  EXPECT_EQ(status().keyframes_skipped, 5);
+}
+
+}  // namespace
