@@ -487,5 +487,16 @@ TEST(ColmapText, ModelNamesAndParameterCountsAreChecked) {
   EXPECT_EQ(error_of(f, io::ColmapFormat::kText), "D/cameras.txt:3: unknown camera model 'PINHOLE_X'");
 }
 
+// Fuzzer finding: images.bin ends a name at its NUL, so a text name holding
+// one parsed but could not be written to binary and read back.
+TEST(ColmapText, AnImageNameWithANulByteIsRefused) {
+  io::ColmapFiles f = io::format_colmap(small_model(), io::ColmapFormat::kText);
+  const std::size_t name = f.images.find(".png");
+  ASSERT_NE(name, std::string::npos);
+  const std::size_t line = static_cast<std::size_t>(std::count(f.images.begin(), f.images.begin() + name, '\n')) + 1;
+  f.images.insert(name, 1, '\0');
+  EXPECT_EQ(error_of(f, io::ColmapFormat::kText), "D/images.txt:" + std::to_string(line) + ": NAME holds a NUL byte");
+}
+
 }  // namespace
 }  // namespace keepless

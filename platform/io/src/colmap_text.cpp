@@ -190,6 +190,8 @@ bool parse_images_text(const std::string& name, const std::string& text, ColmapM
     if (!f.f64s(1, 4, "quaternion", im.qvec) || !f.f64s(5, 3, "translation", im.tvec)) return false;
     if (!f.u32(8, "CAMERA_ID", &im.camera_id)) return false;
     im.name = f.rest(9);
+    // images.bin ends a name at its NUL: a name holding one could not be written back.
+    if (im.name.find('\0') != std::string::npos) return f.fail("NAME holds a NUL byte");
     pos->image.push_back(number);
     std::string_view line;
     std::uint64_t points_line = 0;
