@@ -4,6 +4,8 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
+#include <functional>
 #include <numeric>
 #include <set>
 
@@ -157,6 +159,7 @@ class Vo {
   bool initialised_ = false;
   TrackedFrame init_ref_;
   bool have_init_ref_ = false;
+  std::vector<TrackedFrame> pending_;  // frames after init_ref_ while initialisation waits for parallax
   std::vector<FrameRecord> records_;
 
   opencv::KeyframeAdapter adapter_;
@@ -764,16 +767,17 @@ void Vo::initialize_rgbd(TrackedFrame& cur) {
 
 bool Vo::initialize_monocular(TrackedFrame& cur) {
   if (!have_init_ref_ || cur.f.keys.size() < 100) {
-    if (cur.f.keys.size() >= 100) init_ref_ = cur, have_init_ref_ = true;
+    if (cur.f.keys.size() >= 100) init_ref_ = cur, have_init_ref_ = true, pending_.clear();
     return false;
   }
-  // ORB-SLAM2's SearchForInitialization: level-0 keypoints, 100 px window, TH_LOW, ratio 0.9.
+  // ORB-SLAM2's SearchForInitialization (100 px window, TH_LOW, ratio 0.9),
+  // on every level (+-1) instead of level 0 of an extractor with twice the features.
   const Frame& a = init_ref_.f;
   std::vector<int> match(a.keys.size(), -1), best_of(cur.f.keys.size(), -1), best_dist(cur.f.keys.size(), 256);
   std::vector<int> area;
   for (std::size_t i = 0; i < a.keys.size(); ++i) {
-    if (a.keys[i].octave > 0) continue;
-    cur.f.features_in_area(a.keys[i].pt.x, a.keys[i].pt.y, 100, 0, 0, &area);
+    const int level = a.keys[i].octave;
+    cur.f.features_in_area(a.keys[i].pt.x, a.keys[i].pt.y, 100, std::max(0, level - 1), level + 1, &area);
     int b1 = 256, b2 = 256, bi = -1;
     for (int j : area) {
       const int d = hamming(a.descriptors, static_cast<int>(i), cur.f.descriptors, j);
@@ -793,6 +797,7 @@ bool Vo::initialize_monocular(TrackedFrame& cur) {
   }
   if (pairs.size() < 100) {
     init_ref_ = cur;
+    pending_.clear();
     return false;
   }
   std::vector<cv::Point2f> p0, p1;
@@ -817,8 +822,8 @@ bool Vo::initialize_monocular(TrackedFrame& cur) {
     for (std::size_t h = 0; h < Rs.size(); ++h) hypotheses.emplace_back(Rs[h], ts[h]);
     inlier_mask = mask_h;
   } else {
-    cv::Mat R, t;
-    cv::recoverPose(E, p0, p1, Kcv_, R, t, mask_e);
+    cv::Mat R, t, cheirality = mask_e.clone();  // recoverPose drops far points from its mask
+    cv::recoverPose(E, p0, p1, Kcv_, R, t, cheirality);
     hypotheses.emplace_back(R, t);
     inlier_mask = mask_e;
   }
@@ -851,6 +856,7 @@ bool Vo::initialize_monocular(TrackedFrame& cur) {
       const double e1 = (K_ * X1).hnormalized().x() - p1[k].x, f1 = (K_ * X1).hnormalized().y() - p1[k].y;
       if (e0 * e0 + f0 * f0 > 4 * kChi2Mono || e1 * e1 + f1 * f1 > 4 * kChi2Mono) continue;
       const double c = X.normalized().dot((X - C1).normalized());
+      if (c >= 0.99998) continue;  // ORB-SLAM2 maps only points with some parallax
       parallax.push_back(std::acos(std::clamp(c, -1.0, 1.0)) * 180.0 / M_PI);
       good.emplace_back(order_i[k], X);
     }
@@ -858,12 +864,15 @@ bool Vo::initialize_monocular(TrackedFrame& cur) {
       best_good = static_cast<int>(good.size());
       best_T = T;
       best_points = good;
-      std::sort(parallax.begin(), parallax.end());
+      std::sort(parallax.begin(), parallax.end(), std::greater<double>());  // the 50th largest, as ORB-SLAM2
       best_parallax = parallax.empty() ? 0 : parallax[std::min(parallax.size() - 1, std::size_t{50})];
     }
   }
-  // ORB-SLAM2: >= 50 triangulated, and the 50th smallest parallax >= 1 degree.
-  if (best_good < 50 || best_parallax < 1.0) return false;
+  // ORB-SLAM2: >= 50 triangulated, and the 50th largest parallax >= 1 degree.
+  if (best_good < 50 || best_parallax < 1.0) {
+    pending_.push_back(cur);
+    return false;
+  }
 
   KeyFrame k0, k1;
   k0.frame = init_ref_.index;
@@ -888,9 +897,11 @@ bool Vo::initialize_monocular(TrackedFrame& cur) {
   }
   int tracked = 0;
   for (int p : map_.kfs[1].mp) tracked += (p >= 0 && !map_.points[static_cast<std::size_t>(p)].bad) ? 1 : 0;
+  if (std::getenv("VO_DEBUG")) std::fprintf(stderr, "init %d-%d: good %d parallax %.2f z %zu tracked %d\n", init_ref_.index, cur.index, best_good, best_parallax, z.size(), tracked);
   if (z.size() < 50 || tracked < 100) {
     map_ = Map();
     init_ref_ = cur;
+    pending_.clear();
     return false;
   }
   std::nth_element(z.begin(), z.begin() + static_cast<std::ptrdiff_t>(z.size() / 2), z.end());
@@ -904,10 +915,29 @@ bool Vo::initialize_monocular(TrackedFrame& cur) {
   velocity_ = motion_fraction(cur.Tcw, cur.index - init_ref_.index);
   have_velocity_ = true;
   records_.push_back({init_ref_.index, 0, Eigen::Isometry3d::Identity()});
+  // The frames between the initial pair, tracked against the initial map
+  // (ORB-SLAM2 leaves them out; here every frame counts).
+  std::vector<int> all_points;
+  for (std::size_t p = 0; p < map_.points.size(); ++p) {
+    if (!map_.points[p].bad) all_points.push_back(static_cast<int>(p));
+  }
+  for (TrackedFrame& f : pending_) {
+    f.Tcw = Eigen::Isometry3d::Identity();
+    for (int k = init_ref_.index; k < f.index; ++k) f.Tcw = velocity_ * f.Tcw;
+    f.mp.assign(f.f.keys.size(), -1);
+    f.outlier.assign(f.f.keys.size(), false);
+    search_local_points(f, map_, all_points, cam_, 3);
+    if (optimize(f) >= kMinTrackedInliers) {
+      records_.push_back({f.index, 0, f.Tcw});
+      ++result_.frames_tracked;
+    }
+  }
+  pending_.clear();
   reference_kf_ = 1;
   last_kf_frame_ = cur.index;
   result_.keyframes_created = 2;
   initialised_ = true;
+  ++result_.frames_tracked;  // the reference frame (the caller counts `cur`)
   return true;
 }
 
