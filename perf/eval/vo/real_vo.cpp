@@ -4,7 +4,6 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <cstdlib>
 #include <functional>
 #include <numeric>
 #include <set>
@@ -237,19 +236,11 @@ bool Vo::estimate_pose(TrackedFrame& cur, bool guess) {
 
 bool Vo::relocalise(TrackedFrame& cur) {
   // Every point of the last keyframes, matched by descriptor alone.
-  std::vector<int> points;
-  std::vector<char> seen(map_.points.size(), 0);
-  int taken_kfs = 0;
-  for (int k = static_cast<int>(map_.kfs.size()) - 1; k >= 0 && taken_kfs < 10; --k) {
-    if (map_.kfs[static_cast<std::size_t>(k)].bad) continue;
-    ++taken_kfs;
-    for (int p : map_.kfs[static_cast<std::size_t>(k)].mp) {
-      if (p >= 0 && !seen[static_cast<std::size_t>(p)] && !map_.points[static_cast<std::size_t>(p)].bad) {
-        seen[static_cast<std::size_t>(p)] = 1;
-        points.push_back(p);
-      }
-    }
+  std::vector<int> recent_kfs;
+  for (int k = static_cast<int>(map_.kfs.size()) - 1; k >= 0 && recent_kfs.size() < 10; --k) {
+    if (!map_.kfs[static_cast<std::size_t>(k)].bad) recent_kfs.push_back(k);
   }
+  const std::vector<int> points = map_.points_of(recent_kfs);
   std::fill(cur.mp.begin(), cur.mp.end(), -1);
   std::vector<int> best_dist(cur.mp.size(), 256);
   for (int p : points) {
@@ -302,17 +293,7 @@ std::vector<int> Vo::local_map(const TrackedFrame& cur, int* reference) {
     }
   }
   if (best >= 0) *reference = best;
-  std::vector<int> points;
-  std::vector<char> seen(map_.points.size(), 0);
-  for (int k : kfs) {
-    for (int p : map_.kfs[static_cast<std::size_t>(k)].mp) {
-      if (p >= 0 && !seen[static_cast<std::size_t>(p)] && !map_.points[static_cast<std::size_t>(p)].bad) {
-        seen[static_cast<std::size_t>(p)] = 1;
-        points.push_back(p);
-      }
-    }
-  }
-  return points;
+  return map_.points_of(kfs);
 }
 
 bool Vo::track(TrackedFrame& cur) {
@@ -525,16 +506,7 @@ void Vo::search_in_neighbours(int kf) {
     if (p >= 0) own.push_back(p);
   }
   for (int t : targets) fuse(map_, t, own, cam_);
-  std::vector<int> theirs;
-  std::vector<char> seen(map_.points.size(), 0);
-  for (int t : targets) {
-    for (int p : map_.kfs[static_cast<std::size_t>(t)].mp) {
-      if (p >= 0 && !seen[static_cast<std::size_t>(p)]) {
-        seen[static_cast<std::size_t>(p)] = 1;
-        theirs.push_back(p);
-      }
-    }
-  }
+  const std::vector<int> theirs = map_.points_of(targets);
   fuse(map_, kf, theirs, cam_);
   for (int p : map_.kfs[static_cast<std::size_t>(kf)].mp) {
     if (p >= 0) map_.update_point(p);
@@ -662,16 +634,7 @@ void Vo::local_ba(const std::vector<int>& local, bool fix_first) {
     problem.pose_fixed.push_back(k == 0 || (fix_first && k == local.front()));
     kf_of_pose.push_back(k);
   }
-  std::vector<int> points;
-  std::vector<char> seen(map_.points.size(), 0);
-  for (int k : local) {
-    for (int p : map_.kfs[static_cast<std::size_t>(k)].mp) {
-      if (p >= 0 && !seen[static_cast<std::size_t>(p)] && !map_.points[static_cast<std::size_t>(p)].bad) {
-        seen[static_cast<std::size_t>(p)] = 1;
-        points.push_back(p);
-      }
-    }
-  }
+  const std::vector<int> points = map_.points_of(local);
   std::vector<std::pair<int, int>> obs_of;  // (point, kf) per observation
   for (std::size_t pi = 0; pi < points.size(); ++pi) {
     const MapPoint& m = map_.points[static_cast<std::size_t>(points[pi])];
@@ -897,7 +860,6 @@ bool Vo::initialize_monocular(TrackedFrame& cur) {
   }
   int tracked = 0;
   for (int p : map_.kfs[1].mp) tracked += (p >= 0 && !map_.points[static_cast<std::size_t>(p)].bad) ? 1 : 0;
-  if (std::getenv("VO_DEBUG")) std::fprintf(stderr, "init %d-%d: good %d parallax %.2f z %zu tracked %d\n", init_ref_.index, cur.index, best_good, best_parallax, z.size(), tracked);
   if (z.size() < 50 || tracked < 100) {
     map_ = Map();
     init_ref_ = cur;

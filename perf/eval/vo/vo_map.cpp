@@ -161,6 +161,20 @@ void Map::cull_keyframe(int kf) {
   k.T_cp = k.Tcw * kfs[static_cast<std::size_t>(parent)].Tcw.inverse();
 }
 
+std::vector<int> Map::points_of(const std::vector<int>& keyframes) const {
+  std::vector<int> out;
+  std::vector<char> seen(points.size(), 0);
+  for (int k : keyframes) {
+    for (int p : kfs[static_cast<std::size_t>(k)].mp) {
+      if (p >= 0 && !seen[static_cast<std::size_t>(p)] && !points[static_cast<std::size_t>(p)].bad) {
+        seen[static_cast<std::size_t>(p)] = 1;
+        out.push_back(p);
+      }
+    }
+  }
+  return out;
+}
+
 int Map::alive_points() const {
   return static_cast<int>(std::count_if(points.begin(), points.end(), [](const MapPoint& m) { return !m.bad; }));
 }

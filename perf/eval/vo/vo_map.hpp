@@ -57,6 +57,8 @@ class Map {
   // Keyframes sharing >= min_weight points with kf, by weight then index.
   std::vector<std::pair<int, int>> covisibles(int kf, int min_weight) const;
   void cull_keyframe(int kf);  // parent = best covisible; observations erased
+  // The alive points the keyframes observe, each once, in order of first sight.
+  std::vector<int> points_of(const std::vector<int>& keyframes) const;
   int alive_points() const;
   int alive_keyframes() const;
   bool in_frustum(int p, const Eigen::Isometry3d& Tcw, const PinholeCamera& cam, double* u, double* v,
