@@ -27,8 +27,8 @@ const char* kUsage =
     "  --seeds N      seeds 1..N (RANSAC order, random priorities; default 3, --quick 1)\n"
     "  --M list       keepless pair capacities (default 100)\n"
     "  --kept-fraction F  instead of --M: per input, the M of {5,10,20,30,50,75,100,150,200,300} whose\n"
-    "                 mean kept fraction of the new keyframes' points, on the original run's windows\n"
-    "                 (seed 1), is nearest F\n";
+    "                 mean kept fraction of the new keyframes' evaluated points (seen >= twice in the\n"
+    "                 window), on the original run's windows (seed 1), is nearest F\n";
 
 struct Input {
   bool rgbd = false;
@@ -166,7 +166,7 @@ int main(int argc, char** argv) {
       if (kept_fraction > 0 && seed == 1) {
         std::size_t best = 0;
         for (std::size_t m = 0; m < ladder.size(); ++m) {
-          std::printf("#   calibration M=%lld keeps %.3f of the new keyframes' points\n",
+          std::printf("#   calibration M=%lld keeps %.3f of the new keyframes' evaluated points\n",
                       static_cast<long long>(ladder[m]), orig.calibration_kept_fraction[m]);
           if (std::abs(orig.calibration_kept_fraction[m] - kept_fraction) <
               std::abs(orig.calibration_kept_fraction[best] - kept_fraction)) {

@@ -574,12 +574,11 @@ void Vo::select_points(int kf, const std::vector<int>& local) {
     evaluated.insert(evaluated.end(), keepless_culls.begin(), keepless_culls.end());
     std::sort(evaluated.begin(), evaluated.end());
   }
-  std::size_t cull = 0, total = 0;
+  std::size_t cull = 0;
   std::vector<core::PointId> own_culls;
   for (std::size_t i = 0; i < f.mp.size(); ++i) {
     const int p = f.mp[i];
     if (p < 0 || map_.points[static_cast<std::size_t>(p)].bad) continue;
-    ++total;
     const auto id = static_cast<core::PointId>(p);
     if (!std::binary_search(evaluated.begin(), evaluated.end(), id)) continue;
     candidates.push_back({id, f.f.keys[i].pt.x, f.f.keys[i].pt.y, f.f.keys[i].response,
@@ -596,10 +595,10 @@ void Vo::select_points(int kf, const std::vector<int>& local) {
       opencv::culled_points(*calibration_[m], &culled);
       for (const Candidate& cand : candidates) c += std::binary_search(culled.begin(), culled.end(), cand.id) ? 1 : 0;
     }
-    calibration_sum_[m] += total > 0 ? 1.0 - double(c) / double(total) : 1.0;
+    calibration_sum_[m] += candidates.empty() ? 1.0 : 1.0 - double(c) / double(candidates.size());
   }
   ++windows_;
-  kept_fraction_sum_ += total > 0 ? 1.0 - double(cull) / double(total) : 1.0;
+  kept_fraction_sum_ += candidates.empty() ? 1.0 : 1.0 - double(cull) / double(candidates.size());
   std::vector<core::PointId> culls;
   if (opt_.selector == Selector::kKeepless) {
     culls = own_culls;

@@ -48,7 +48,7 @@ struct RealRunResult {
   int window_rejections = 0;  // windows the adapter or Sparsifier refused (nothing culled there)
   double local_ba_seconds = 0, selector_seconds = 0, total_seconds = 0;
   double ate_m = 0, ate_r_deg = 0;  // RMS over tracked frames, SE(3) for RGB-D, Sim(3) monocular
-  double mean_kept_fraction = 1;    // of the new keyframes' candidate points, over windows
+  double mean_kept_fraction = 1;    // of the new keyframes' evaluated points (>= 2 views in the window), over windows
   std::vector<double> calibration_kept_fraction;  // per calibrate_M
   std::vector<Pose> estimate, ground_truth;       // tracked frames, aligned estimate
   std::vector<KeypointMark> marks;                // one keyframe's keypoints (the window with most culls)
