@@ -62,16 +62,29 @@ bool read_calibration(const std::string& path, PinholeCamera* cam, std::string* 
   return false;
 }
 
-Pose pose_from_matrix(const Eigen::Matrix3d& R, const Eigen::Vector3d& t) {
-  Pose p;
-  p.q = Eigen::Quaterniond(R).normalized();
-  p.t = t;
-  return p;
+// Camera-to-world from the first 12 row-major numbers of a 3x4 or 4x4 matrix.
+bool pose_from_rows(const std::vector<double>& v, Pose* out) {
+  Eigen::Matrix3d R;
+  R << v[0], v[1], v[2], v[4], v[5], v[6], v[8], v[9], v[10];
+  if (!R.allFinite() || (R.transpose() * R - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff() > 1e-3 ||
+      R.determinant() <= 0) {
+    return false;
+  }
+  out->q = Eigen::Quaterniond(R).normalized();
+  out->t = Eigen::Vector3d(v[3], v[7], v[11]);
+  return out->t.allFinite();
 }
 
-bool valid_rotation(const Eigen::Matrix3d& R) {
-  return R.allFinite() && (R.transpose() * R - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff() < 1e-3 &&
-         R.determinant() > 0;
+// The image size, from the first frame.
+bool probe_size(RealSequence* s, std::string* error) {
+  const cv::Mat probe = cv::imread(s->image_files[0], cv::IMREAD_GRAYSCALE);
+  if (probe.empty()) {
+    *error = s->image_files[0] + ": cannot read image";
+    return false;
+  }
+  s->camera.width = probe.cols;
+  s->camera.height = probe.rows;
+  return true;
 }
 
 bool clip_range(std::size_t n, int first, int last, std::size_t* a, std::size_t* b, std::string* error) {
@@ -150,13 +163,12 @@ bool load_kitti_sequence(const std::string& image_dir, const std::string& calib_
       *error = poses_file + ":" + std::to_string(lineno) + ": expected 12 numbers (3x4 pose)";
       return false;
     }
-    Eigen::Matrix3d R;
-    R << v[0], v[1], v[2], v[4], v[5], v[6], v[8], v[9], v[10];
-    if (!valid_rotation(R)) {
-      *error = poses_file + ":" + std::to_string(lineno) + ": not a rotation";
+    Pose pose;
+    if (!pose_from_rows(v, &pose)) {
+      *error = poses_file + ":" + std::to_string(lineno) + ": not a rigid pose";
       return false;
     }
-    gt.push_back(pose_from_matrix(R, Eigen::Vector3d(v[3], v[7], v[11])));
+    gt.push_back(pose);
   }
   const std::size_t n = std::min(files.size(), gt.size());
   std::size_t a = 0, b = 0;
@@ -165,13 +177,7 @@ bool load_kitti_sequence(const std::string& image_dir, const std::string& calib_
     s.image_files.push_back(files[i]);
     s.ground_truth.push_back(gt[i]);
   }
-  cv::Mat probe = cv::imread(s.image_files[0], cv::IMREAD_GRAYSCALE);
-  if (probe.empty()) {
-    *error = s.image_files[0] + ": cannot read image";
-    return false;
-  }
-  s.camera.width = probe.cols;
-  s.camera.height = probe.rows;
+  if (!probe_size(&s, error)) return false;
   *out = std::move(s);
   return true;
 }
@@ -206,15 +212,14 @@ bool load_rgbd_sequence(const std::string& dir, int first, int last, RealSequenc
       *error = base + ".pose.txt: expected a 4x4 matrix";
       return false;
     }
-    Eigen::Matrix3d R;
-    R << v[0], v[1], v[2], v[4], v[5], v[6], v[8], v[9], v[10];
-    if (!valid_rotation(R)) {
-      *error = base + ".pose.txt: not a rotation";
+    Pose pose;
+    if (!pose_from_rows(v, &pose)) {
+      *error = base + ".pose.txt: not a rigid pose";
       return false;
     }
     s.image_files.push_back(base + ".color.jpg");
     s.depth_files.push_back(base + ".depth.png");
-    s.ground_truth.push_back(pose_from_matrix(R, Eigen::Vector3d(v[3], v[7], v[11])));
+    s.ground_truth.push_back(pose);
   }
   if (s.image_files.empty()) {
     *error = dir + ": no frame-000000.color.jpg";
@@ -225,13 +230,7 @@ bool load_rgbd_sequence(const std::string& dir, int first, int last, RealSequenc
   s.image_files = std::vector<std::string>(s.image_files.begin() + a, s.image_files.begin() + b + 1);
   s.depth_files = std::vector<std::string>(s.depth_files.begin() + a, s.depth_files.begin() + b + 1);
   s.ground_truth = std::vector<Pose>(s.ground_truth.begin() + a, s.ground_truth.begin() + b + 1);
-  cv::Mat probe = cv::imread(s.image_files[0], cv::IMREAD_GRAYSCALE);
-  if (probe.empty()) {
-    *error = s.image_files[0] + ": cannot read image";
-    return false;
-  }
-  s.camera.width = probe.cols;
-  s.camera.height = probe.rows;
+  if (!probe_size(&s, error)) return false;
   *out = std::move(s);
   return true;
 }
