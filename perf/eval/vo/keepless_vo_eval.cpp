@@ -51,11 +51,11 @@ bool parse_list(const std::string& s, std::vector<std::int64_t>* out) {
 void print_run(const RealSequence& s, const char* variant, std::int64_t M, std::uint64_t seed,
                const RealRunResult& r) {
   std::printf("%-28s %-13s M=%-4lld seed=%llu  tracked %d/%d (losses %d)  MPs %d  KFs %d (made %d)  obs %lld  "
-              "culled %lld  local BA %.2f s (%d)  total %.1f s  ATE %.4f m  ATE_r %.2f deg\n",
+              "culled %lld (windows refused %d)  local BA %.2f s (%d)  total %.1f s  ATE %.4f m  ATE_r %.2f deg\n",
               s.name.c_str(), variant, static_cast<long long>(M), static_cast<unsigned long long>(seed),
               r.frames_tracked, r.frames, r.tracking_losses, r.map_points, r.keyframes, r.keyframes_created,
               static_cast<long long>(r.observations), static_cast<long long>(r.points_culled_by_selector),
-              r.local_ba_seconds, r.local_bas, r.total_seconds, r.ate_m, r.ate_r_deg);
+              r.window_rejections, r.local_ba_seconds, r.local_bas, r.total_seconds, r.ate_m, r.ate_r_deg);
   std::fflush(stdout);
 }
 
