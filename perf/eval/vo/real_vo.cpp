@@ -602,6 +602,7 @@ void Vo::select_points(int kf, const std::vector<int>& local) {
   std::vector<core::PointId> culls;
   if (opt_.selector == Selector::kKeepless) {
     culls = own_culls;
+    std::sort(culls.begin(), culls.end());  // in keypoint order so far
   } else if (opt_.selector != Selector::kOriginal) {
     culls = baseline_culls(opt_.selector, candidates, cull, opt_.seed, cam_.width, cam_.height);
   }
