@@ -21,10 +21,11 @@ namespace {
 
 const char* kUsage =
     "usage: keepless_vo_eval [--images DIR --calib FILE --poses FILE]... [--rgbd DIR]...\n"
-    "  [--frames A:B] [--seeds N] [--M 50,100] [--kept-fraction F] [--variants original,keepless,random,\n"
+    "  [--frames A:B] [--seeds N] [--first-seed S] [--M 50,100] [--kept-fraction F] [--variants original,keepless,random,\n"
     "  longest_track,anms] [--quick] [--out DIR] [--verbose]\n"
     "  --frames A:B   frames A..B inclusive of every input (default all; --quick: 0:59)\n"
-    "  --seeds N      seeds 1..N (RANSAC order, random priorities; default 3, --quick 1)\n"
+    "  --seeds N      seeds S..S+N-1 (RANSAC order, random priorities; default 3, --quick 1)\n"
+    "  --first-seed S the first seed (default 1; --kept-fraction calibrates on it)\n"
     "  --M list       keepless pair capacities (default 100)\n"
     "  --kept-fraction F  instead of --M: per input, the M of {5,10,20,30,50,75,100,150,200,300} whose\n"
     "                 mean kept fraction of the new keyframes' evaluated points (seen >= twice in the\n"
@@ -64,7 +65,7 @@ void print_run(const RealSequence& s, const char* variant, std::int64_t M, std::
 int main(int argc, char** argv) {
   std::vector<Input> inputs;
   std::string frames, out_dir;
-  int seeds = -1;
+  int seeds = -1, first_seed = 1;
   bool quick = false, verbose = false;
   double kept_fraction = -1;
   std::vector<std::int64_t> Ms = {100};
@@ -91,6 +92,8 @@ int main(int argc, char** argv) {
       frames = v;
     } else if (a == "--seeds" && value(&v)) {
       seeds = std::atoi(v.c_str());
+    } else if (a == "--first-seed" && value(&v)) {
+      first_seed = std::atoi(v.c_str());
     } else if (a == "--M" && value(&v)) {
       if (!parse_list(v, &Ms)) {
         std::fprintf(stderr, "--M: a comma-separated list of integers >= 1\n");
@@ -152,18 +155,18 @@ int main(int argc, char** argv) {
     const std::vector<std::int64_t> ladder = {5, 10, 20, 30, 50, 75, 100, 150, 200, 300};
     std::vector<std::int64_t> input_Ms = Ms;
     std::vector<Comparison> cmp;
-    for (int seed = 1; seed <= seeds; ++seed) {
+    for (int seed = first_seed; seed < first_seed + seeds; ++seed) {
       RealVoOptions o;
       o.seed = static_cast<std::uint64_t>(seed);
       o.verbose = verbose;
       o.selector = Selector::kOriginal;
-      if (kept_fraction > 0 && seed == 1) o.calibrate_M = ladder;
+      if (kept_fraction > 0 && seed == first_seed) o.calibrate_M = ladder;
       const RealRunResult orig = run_real_vo(seq, o);
       if (!orig.error.empty()) {
         std::fprintf(stderr, "keepless_vo_eval: %s\n", orig.error.c_str());
         return 1;
       }
-      if (kept_fraction > 0 && seed == 1) {
+      if (kept_fraction > 0 && seed == first_seed) {
         std::size_t best = 0;
         for (std::size_t m = 0; m < ladder.size(); ++m) {
           std::printf("#   calibration M=%lld keeps %.3f of the new keyframes' evaluated points\n",
