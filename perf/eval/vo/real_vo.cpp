@@ -6,7 +6,6 @@
 #include <cstdio>
 #include <functional>
 #include <numeric>
-#include <set>
 
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core/eigen.hpp>
@@ -137,7 +136,8 @@ class Vo {
   void search_in_neighbours(int kf);
   std::vector<int> local_keyframes(int kf) const;
   void select_points(int kf, const std::vector<int>& local);
-  void local_ba(const std::vector<int>& local, bool all_fixed_first);
+  // fix_first: hold local.front() too (the two-view start's gauge).
+  void local_ba(const std::vector<int>& local, bool fix_first);
   void keyframe_culling(int kf);
   Eigen::Isometry3d final_pose(int kf) const;
   int neighbours() const { return seq_.rgbd ? 10 : 20; }
@@ -152,7 +152,7 @@ class Vo {
   Map map_;
   std::vector<int> recent_;  // ORB-SLAM2's mlpRecentAddedMapPoints
   TrackedFrame last_;
-  bool have_last_ = false, have_velocity_ = false;
+  bool have_velocity_ = false;
   Eigen::Isometry3d velocity_ = Eigen::Isometry3d::Identity();
   int last_kf_frame_ = -1000, reference_kf_ = -1, relocalised_frame_ = -1000;
   bool initialised_ = false;
@@ -934,10 +934,7 @@ RealRunResult Vo::run() {
       } else {
         tracked = initialize_monocular(cur);
       }
-      if (tracked) {
-        last_ = cur;
-        have_last_ = true;
-      }
+      if (tracked) last_ = cur;
     } else {
       const Eigen::Isometry3d before = last_.Tcw;
       tracked = track(cur);
