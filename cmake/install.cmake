@@ -1,4 +1,10 @@
 include(CMakePackageConfigHelpers)
+# The package config looks for OpenCV only when the adapter is in it.
+if(TARGET keepless::opencv)
+  set(KEEPLESS_PACKAGE_HAS_OPENCV TRUE)
+else()
+  set(KEEPLESS_PACKAGE_HAS_OPENCV FALSE)
+endif()
 install(EXPORT keeplessTargets NAMESPACE keepless:: FILE keeplessTargets.cmake
         DESTINATION ${CMAKE_INSTALL_LIBDIR}/cmake/keepless)
 configure_package_config_file(${CMAKE_CURRENT_LIST_DIR}/keeplessConfig.cmake.in

@@ -18,6 +18,11 @@
 
 #include "keepless/decision_t.hpp"
 #endif
+#ifdef ONBOARD_MODULE_WITH_OPENCV
+#include <vector>
+
+#include "keepless/opencv/keyframe_adapter.hpp"
+#endif
 
 namespace {
 
@@ -104,6 +109,40 @@ int main() {
     std::printf("onboard_module: inconsistent decisions\n");
     return 1;
   }
+
+#ifdef ONBOARD_MODULE_WITH_OPENCV
+  // The same window from an ORB-SLAM-style tracker's own types: cv::KeyPoint,
+  // map point ids and Tcw as a cv::Mat; the culled ids come back as a set.
+  core::Window cv_window(capacities);
+  core::Sparsifier cv_sparsifier(capacities, params);
+  opencv::KeyframeAdapter adapter(capacities);
+  for (std::uint32_t k = 0; k < kKeyframes; ++k) {
+    std::vector<cv::KeyPoint> keypoints;
+    std::vector<core::PointId> ids;
+    for (std::uint32_t i = 0; i < kPointsPerKeyframe; ++i) {
+      const std::uint32_t point = k * kPointStride + i;
+      keypoints.emplace_back(float(20.0 + 25.0 * (point % 24) - 40.0 * k), float(30.0 + 17.0 * (point % 7)),
+                             31.f);
+      ids.push_back(point);
+    }
+    cv::Mat Tcw = cv::Mat::eye(4, 4, CV_32F);
+    Tcw.at<float>(0, 3) = -0.5f * float(k);  // centre at x = 0.5 k
+    opencv::CameraPose pose;
+    if (opencv::pose_from_tcw(Tcw, &pose) != opencv::Status::kOk ||
+        adapter.add_keyframe(cv_window, 100 + k, pose, keypoints, ids) != opencv::Status::kOk) {
+      std::printf("opencv adapter rejected keyframe %u\n", k);
+      return 1;
+    }
+  }
+  std::vector<core::PointId> cv_culled;
+  if (cv_sparsifier.run(cv_window) != core::Status::kOk) return 1;
+  opencv::culled_points(cv_sparsifier, &cv_culled);
+  if (cv_culled.size() != culled) {
+    std::printf("onboard_module: the OpenCV adapter's window decided differently\n");
+    return 1;
+  }
+  std::printf("  keepless::opencv: %zu culled ids, the same decisions\n", cv_culled.size());
+#endif
 
 #ifdef ONBOARD_MODULE_WITH_LCM
   // What the module would publish on the bus: the summary and the culled ids.

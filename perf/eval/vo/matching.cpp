@@ -1,0 +1,202 @@
+#include "matching.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace keepless::eval::vo {
+namespace {
+
+// Brute force along the epipolar band (ORB-SLAM2 narrows by BoW node instead).
+constexpr double kTriangulationRatio = 0.7;
+
+struct Best {
+  int dist = std::numeric_limits<int>::max(), dist2 = std::numeric_limits<int>::max();
+  int index = -1, level = -1, level2 = -1;
+  void offer(int d, int i, int level_i) {
+    if (d < dist) {
+      dist2 = dist, level2 = level;
+      dist = d, index = i, level = level_i;
+    } else if (d < dist2) {
+      dist2 = d, level2 = level_i;
+    }
+  }
+};
+
+bool project(const PinholeCamera& cam, const Eigen::Isometry3d& Tcw, const Eigen::Vector3d& X, double* u,
+             double* v, double* z) {
+  const Eigen::Vector3d p = Tcw * X;
+  if (p.z() <= 0) return false;
+  *z = p.z();
+  *u = cam.fx * p.x() / p.z() + cam.cx;
+  *v = cam.fy * p.y() / p.z() + cam.cy;
+  return *u >= 0 && *v >= 0 && *u < cam.width && *v < cam.height;
+}
+
+}  // namespace
+
+int search_by_projection(TrackedFrame& cur, const TrackedFrame& last, const Map& map,
+                         const PinholeCamera& cam, double th) {
+  int found = 0;
+  std::vector<int> area;
+  for (std::size_t i = 0; i < last.mp.size(); ++i) {
+    const int p = last.mp[i] >= 0 ? map.resolve(last.mp[i]) : -1;
+    if (p < 0 || last.outlier[i]) continue;
+    const MapPoint& m = map.points[static_cast<std::size_t>(p)];
+    double u, v, z;
+    if (!project(cam, cur.Tcw, m.X, &u, &v, &z)) continue;
+    const int level = last.f.keys[i].octave;
+    const double r = th * pyramid().scale[static_cast<std::size_t>(level)];
+    cur.f.features_in_area(u, v, r, std::max(0, level - 1), std::min(kLevels - 1, level + 1), &area);
+    Best best;
+    for (int j : area) {
+      if (cur.mp[static_cast<std::size_t>(j)] >= 0) continue;
+      const double ur = cur.f.ur[static_cast<std::size_t>(j)];
+      if (ur >= 0 && std::abs(u - cam.bf / z - ur) > r) continue;
+      best.offer(hamming(m.descriptor, 0, cur.f.descriptors, j), j, 0);
+    }
+    if (best.index >= 0 && best.dist <= kHammingHigh) {
+      cur.mp[static_cast<std::size_t>(best.index)] = p;
+      ++found;
+    }
+  }
+  return found;
+}
+
+int search_local_points(TrackedFrame& cur, Map& map, const std::vector<int>& points,
+                        const PinholeCamera& cam, double th) {
+  for (int p : cur.mp) {  // matched already: visible, and not searched again
+    if (p < 0) continue;
+    MapPoint& m = map.points[static_cast<std::size_t>(p)];
+    m.last_seen_frame = cur.index;
+    ++m.visible;
+  }
+  int found = 0;
+  std::vector<int> area;
+  for (int p : points) {
+    MapPoint& m = map.points[static_cast<std::size_t>(p)];
+    if (m.bad || m.last_seen_frame == cur.index) continue;
+    double u, v, view_cos;
+    int level;
+    if (!map.in_frustum(p, cur.Tcw, cam, &u, &v, &level, &view_cos)) continue;
+    ++m.visible;
+    const double r = th * (view_cos > 0.998 ? 2.5 : 4.0) * pyramid().scale[static_cast<std::size_t>(level)];
+    cur.f.features_in_area(u, v, r, level - 1, level, &area);
+    Best best;
+    for (int j : area) {
+      if (cur.mp[static_cast<std::size_t>(j)] >= 0) continue;
+      best.offer(hamming(m.descriptor, 0, cur.f.descriptors, j), j, cur.f.keys[static_cast<std::size_t>(j)].octave);
+    }
+    if (best.index < 0 || best.dist > kHammingHigh) continue;
+    if (best.level == best.level2 && best.dist > 0.8 * best.dist2) continue;
+    cur.mp[static_cast<std::size_t>(best.index)] = p;
+    ++found;
+  }
+  return found;
+}
+
+int fuse(Map& map, int kf, const std::vector<int>& points, const PinholeCamera& cam) {
+  int changed = 0;
+  std::vector<int> area;
+  for (int p0 : points) {
+    const int p = map.resolve(p0);
+    if (p < 0) continue;
+    KeyFrame& k = map.kfs[static_cast<std::size_t>(kf)];
+    const MapPoint& m = map.points[static_cast<std::size_t>(p)];
+    if (std::any_of(m.obs.begin(), m.obs.end(), [&](const auto& o) { return o.first == kf; })) continue;
+    double u, v, view_cos;
+    int level;
+    if (!map.in_frustum(p, k.Tcw, cam, &u, &v, &level, &view_cos)) continue;
+    const double z = (k.Tcw * m.X).z();
+    const double r = 3.0 * pyramid().scale[static_cast<std::size_t>(level)];
+    k.f.features_in_area(u, v, r, level - 1, level, &area);
+    int best = -1, best_dist = std::numeric_limits<int>::max();
+    for (int j : area) {
+      const cv::KeyPoint& kp = k.f.keys[static_cast<std::size_t>(j)];
+      const double inv = pyramid().inv_sigma2[static_cast<std::size_t>(kp.octave)];
+      double e2 = (u - kp.pt.x) * (u - kp.pt.x) + (v - kp.pt.y) * (v - kp.pt.y);
+      const double ur = k.f.ur[static_cast<std::size_t>(j)];
+      if (ur >= 0) e2 += (u - cam.bf / z - ur) * (u - cam.bf / z - ur);
+      if (e2 * inv > (ur >= 0 ? 7.8 : 5.99)) continue;
+      const int d = hamming(m.descriptor, 0, k.f.descriptors, j);
+      if (d < best_dist) best_dist = d, best = j;
+    }
+    if (best < 0 || best_dist > kHammingLow) continue;
+    const int there = map.resolve(k.mp[static_cast<std::size_t>(best)]);
+    if (there >= 0) {
+      if (map.weighted_observations(there) > map.weighted_observations(p)) {
+        map.replace(p, there);
+      } else {
+        map.replace(there, p);
+      }
+    } else {
+      map.add_observation(p, kf, best);
+      map.update_point(p);
+    }
+    ++changed;
+  }
+  return changed;
+}
+
+std::vector<std::pair<int, int>> search_for_triangulation(const Map& map, int a, int b,
+                                                          const PinholeCamera& cam) {
+  const KeyFrame& ka = map.kfs[static_cast<std::size_t>(a)];
+  const KeyFrame& kb = map.kfs[static_cast<std::size_t>(b)];
+  // F_ba = K^-T [t]x R K^-1 with T_ba = T_b T_a^-1: x_b^T F x_a = 0.
+  const Eigen::Isometry3d Tba = kb.Tcw * ka.Tcw.inverse();
+  Eigen::Matrix3d tx;
+  const Eigen::Vector3d t = Tba.translation();
+  tx << 0, -t.z(), t.y(), t.z(), 0, -t.x(), -t.y(), t.x(), 0;
+  Eigen::Matrix3d K;
+  K << cam.fx, 0, cam.cx, 0, cam.fy, cam.cy, 0, 0, 1;
+  const Eigen::Matrix3d Kinv = K.inverse();
+  const Eigen::Matrix3d F = Kinv.transpose() * tx * Tba.linear() * Kinv;
+  // The epipole of a in b: keypoints of b too close to it carry no depth.
+  const Eigen::Vector3d ca = kb.Tcw * ka.centre();
+  const double eu = cam.fx * ca.x() / ca.z() + cam.cx, ev = cam.fy * ca.y() / ca.z() + cam.cy;
+
+  std::vector<int> free_b;
+  for (std::size_t j = 0; j < kb.mp.size(); ++j) {
+    if (kb.mp[j] < 0) free_b.push_back(static_cast<int>(j));
+  }
+  std::vector<std::pair<int, int>> out;
+  std::vector<int> taken(kb.mp.size(), -1);
+  std::vector<int> taken_dist(kb.mp.size(), std::numeric_limits<int>::max());
+  for (std::size_t i = 0; i < ka.mp.size(); ++i) {
+    if (ka.mp[i] >= 0) continue;
+    const cv::KeyPoint& pa = ka.f.keys[i];
+    const Eigen::Vector3d line = F * Eigen::Vector3d(pa.pt.x, pa.pt.y, 1);
+    const double norm2 = line.x() * line.x() + line.y() * line.y();
+    if (norm2 <= 0) continue;
+    Best best;
+    for (int j : free_b) {
+      const cv::KeyPoint& pb = kb.f.keys[static_cast<std::size_t>(j)];
+      if (std::abs(pb.octave - pa.octave) > 1) continue;
+      const double num = line.x() * pb.pt.x + line.y() * pb.pt.y + line.z();
+      if (num * num / norm2 >= 3.84 * pyramid().scale[static_cast<std::size_t>(pb.octave)] *
+                                      pyramid().scale[static_cast<std::size_t>(pb.octave)]) {
+        continue;
+      }
+      const int d = hamming(ka.f.descriptors, static_cast<int>(i), kb.f.descriptors, j);
+      if (d > kHammingLow) continue;
+      const double du = eu - pb.pt.x, dv = ev - pb.pt.y;
+      if (ka.f.ur[i] < 0 && du * du + dv * dv < 100 * pyramid().scale[static_cast<std::size_t>(pb.octave)]) {
+        continue;
+      }
+      best.offer(d, j, 0);
+    }
+    if (best.index < 0) continue;
+    if (best.dist2 != std::numeric_limits<int>::max() && best.dist > kTriangulationRatio * best.dist2) continue;
+    const auto j = static_cast<std::size_t>(best.index);
+    if (best.dist < taken_dist[j]) {
+      taken[j] = static_cast<int>(i);
+      taken_dist[j] = best.dist;
+    }
+  }
+  for (std::size_t j = 0; j < taken.size(); ++j) {
+    if (taken[j] >= 0) out.emplace_back(taken[j], static_cast<int>(j));
+  }
+  return out;
+}
+
+}  // namespace keepless::eval::vo

@@ -1,0 +1,55 @@
+#include "point_selection.hpp"
+
+#include <algorithm>
+#include <numeric>
+
+#include "prng.hpp"
+#include "ssc.hpp"
+
+namespace keepless::eval::vo {
+
+std::vector<core::PointId> baseline_culls(Selector selector, const std::vector<Candidate>& candidates,
+                                          std::size_t cull, std::uint64_t seed, int width, int height) {
+  const std::size_t n = candidates.size();
+  cull = std::min(cull, n);
+  std::vector<std::uint32_t> order(n);
+  std::iota(order.begin(), order.end(), 0u);
+  std::vector<core::PointId> out;
+  if (cull == 0) return out;
+  switch (selector) {
+    case Selector::kRandom: {
+      std::vector<std::uint64_t> priority(n);
+      for (std::size_t i = 0; i < n; ++i) priority[i] = mix(seed, candidates[i].id);
+      std::sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) {
+        return priority[a] != priority[b] ? priority[a] < priority[b] : candidates[a].id < candidates[b].id;
+      });
+      break;
+    }
+    case Selector::kLongestTrack:
+      std::sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) {
+        const Candidate &x = candidates[a], &y = candidates[b];
+        return x.track_length != y.track_length ? x.track_length < y.track_length : x.id > y.id;
+      });
+      break;
+    case Selector::kAnms: {
+      std::vector<SscPoint> pts(n);
+      for (std::size_t i = 0; i < n; ++i) {
+        pts[i] = {candidates[i].u, candidates[i].v, candidates[i].response, candidates[i].id};
+      }
+      const std::vector<std::uint32_t> keep =
+          ssc_select(pts, static_cast<std::uint32_t>(n - cull), width, height);
+      std::vector<bool> kept(n, false);
+      for (std::uint32_t k : keep) kept[k] = true;
+      std::stable_partition(order.begin(), order.end(), [&](std::uint32_t i) { return !kept[i]; });
+      break;
+    }
+    case Selector::kOriginal:
+    case Selector::kKeepless:
+      return out;
+  }
+  for (std::size_t i = 0; i < cull; ++i) out.push_back(candidates[order[i]].id);
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+}  // namespace keepless::eval::vo

@@ -1,0 +1,25 @@
+#pragma once
+// The baselines that cull as many points as keepless does on the same
+// window: random (a fixed priority per point and seed), longest-track-first
+// (the shortest tracks go), and ANMS (SSC on the new keyframe's responses).
+
+#include <cstdint>
+#include <vector>
+
+#include "keepless/core/config.hpp"
+#include "real_vo.hpp"
+
+namespace keepless::eval::vo {
+
+struct Candidate {
+  core::PointId id = 0;
+  float u = 0, v = 0, response = 0;  // its keypoint in the new keyframe
+  int track_length = 0;              // observations in the whole map
+};
+
+// The ids (ascending) of exactly min(cull, candidates) candidates that
+// `selector` (a baseline, not kKeepless/kOriginal) removes.
+std::vector<core::PointId> baseline_culls(Selector selector, const std::vector<Candidate>& candidates,
+                                          std::size_t cull, std::uint64_t seed, int width, int height);
+
+}  // namespace keepless::eval::vo

@@ -1,0 +1,1003 @@
+#include "real_vo.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <functional>
+#include <numeric>
+
+#include <opencv2/calib3d.hpp>
+#include <opencv2/core/eigen.hpp>
+
+#include "keepless/core/sparsifier.hpp"
+#include "keepless/opencv/keyframe_adapter.hpp"
+#include "matching.hpp"
+#include "metrics.hpp"
+#include "point_selection.hpp"
+#include "prng.hpp"
+#include "vo_ba.hpp"
+
+namespace keepless::eval::vo {
+
+const char* to_string(Selector s) {
+  switch (s) {
+    case Selector::kOriginal: return "original";
+    case Selector::kKeepless: return "keepless";
+    case Selector::kRandom: return "random";
+    case Selector::kLongestTrack: return "longest_track";
+    case Selector::kAnms: return "anms";
+  }
+  return "unknown";
+}
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+// ORB-SLAM2's tracking thresholds.
+constexpr int kMinTrackedInliers = 30;
+constexpr int kMinTrackedAfterRelocalisation = 50;
+
+core::Capacities window_capacities() {
+  core::Capacities c;
+  c.max_keyframes = 32;
+  c.max_points = 1 << 16;
+  c.max_observations = 1 << 16;
+  c.max_pair_arcs = 1 << 20;
+  return c;
+}
+
+// A seeded order for RANSAC's samples: OpenCV's RANSAC has its own fixed
+// generator, so the seed acts through the order of the correspondences.
+std::vector<int> shuffled(std::size_t n, Rng& rng) {
+  std::vector<int> order(n);
+  std::iota(order.begin(), order.end(), 0);
+  for (std::size_t i = n; i > 1; --i) std::swap(order[i - 1], order[rng.below(static_cast<std::uint32_t>(i))]);
+  return order;
+}
+
+Eigen::Isometry3d pose_from_cv(const cv::Mat& rvec, const cv::Mat& tvec) {
+  cv::Mat R;
+  cv::Rodrigues(rvec, R);
+  Eigen::Matrix3d Re;
+  Eigen::Vector3d te;
+  cv::cv2eigen(R, Re);
+  cv::cv2eigen(tvec, te);
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear() = Re;
+  T.translation() = te;
+  return T;
+}
+
+// A fraction 1/n of a motion (for the velocity over an initialisation gap).
+Eigen::Isometry3d motion_fraction(const Eigen::Isometry3d& T, int n) {
+  if (n <= 1) return T;
+  const Eigen::AngleAxisd aa(Eigen::Matrix3d(T.linear()));
+  Eigen::Isometry3d out = Eigen::Isometry3d::Identity();
+  out.linear() = Eigen::AngleAxisd(aa.angle() / n, aa.axis()).toRotationMatrix();
+  out.translation() = T.translation() / n;
+  return out;
+}
+
+// Linear triangulation (ORB-SLAM2's Initializer::Triangulate).
+bool triangulate(const Eigen::Matrix<double, 3, 4>& P1, const Eigen::Matrix<double, 3, 4>& P2,
+                 const cv::Point2f& x1, const cv::Point2f& x2, Eigen::Vector3d* X) {
+  Eigen::Matrix4d A;
+  A.row(0) = x1.x * P1.row(2) - P1.row(0);
+  A.row(1) = x1.y * P1.row(2) - P1.row(1);
+  A.row(2) = x2.x * P2.row(2) - P2.row(0);
+  A.row(3) = x2.y * P2.row(2) - P2.row(1);
+  Eigen::JacobiSVD<Eigen::Matrix4d> svd(A, Eigen::ComputeFullV);
+  const Eigen::Vector4d h = svd.matrixV().col(3);
+  if (std::abs(h(3)) < 1e-12) return false;
+  *X = h.head<3>() / h(3);
+  return X->allFinite();
+}
+
+struct FrameRecord {
+  int frame = 0, ref_kf = 0;
+  Eigen::Isometry3d T_cr = Eigen::Isometry3d::Identity();
+};
+
+class Vo {
+ public:
+  Vo(const RealSequence& s, const RealVoOptions& o)
+      : seq_(s), opt_(o), cam_(s.camera),
+        extractor_(o.features > 0 ? o.features : (s.rgbd ? 1000 : 2000), s.camera),
+        rng_(mix(o.seed, 0x5eed)), adapter_(window_capacities()), window_(window_capacities()),
+        sparsifier_(window_capacities(), o.params) {
+    K_ << cam_.fx, 0, cam_.cx, 0, cam_.fy, cam_.cy, 0, 0, 1;
+    cv::eigen2cv(K_, Kcv_);
+    for (std::int64_t M : o.calibrate_M) {
+      core::Params p = o.params;
+      p.pair_capacity = M;
+      calibration_.push_back(std::make_unique<core::Sparsifier>(window_capacities(), p));
+    }
+    calibration_sum_.assign(o.calibrate_M.size(), 0.0);
+  }
+
+  RealRunResult run();
+
+ private:
+  bool track(TrackedFrame& cur);
+  bool estimate_pose(TrackedFrame& cur, bool guess);
+  bool relocalise(TrackedFrame& cur);
+  int optimize(TrackedFrame& cur);
+  std::vector<int> local_map(const TrackedFrame& cur, int* reference);
+  bool initialize_monocular(TrackedFrame& cur);
+  void initialize_rgbd(TrackedFrame& cur);
+  bool need_keyframe(const TrackedFrame& cur, int inliers) const;
+  int insert_keyframe(TrackedFrame& cur);
+  void local_mapping(int kf);
+  void point_culling(int kf);
+  void create_points(int kf);
+  void search_in_neighbours(int kf);
+  std::vector<int> local_keyframes(int kf) const;
+  void select_points(int kf, const std::vector<int>& local);
+  // fix_first: hold local.front() too (the two-view start's gauge).
+  void local_ba(const std::vector<int>& local, bool fix_first);
+  void keyframe_culling(int kf);
+  Eigen::Isometry3d final_pose(int kf) const;
+  int neighbours() const { return seq_.rgbd ? 10 : 20; }
+
+  const RealSequence& seq_;
+  const RealVoOptions& opt_;
+  const PinholeCamera cam_;
+  OrbExtractor extractor_;
+  Rng rng_;
+  Eigen::Matrix3d K_;
+  cv::Mat Kcv_;
+  Map map_;
+  std::vector<int> recent_;  // ORB-SLAM2's mlpRecentAddedMapPoints
+  TrackedFrame last_;
+  bool have_velocity_ = false;
+  Eigen::Isometry3d velocity_ = Eigen::Isometry3d::Identity();
+  int last_kf_frame_ = -1000, reference_kf_ = -1, relocalised_frame_ = -1000;
+  bool initialised_ = false;
+  TrackedFrame init_ref_;
+  bool have_init_ref_ = false;
+  std::vector<TrackedFrame> pending_;  // frames after init_ref_ while initialisation waits for parallax
+  std::vector<FrameRecord> records_;
+
+  opencv::KeyframeAdapter adapter_;
+  core::Window window_;
+  core::Sparsifier sparsifier_;
+  std::vector<std::unique_ptr<core::Sparsifier>> calibration_;
+  std::vector<double> calibration_sum_;
+  int windows_ = 0;
+  double kept_fraction_sum_ = 0;
+  std::size_t marked_culls_ = 0;
+  RealRunResult result_;
+};
+
+int Vo::optimize(TrackedFrame& cur) {
+  std::vector<Eigen::Vector3d> X;
+  std::vector<BaObservation> obs;
+  std::vector<int> keypoint;
+  for (std::size_t i = 0; i < cur.mp.size(); ++i) {
+    const int p = cur.mp[i] >= 0 ? map_.resolve(cur.mp[i]) : -1;
+    cur.mp[i] = p;
+    if (p < 0) continue;
+    X.push_back(map_.points[static_cast<std::size_t>(p)].X);
+    BaObservation o;
+    o.point = static_cast<int>(X.size()) - 1;
+    o.u = cur.f.keys[i].pt.x;
+    o.v = cur.f.keys[i].pt.y;
+    o.ur = cur.f.ur[i];
+    o.level = cur.f.keys[i].octave;
+    obs.push_back(o);
+    keypoint.push_back(static_cast<int>(i));
+  }
+  if (obs.size() < 3) return 0;
+  std::vector<bool> outlier;
+  const int inliers = optimize_pose(cam_, X, obs, &cur.Tcw, &outlier);
+  for (std::size_t k = 0; k < obs.size(); ++k) {
+    if (outlier[k]) cur.mp[static_cast<std::size_t>(keypoint[k])] = -1;
+  }
+  return inliers;
+}
+
+bool Vo::estimate_pose(TrackedFrame& cur, bool guess) {
+  std::vector<cv::Point3f> object;
+  std::vector<cv::Point2f> image;
+  std::vector<int> keypoint;
+  std::vector<int> all;
+  for (std::size_t i = 0; i < cur.mp.size(); ++i) {
+    if (cur.mp[i] >= 0) all.push_back(static_cast<int>(i));
+  }
+  if (all.size() < 15) return false;
+  for (int k : shuffled(all.size(), rng_)) {
+    const int i = all[static_cast<std::size_t>(k)];
+    const Eigen::Vector3d& X = map_.points[static_cast<std::size_t>(cur.mp[static_cast<std::size_t>(i)])].X;
+    object.emplace_back(float(X.x()), float(X.y()), float(X.z()));
+    image.push_back(cur.f.keys[static_cast<std::size_t>(i)].pt);
+    keypoint.push_back(i);
+  }
+  const PoseBlock b = to_block(cur.Tcw);
+  cv::Mat rvec = (cv::Mat_<double>(3, 1) << b[0], b[1], b[2]);
+  cv::Mat tvec = (cv::Mat_<double>(3, 1) << b[3], b[4], b[5]);
+  std::vector<int> inliers;
+  const bool ok = cv::solvePnPRansac(object, image, Kcv_, cv::noArray(), rvec, tvec, guess, guess ? 100 : 300,
+                                     4.0f, 0.99, inliers, cv::SOLVEPNP_EPNP);
+  if (ok && inliers.size() >= 10) {
+    cur.Tcw = pose_from_cv(rvec, tvec);
+    std::vector<bool> in(keypoint.size(), false);
+    for (int k : inliers) in[static_cast<std::size_t>(k)] = true;
+    for (std::size_t k = 0; k < keypoint.size(); ++k) {
+      if (!in[k]) cur.mp[static_cast<std::size_t>(keypoint[k])] = -1;
+    }
+  } else if (!guess) {
+    return false;
+  }
+  return optimize(cur) >= 10;
+}
+
+bool Vo::relocalise(TrackedFrame& cur) {
+  // Every point of the last keyframes, matched by descriptor alone.
+  std::vector<int> recent_kfs;
+  for (int k = static_cast<int>(map_.kfs.size()) - 1; k >= 0 && recent_kfs.size() < 10; --k) {
+    if (!map_.kfs[static_cast<std::size_t>(k)].bad) recent_kfs.push_back(k);
+  }
+  const std::vector<int> points = map_.points_of(recent_kfs);
+  std::fill(cur.mp.begin(), cur.mp.end(), -1);
+  std::vector<int> best_dist(cur.mp.size(), 256);
+  for (int p : points) {
+    const cv::Mat& d = map_.points[static_cast<std::size_t>(p)].descriptor;
+    int b1 = 256, b2 = 256, bi = -1;
+    for (int j = 0; j < cur.f.descriptors.rows; ++j) {
+      const int h = hamming(d, 0, cur.f.descriptors, j);
+      if (h < b1) b2 = b1, b1 = h, bi = j;
+      else if (h < b2) b2 = h;
+    }
+    if (bi < 0 || b1 > kHammingLow || b1 > 0.75 * b2) continue;
+    if (b1 < best_dist[static_cast<std::size_t>(bi)]) {
+      best_dist[static_cast<std::size_t>(bi)] = b1;
+      cur.mp[static_cast<std::size_t>(bi)] = p;
+    }
+  }
+  return estimate_pose(cur, false);
+}
+
+std::vector<int> Vo::local_map(const TrackedFrame& cur, int* reference) {
+  std::vector<int> count(map_.kfs.size(), 0);
+  for (int p : cur.mp) {
+    if (p < 0) continue;
+    for (const auto& o : map_.points[static_cast<std::size_t>(p)].obs) ++count[static_cast<std::size_t>(o.first)];
+  }
+  std::vector<int> kfs;
+  int best = -1;
+  for (std::size_t k = 0; k < count.size(); ++k) {
+    if (count[k] == 0 || map_.kfs[k].bad) continue;
+    kfs.push_back(static_cast<int>(k));
+    if (best < 0 || count[k] > count[static_cast<std::size_t>(best)]) best = static_cast<int>(k);
+  }
+  std::sort(kfs.begin(), kfs.end(), [&](int a, int b) {
+    return count[static_cast<std::size_t>(a)] != count[static_cast<std::size_t>(b)]
+               ? count[static_cast<std::size_t>(a)] > count[static_cast<std::size_t>(b)]
+               : a > b;
+  });
+  if (kfs.size() > 80) kfs.resize(80);
+  std::vector<char> in(map_.kfs.size(), 0);
+  for (int k : kfs) in[static_cast<std::size_t>(k)] = 1;
+  const std::size_t direct = kfs.size();
+  for (std::size_t i = 0; i < direct && kfs.size() < 80; ++i) {
+    const auto cov = map_.covisibles(kfs[i], 1);
+    for (std::size_t c = 0; c < cov.size() && c < 10; ++c) {
+      if (!in[static_cast<std::size_t>(cov[c].first)]) {
+        in[static_cast<std::size_t>(cov[c].first)] = 1;
+        kfs.push_back(cov[c].first);
+        break;  // ORB-SLAM2 takes the first new one of each
+      }
+    }
+  }
+  if (best >= 0) *reference = best;
+  return map_.points_of(kfs);
+}
+
+bool Vo::track(TrackedFrame& cur) {
+  cur.mp.assign(cur.f.keys.size(), -1);
+  cur.outlier.assign(cur.f.keys.size(), false);
+  cur.Tcw = have_velocity_ ? velocity_ * last_.Tcw : last_.Tcw;
+  const double th = seq_.rgbd ? 7 : 15;
+  bool ok = false;
+  if (have_velocity_) {
+    int m = search_by_projection(cur, last_, map_, cam_, th);
+    if (m < 20) {
+      std::fill(cur.mp.begin(), cur.mp.end(), -1);
+      m = search_by_projection(cur, last_, map_, cam_, 2 * th);
+    }
+    ok = m >= 15 && estimate_pose(cur, true);
+  }
+  bool relocalised = false;
+  if (!ok) {
+    cur.Tcw = last_.Tcw;
+    ok = relocalise(cur);
+    relocalised = ok;
+    if (ok) relocalised_frame_ = cur.index;
+  }
+  if (!ok) return false;
+  int reference = reference_kf_;
+  const std::vector<int> points = local_map(cur, &reference);
+  const bool recent = cur.index < relocalised_frame_ + 2;
+  search_local_points(cur, map_, points, cam_, recent ? 5 : (seq_.rgbd ? 3 : 1));
+  const int inliers = optimize(cur);
+  if (inliers < (relocalised || recent ? kMinTrackedAfterRelocalisation : kMinTrackedInliers)) return false;
+  for (int p : cur.mp) {
+    if (p >= 0) ++map_.points[static_cast<std::size_t>(p)].found;
+  }
+  reference_kf_ = reference;
+  if (need_keyframe(cur, inliers)) insert_keyframe(cur);
+  return true;
+}
+
+bool Vo::need_keyframe(const TrackedFrame& cur, int inliers) const {
+  const int kfs = map_.alive_keyframes();
+  const int max_frames = static_cast<int>(seq_.fps);
+  if (cur.index < relocalised_frame_ + max_frames && kfs > max_frames) return false;
+  const int min_obs = kfs <= 2 ? 2 : 3;
+  int ref_matches = 0;
+  for (int p : map_.kfs[static_cast<std::size_t>(reference_kf_)].mp) {
+    if (p >= 0 && !map_.points[static_cast<std::size_t>(p)].bad && map_.weighted_observations(p) >= min_obs) {
+      ++ref_matches;
+    }
+  }
+  int tracked_close = 0, untracked_close = 0;
+  if (seq_.rgbd) {
+    for (std::size_t i = 0; i < cur.f.depth.size(); ++i) {
+      if (cur.f.depth[i] > 0 && cur.f.depth[i] < cam_.close_depth) (cur.mp[i] >= 0 ? tracked_close : untracked_close)++;
+    }
+  }
+  const bool need_close = seq_.rgbd && tracked_close < 100 && untracked_close > 70;
+  const double ratio = kfs < 2 ? 0.4 : (seq_.rgbd ? 0.75 : 0.9);
+  // c1a (max frames) and c1b (min frames, mapping idle: always, it runs inline) hold.
+  const bool c2 = (inliers < ref_matches * ratio || need_close) && inliers > 15;
+  // The translation/rotation rule: a keyframe at least every 20 degrees.
+  const Eigen::Isometry3d rel = cur.Tcw * map_.kfs[static_cast<std::size_t>(reference_kf_)].Tcw.inverse();
+  const bool turned = Eigen::AngleAxisd(Eigen::Matrix3d(rel.linear())).angle() > 20.0 * M_PI / 180.0;
+  const bool c1a = cur.index >= last_kf_frame_ + max_frames;
+  return (c2 || ((turned || c1a) && inliers > 15));
+}
+
+int Vo::insert_keyframe(TrackedFrame& cur) {
+  KeyFrame k;
+  k.frame = cur.index;
+  k.Tcw = cur.Tcw;
+  k.f = cur.f;
+  k.mp.assign(cur.f.keys.size(), -1);
+  map_.kfs.push_back(std::move(k));
+  const int id = static_cast<int>(map_.kfs.size()) - 1;
+  for (std::size_t i = 0; i < cur.mp.size(); ++i) {
+    const int p = cur.mp[i] >= 0 ? map_.resolve(cur.mp[i]) : -1;
+    if (p < 0) continue;
+    map_.add_observation(p, id, static_cast<int>(i));
+    map_.update_point(p);
+  }
+  if (seq_.rgbd) {
+    // ORB-SLAM2's CreateNewKeyFrame: points from depth, nearest first, all
+    // close ones and at least 100.
+    KeyFrame& kf = map_.kfs[static_cast<std::size_t>(id)];
+    std::vector<int> by_depth;
+    for (std::size_t i = 0; i < kf.f.depth.size(); ++i) {
+      if (kf.f.depth[i] > 0) by_depth.push_back(static_cast<int>(i));
+    }
+    std::sort(by_depth.begin(), by_depth.end(), [&](int a, int b) {
+      return kf.f.depth[static_cast<std::size_t>(a)] < kf.f.depth[static_cast<std::size_t>(b)];
+    });
+    const Eigen::Isometry3d Twc = kf.Tcw.inverse();
+    int n = 0;
+    for (int i : by_depth) {
+      const auto si = static_cast<std::size_t>(i);
+      const double z = kf.f.depth[si];
+      if (z > cam_.close_depth && n > 100) break;
+      ++n;
+      if (map_.kfs[static_cast<std::size_t>(id)].mp[si] >= 0) continue;
+      const cv::Point2f& pt = map_.kfs[static_cast<std::size_t>(id)].f.keys[si].pt;
+      const Eigen::Vector3d Xc((pt.x - cam_.cx) * z / cam_.fx, (pt.y - cam_.cy) * z / cam_.fy, z);
+      recent_.push_back(map_.new_point(Twc * Xc, id, i));
+    }
+  }
+  cur.mp = map_.kfs[static_cast<std::size_t>(id)].mp;
+  last_kf_frame_ = cur.index;
+  reference_kf_ = id;
+  ++result_.keyframes_created;
+  local_mapping(id);
+  // The keyframe's points after mapping (fused, culled) are what the next frame tracks.
+  cur.mp = map_.kfs[static_cast<std::size_t>(id)].mp;
+  cur.Tcw = map_.kfs[static_cast<std::size_t>(id)].Tcw;
+  return id;
+}
+
+void Vo::point_culling(int kf) {
+  const int th_obs = seq_.rgbd ? 3 : 2;
+  std::vector<int> keep;
+  for (int p : recent_) {
+    MapPoint& m = map_.points[static_cast<std::size_t>(p)];
+    if (m.bad) continue;
+    if (double(m.found) / m.visible < 0.25) {
+      map_.set_bad(p);
+    } else if (kf - m.first_kf >= 2 && map_.weighted_observations(p) <= th_obs) {
+      map_.set_bad(p);
+    } else if (kf - m.first_kf < 3) {
+      keep.push_back(p);
+    }
+  }
+  recent_.swap(keep);
+}
+
+void Vo::create_points(int kf) {
+  const auto cov = map_.covisibles(kf, 1);
+  const KeyFrame& k1 = map_.kfs[static_cast<std::size_t>(kf)];
+  const Eigen::Vector3d c1 = k1.centre();
+  const double ratio_factor = 1.5 * kScaleFactor;
+  for (std::size_t n = 0; n < cov.size() && static_cast<int>(n) < neighbours(); ++n) {
+    const int other = cov[n].first;
+    const KeyFrame& k2 = map_.kfs[static_cast<std::size_t>(other)];
+    const Eigen::Vector3d c2 = k2.centre();
+    const double baseline = (c2 - c1).norm();
+    if (seq_.rgbd) {
+      if (baseline < cam_.bf / cam_.fx) continue;
+    } else {
+      std::vector<double> z;
+      for (int p : k2.mp) {
+        if (p >= 0 && !map_.points[static_cast<std::size_t>(p)].bad) {
+          z.push_back((k2.Tcw * map_.points[static_cast<std::size_t>(p)].X).z());
+        }
+      }
+      if (z.empty()) continue;
+      std::nth_element(z.begin(), z.begin() + static_cast<std::ptrdiff_t>(z.size() / 2), z.end());
+      if (baseline / z[z.size() / 2] < 0.01) continue;
+    }
+    const std::vector<std::pair<int, int>> pairs = search_for_triangulation(map_, kf, other, cam_);
+    const Eigen::Matrix<double, 3, 4> P1 = K_ * k1.Tcw.matrix().topRows<3>();
+    const Eigen::Matrix<double, 3, 4> P2 = K_ * k2.Tcw.matrix().topRows<3>();
+    const Eigen::Matrix3d Rwc1 = k1.Tcw.linear().transpose(), Rwc2 = k2.Tcw.linear().transpose();
+    for (const auto& [i, j] : pairs) {
+      const auto si = static_cast<std::size_t>(i), sj = static_cast<std::size_t>(j);
+      if (map_.kfs[static_cast<std::size_t>(kf)].mp[si] >= 0 || map_.kfs[static_cast<std::size_t>(other)].mp[sj] >= 0) continue;
+      const cv::KeyPoint& a = k1.f.keys[si];
+      const cv::KeyPoint& b = k2.f.keys[sj];
+      const Eigen::Vector3d r1 = Rwc1 * Eigen::Vector3d((a.pt.x - cam_.cx) / cam_.fx, (a.pt.y - cam_.cy) / cam_.fy, 1);
+      const Eigen::Vector3d r2 = Rwc2 * Eigen::Vector3d((b.pt.x - cam_.cx) / cam_.fx, (b.pt.y - cam_.cy) / cam_.fy, 1);
+      const double cos_parallax = r1.dot(r2) / (r1.norm() * r2.norm());
+      if (!(cos_parallax > 0 && cos_parallax < 0.9998)) continue;
+      Eigen::Vector3d X;
+      if (!triangulate(P1, P2, a.pt, b.pt, &X)) continue;
+      BaObservation o1{0, 0, a.pt.x, a.pt.y, k1.f.ur[si], a.octave};
+      BaObservation o2{0, 0, b.pt.x, b.pt.y, k2.f.ur[sj], b.octave};
+      if (chi2(cam_, k1.Tcw, X, o1) > (o1.ur >= 0 ? kChi2Stereo : kChi2Mono)) continue;
+      if (chi2(cam_, k2.Tcw, X, o2) > (o2.ur >= 0 ? kChi2Stereo : kChi2Mono)) continue;
+      const double d1 = (X - c1).norm(), d2 = (X - c2).norm();
+      if (d1 <= 0 || d2 <= 0) continue;
+      const double ratio_dist = d2 / d1;
+      const double ratio_octave = pyramid().scale[static_cast<std::size_t>(a.octave)] /
+                                  pyramid().scale[static_cast<std::size_t>(b.octave)];
+      if (ratio_dist * ratio_factor < ratio_octave || ratio_dist > ratio_octave * ratio_factor) continue;
+      const int p = map_.new_point(X, kf, i);
+      map_.add_observation(p, other, j);
+      map_.update_point(p);
+      recent_.push_back(p);
+    }
+  }
+}
+
+void Vo::search_in_neighbours(int kf) {
+  std::vector<int> targets;
+  std::vector<char> in(map_.kfs.size(), 0);
+  in[static_cast<std::size_t>(kf)] = 1;
+  const auto cov = map_.covisibles(kf, 1);
+  for (std::size_t n = 0; n < cov.size() && static_cast<int>(n) < neighbours(); ++n) {
+    if (!in[static_cast<std::size_t>(cov[n].first)]) targets.push_back(cov[n].first);
+    in[static_cast<std::size_t>(cov[n].first)] = 1;
+  }
+  const std::size_t first = targets.size();
+  for (std::size_t t = 0; t < first; ++t) {
+    const auto second = map_.covisibles(targets[t], 1);
+    for (std::size_t n = 0; n < second.size() && n < 5; ++n) {
+      if (!in[static_cast<std::size_t>(second[n].first)]) {
+        in[static_cast<std::size_t>(second[n].first)] = 1;
+        targets.push_back(second[n].first);
+      }
+    }
+  }
+  std::vector<int> own;
+  for (int p : map_.kfs[static_cast<std::size_t>(kf)].mp) {
+    if (p >= 0) own.push_back(p);
+  }
+  for (int t : targets) fuse(map_, t, own, cam_);
+  const std::vector<int> theirs = map_.points_of(targets);
+  fuse(map_, kf, theirs, cam_);
+  for (int p : map_.kfs[static_cast<std::size_t>(kf)].mp) {
+    if (p >= 0) map_.update_point(p);
+  }
+}
+
+std::vector<int> Vo::local_keyframes(int kf) const {
+  std::vector<int> local = {kf};
+  auto cov = map_.covisibles(kf, 15);
+  if (cov.empty()) {
+    cov = map_.covisibles(kf, 1);
+    if (cov.size() > 1) cov.resize(1);
+  }
+  for (const auto& c : cov) {
+    if (static_cast<int>(local.size()) >= opt_.max_local_keyframes) break;
+    local.push_back(c.first);
+  }
+  return local;
+}
+
+void Vo::select_points(int kf, const std::vector<int>& local) {
+  const Clock::time_point start = Clock::now();
+  std::vector<int> ordered = local;
+  std::sort(ordered.begin(), ordered.end());
+  window_.clear();
+  std::vector<cv::KeyPoint> keypoints, unmapped;
+  std::vector<core::PointId> ids;
+  for (int k : ordered) {
+    const KeyFrame& f = map_.kfs[static_cast<std::size_t>(k)];
+    keypoints.clear();
+    unmapped.clear();
+    ids.clear();
+    for (std::size_t i = 0; i < f.mp.size(); ++i) {
+      if (f.mp[i] >= 0 && !map_.points[static_cast<std::size_t>(f.mp[i])].bad) {
+        keypoints.push_back(f.f.keys[i]);
+        ids.push_back(static_cast<core::PointId>(f.mp[i]));
+      } else {
+        unmapped.push_back(f.f.keys[i]);
+      }
+    }
+    opencv::CameraPose pose;
+    if (opencv::pose_from_tcw(f.Tcw, &pose) != opencv::Status::kOk ||
+        adapter_.add_keyframe(window_, static_cast<core::KeyframeId>(k), pose, keypoints, ids, &unmapped) !=
+            opencv::Status::kOk) {
+      ++result_.window_rejections;
+      result_.selector_seconds += seconds_since(start);
+      return;
+    }
+  }
+  if (sparsifier_.run(window_) != core::Status::kOk) {
+    ++result_.window_rejections;
+    result_.selector_seconds += seconds_since(start);
+    return;
+  }
+  // The authors' integration: only the new keyframe's points are decided.
+  const KeyFrame& f = map_.kfs[static_cast<std::size_t>(kf)];
+  std::vector<Candidate> candidates;
+  std::vector<core::PointId> keepless_culls;
+  opencv::culled_points(sparsifier_, &keepless_culls);
+  std::vector<core::PointId> evaluated;
+  {
+    std::vector<core::PointId> kept;
+    opencv::points_with_verdict(sparsifier_, core::Verdict::kKeep, &kept);
+    evaluated = kept;
+    evaluated.insert(evaluated.end(), keepless_culls.begin(), keepless_culls.end());
+    std::sort(evaluated.begin(), evaluated.end());
+  }
+  std::size_t cull = 0;
+  std::vector<core::PointId> own_culls;
+  for (std::size_t i = 0; i < f.mp.size(); ++i) {
+    const int p = f.mp[i];
+    if (p < 0 || map_.points[static_cast<std::size_t>(p)].bad) continue;
+    const auto id = static_cast<core::PointId>(p);
+    if (!std::binary_search(evaluated.begin(), evaluated.end(), id)) continue;
+    candidates.push_back({id, f.f.keys[i].pt.x, f.f.keys[i].pt.y, f.f.keys[i].response,
+                          static_cast<int>(map_.points[static_cast<std::size_t>(p)].obs.size())});
+    if (std::binary_search(keepless_culls.begin(), keepless_culls.end(), id)) {
+      ++cull;
+      own_culls.push_back(id);
+    }
+  }
+  for (std::size_t m = 0; m < calibration_.size(); ++m) {
+    std::size_t c = 0;
+    if (calibration_[m]->run(window_) == core::Status::kOk) {
+      std::vector<core::PointId> culled;
+      opencv::culled_points(*calibration_[m], &culled);
+      for (const Candidate& cand : candidates) c += std::binary_search(culled.begin(), culled.end(), cand.id) ? 1 : 0;
+    }
+    calibration_sum_[m] += candidates.empty() ? 1.0 : 1.0 - double(c) / double(candidates.size());
+  }
+  ++windows_;
+  kept_fraction_sum_ += candidates.empty() ? 1.0 : 1.0 - double(cull) / double(candidates.size());
+  std::vector<core::PointId> culls;
+  if (opt_.selector == Selector::kKeepless) {
+    culls = own_culls;
+    std::sort(culls.begin(), culls.end());  // in keypoint order so far
+  } else if (opt_.selector != Selector::kOriginal) {
+    culls = baseline_culls(opt_.selector, candidates, cull, opt_.seed, cam_.width, cam_.height);
+  }
+  if (!culls.empty() && culls.size() > marked_culls_) {
+    marked_culls_ = culls.size();
+    result_.marked_frame = f.frame;
+    result_.marks.clear();
+    for (std::size_t i = 0; i < f.mp.size(); ++i) {
+      KeypointMark mark{f.f.keys[i].pt.x, f.f.keys[i].pt.y, 0};
+      if (f.mp[i] >= 0 && !map_.points[static_cast<std::size_t>(f.mp[i])].bad) {
+        mark.state = std::binary_search(culls.begin(), culls.end(), static_cast<core::PointId>(f.mp[i])) ? 2 : 1;
+      }
+      result_.marks.push_back(mark);
+    }
+  }
+  for (core::PointId id : culls) map_.set_bad(static_cast<int>(id));
+  result_.points_culled_by_selector += static_cast<std::int64_t>(culls.size());
+  result_.selector_seconds += seconds_since(start);
+}
+
+void Vo::local_ba(const std::vector<int>& local, bool fix_first) {
+  const Clock::time_point start = Clock::now();
+  std::vector<int> pose_of(map_.kfs.size(), -1);
+  LocalBaProblem problem;
+  std::vector<int> kf_of_pose;
+  for (int k : local) {
+    pose_of[static_cast<std::size_t>(k)] = static_cast<int>(problem.poses.size());
+    problem.poses.push_back(to_block(map_.kfs[static_cast<std::size_t>(k)].Tcw));
+    problem.pose_fixed.push_back(k == 0 || (fix_first && k == local.front()));
+    kf_of_pose.push_back(k);
+  }
+  const std::vector<int> points = map_.points_of(local);
+  std::vector<std::pair<int, int>> obs_of;  // (point, kf) per observation
+  for (std::size_t pi = 0; pi < points.size(); ++pi) {
+    const MapPoint& m = map_.points[static_cast<std::size_t>(points[pi])];
+    problem.points.push_back(m.X);
+    for (const auto& [k, i] : m.obs) {
+      if (map_.kfs[static_cast<std::size_t>(k)].bad) continue;
+      if (pose_of[static_cast<std::size_t>(k)] < 0) {  // a fixed observer
+        pose_of[static_cast<std::size_t>(k)] = static_cast<int>(problem.poses.size());
+        problem.poses.push_back(to_block(map_.kfs[static_cast<std::size_t>(k)].Tcw));
+        problem.pose_fixed.push_back(true);
+        kf_of_pose.push_back(k);
+      }
+      const cv::KeyPoint& kp = map_.kfs[static_cast<std::size_t>(k)].f.keys[static_cast<std::size_t>(i)];
+      problem.observations.push_back({pose_of[static_cast<std::size_t>(k)], static_cast<int>(pi), kp.pt.x, kp.pt.y,
+                                      map_.kfs[static_cast<std::size_t>(k)].f.ur[static_cast<std::size_t>(i)],
+                                      kp.octave});
+      obs_of.emplace_back(points[pi], k);
+    }
+  }
+  const std::vector<bool> outlier = solve_local_ba(cam_, &problem);
+  for (std::size_t q = 0; q < problem.poses.size(); ++q) {
+    if (!problem.pose_fixed[q]) map_.kfs[static_cast<std::size_t>(kf_of_pose[q])].Tcw = from_block(problem.poses[q]);
+  }
+  for (std::size_t pi = 0; pi < points.size(); ++pi) {
+    if (problem.points[pi].allFinite()) map_.points[static_cast<std::size_t>(points[pi])].X = problem.points[pi];
+  }
+  for (std::size_t o = 0; o < outlier.size(); ++o) {
+    if (outlier[o] && !map_.points[static_cast<std::size_t>(obs_of[o].first)].bad) {
+      map_.erase_observation(obs_of[o].first, obs_of[o].second);
+    }
+  }
+  for (int p : points) map_.update_point(p);
+  result_.local_ba_seconds += seconds_since(start);
+  ++result_.local_bas;
+}
+
+void Vo::keyframe_culling(int kf) {
+  const int th_obs = 3;
+  for (const auto& [k, w] : map_.covisibles(kf, 15)) {
+    if (k == 0 || k == kf) continue;
+    const KeyFrame& f = map_.kfs[static_cast<std::size_t>(k)];
+    int points = 0, redundant = 0;
+    for (std::size_t i = 0; i < f.mp.size(); ++i) {
+      const int p = f.mp[i];
+      if (p < 0 || map_.points[static_cast<std::size_t>(p)].bad) continue;
+      if (seq_.rgbd && (f.f.depth[i] <= 0 || f.f.depth[i] > cam_.close_depth)) continue;
+      ++points;
+      if (map_.weighted_observations(p) <= th_obs) continue;
+      const int level = f.f.keys[i].octave;
+      int seen = 0;
+      for (const auto& [k2, j] : map_.points[static_cast<std::size_t>(p)].obs) {
+        if (k2 == k) continue;
+        if (map_.kfs[static_cast<std::size_t>(k2)].f.keys[static_cast<std::size_t>(j)].octave <= level + 1 && ++seen >= th_obs) break;
+      }
+      if (seen >= th_obs) ++redundant;
+    }
+    if (points > 0 && redundant > 0.9 * points) map_.cull_keyframe(k);
+  }
+}
+
+void Vo::local_mapping(int kf) {
+  point_culling(kf);
+  create_points(kf);
+  search_in_neighbours(kf);
+  const std::vector<int> local = local_keyframes(kf);
+  if (opt_.selector != Selector::kOriginal || !calibration_.empty()) select_points(kf, local);
+  local_ba(local, false);
+  keyframe_culling(kf);
+}
+
+void Vo::initialize_rgbd(TrackedFrame& cur) {
+  cur.Tcw = Eigen::Isometry3d::Identity();
+  cur.mp.assign(cur.f.keys.size(), -1);
+  cur.outlier.assign(cur.f.keys.size(), false);
+  KeyFrame k;
+  k.frame = cur.index;
+  k.f = cur.f;
+  k.mp.assign(cur.f.keys.size(), -1);
+  map_.kfs.push_back(std::move(k));
+  for (std::size_t i = 0; i < cur.f.depth.size(); ++i) {
+    const double z = cur.f.depth[i];
+    if (z <= 0) continue;
+    const cv::Point2f& pt = cur.f.keys[i].pt;
+    map_.new_point(Eigen::Vector3d((pt.x - cam_.cx) * z / cam_.fx, (pt.y - cam_.cy) * z / cam_.fy, z), 0,
+                   static_cast<int>(i));
+  }
+  cur.mp = map_.kfs[0].mp;
+  reference_kf_ = 0;
+  last_kf_frame_ = cur.index;
+  result_.keyframes_created = 1;
+  initialised_ = true;
+}
+
+bool Vo::initialize_monocular(TrackedFrame& cur) {
+  if (!have_init_ref_ || cur.f.keys.size() < 100) {
+    if (cur.f.keys.size() >= 100) init_ref_ = cur, have_init_ref_ = true, pending_.clear();
+    return false;
+  }
+  // ORB-SLAM2's SearchForInitialization (100 px window, TH_LOW, ratio 0.9),
+  // on every level (+-1) instead of level 0 of an extractor with twice the features.
+  const Frame& a = init_ref_.f;
+  std::vector<int> match(a.keys.size(), -1), best_of(cur.f.keys.size(), -1), best_dist(cur.f.keys.size(), 256);
+  std::vector<int> area;
+  for (std::size_t i = 0; i < a.keys.size(); ++i) {
+    const int level = a.keys[i].octave;
+    cur.f.features_in_area(a.keys[i].pt.x, a.keys[i].pt.y, 100, std::max(0, level - 1), level + 1, &area);
+    int b1 = 256, b2 = 256, bi = -1;
+    for (int j : area) {
+      const int d = hamming(a.descriptors, static_cast<int>(i), cur.f.descriptors, j);
+      if (d < b1) b2 = b1, b1 = d, bi = j;
+      else if (d < b2) b2 = d;
+    }
+    if (bi < 0 || b1 > kHammingLow || b1 >= 0.9 * b2) continue;
+    const auto sj = static_cast<std::size_t>(bi);
+    if (b1 < best_dist[sj]) {
+      if (best_of[sj] >= 0) match[static_cast<std::size_t>(best_of[sj])] = -1;
+      best_of[sj] = static_cast<int>(i), best_dist[sj] = b1, match[i] = bi;
+    }
+  }
+  std::vector<int> pairs;
+  for (std::size_t i = 0; i < match.size(); ++i) {
+    if (match[i] >= 0) pairs.push_back(static_cast<int>(i));
+  }
+  if (pairs.size() < 100) {
+    init_ref_ = cur;
+    pending_.clear();
+    return false;
+  }
+  std::vector<cv::Point2f> p0, p1;
+  std::vector<int> order_i;
+  for (int k : shuffled(pairs.size(), rng_)) {
+    const int i = pairs[static_cast<std::size_t>(k)];
+    p0.push_back(a.keys[static_cast<std::size_t>(i)].pt);
+    p1.push_back(cur.f.keys[static_cast<std::size_t>(match[static_cast<std::size_t>(i)])].pt);
+    order_i.push_back(i);
+  }
+  cv::Mat mask_e, mask_h;
+  const cv::Mat E = cv::findEssentialMat(p0, p1, Kcv_, cv::RANSAC, 0.999, 1.0, mask_e);
+  const cv::Mat H = cv::findHomography(p0, p1, cv::RANSAC, 2.0, mask_h);
+  if (E.rows != 3 || E.cols != 3) return false;
+  const int ne = cv::countNonZero(mask_e), nh = H.empty() ? 0 : cv::countNonZero(mask_h);
+  // ORB-SLAM2 picks the homography when it explains the scene (RH > 0.45).
+  std::vector<std::pair<cv::Mat, cv::Mat>> hypotheses;  // (R, t) of T_10
+  cv::Mat inlier_mask;
+  if (nh > 0 && double(nh) / double(nh + ne) > 0.45) {
+    std::vector<cv::Mat> Rs, ts, ns;
+    cv::decomposeHomographyMat(H, Kcv_, Rs, ts, ns);
+    for (std::size_t h = 0; h < Rs.size(); ++h) hypotheses.emplace_back(Rs[h], ts[h]);
+    inlier_mask = mask_h;
+  } else {
+    cv::Mat R, t, cheirality = mask_e.clone();  // recoverPose drops far points from its mask
+    cv::recoverPose(E, p0, p1, Kcv_, R, t, cheirality);
+    hypotheses.emplace_back(R, t);
+    inlier_mask = mask_e;
+  }
+  // The hypothesis that triangulates most points in front with parallax.
+  int best_good = -1;
+  Eigen::Isometry3d best_T = Eigen::Isometry3d::Identity();
+  std::vector<std::pair<int, Eigen::Vector3d>> best_points;
+  double best_parallax = 0;
+  for (const auto& [Rcv, tcv] : hypotheses) {
+    Eigen::Matrix3d R;
+    Eigen::Vector3d t;
+    cv::cv2eigen(Rcv, R);
+    cv::cv2eigen(tcv, t);
+    if (t.norm() <= 0) continue;
+    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+    T.linear() = R;
+    T.translation() = t.normalized();
+    const Eigen::Matrix<double, 3, 4> P0 = K_ * Eigen::Isometry3d::Identity().matrix().topRows<3>();
+    const Eigen::Matrix<double, 3, 4> P1 = K_ * T.matrix().topRows<3>();
+    const Eigen::Vector3d C1 = T.inverse().translation();
+    std::vector<std::pair<int, Eigen::Vector3d>> good;
+    std::vector<double> parallax;
+    for (std::size_t k = 0; k < p0.size(); ++k) {
+      if (!inlier_mask.at<uchar>(static_cast<int>(k))) continue;
+      Eigen::Vector3d X;
+      if (!triangulate(P0, P1, p0[k], p1[k], &X)) continue;
+      const Eigen::Vector3d X1 = T * X;
+      if (X.z() <= 0 || X1.z() <= 0) continue;
+      const double e0 = (K_ * X).hnormalized().x() - p0[k].x, f0 = (K_ * X).hnormalized().y() - p0[k].y;
+      const double e1 = (K_ * X1).hnormalized().x() - p1[k].x, f1 = (K_ * X1).hnormalized().y() - p1[k].y;
+      if (e0 * e0 + f0 * f0 > 4 * kChi2Mono || e1 * e1 + f1 * f1 > 4 * kChi2Mono) continue;
+      const double c = X.normalized().dot((X - C1).normalized());
+      if (c >= 0.99998) continue;  // ORB-SLAM2 maps only points with some parallax
+      parallax.push_back(std::acos(std::clamp(c, -1.0, 1.0)) * 180.0 / M_PI);
+      good.emplace_back(order_i[k], X);
+    }
+    if (static_cast<int>(good.size()) > best_good) {
+      best_good = static_cast<int>(good.size());
+      best_T = T;
+      best_points = good;
+      std::sort(parallax.begin(), parallax.end(), std::greater<double>());  // the 50th largest, as ORB-SLAM2
+      best_parallax = parallax.empty() ? 0 : parallax[std::min(parallax.size() - 1, std::size_t{50})];
+    }
+  }
+  // ORB-SLAM2: >= 50 triangulated, and the 50th largest parallax >= 1 degree.
+  if (best_good < 50 || best_parallax < 1.0) {
+    pending_.push_back(cur);
+    return false;
+  }
+
+  KeyFrame k0, k1;
+  k0.frame = init_ref_.index;
+  k0.f = init_ref_.f;
+  k0.mp.assign(k0.f.keys.size(), -1);
+  k1.frame = cur.index;
+  k1.Tcw = best_T;
+  k1.f = cur.f;
+  k1.mp.assign(k1.f.keys.size(), -1);
+  map_.kfs.push_back(std::move(k0));
+  map_.kfs.push_back(std::move(k1));
+  for (const auto& [i, X] : best_points) {
+    const int p = map_.new_point(X, 0, i);
+    map_.add_observation(p, 1, match[static_cast<std::size_t>(i)]);
+    map_.update_point(p);
+  }
+  local_ba({0, 1}, true);  // the initial map's global BA, KF 0 fixed
+  // Scale: median depth 1 in the first keyframe.
+  std::vector<double> z;
+  for (int p : map_.kfs[0].mp) {
+    if (p >= 0 && !map_.points[static_cast<std::size_t>(p)].bad) z.push_back(map_.points[static_cast<std::size_t>(p)].X.z());
+  }
+  int tracked = 0;
+  for (int p : map_.kfs[1].mp) tracked += (p >= 0 && !map_.points[static_cast<std::size_t>(p)].bad) ? 1 : 0;
+  if (z.size() < 50 || tracked < 100) {
+    map_ = Map();
+    init_ref_ = cur;
+    pending_.clear();
+    return false;
+  }
+  std::nth_element(z.begin(), z.begin() + static_cast<std::ptrdiff_t>(z.size() / 2), z.end());
+  const double s = 1.0 / z[z.size() / 2];
+  map_.kfs[1].Tcw.translation() *= s;
+  for (MapPoint& m : map_.points) m.X *= s;
+  for (std::size_t p = 0; p < map_.points.size(); ++p) map_.update_point(static_cast<int>(p));
+  cur.Tcw = map_.kfs[1].Tcw;
+  cur.mp = map_.kfs[1].mp;
+  cur.outlier.assign(cur.mp.size(), false);
+  velocity_ = motion_fraction(cur.Tcw, cur.index - init_ref_.index);
+  have_velocity_ = true;
+  records_.push_back({init_ref_.index, 0, Eigen::Isometry3d::Identity()});
+  // The frames between the initial pair, tracked against the initial map
+  // (ORB-SLAM2 leaves them out; here every frame counts).
+  std::vector<int> all_points;
+  for (std::size_t p = 0; p < map_.points.size(); ++p) {
+    if (!map_.points[p].bad) all_points.push_back(static_cast<int>(p));
+  }
+  for (TrackedFrame& f : pending_) {
+    f.Tcw = Eigen::Isometry3d::Identity();
+    for (int k = init_ref_.index; k < f.index; ++k) f.Tcw = velocity_ * f.Tcw;
+    f.mp.assign(f.f.keys.size(), -1);
+    f.outlier.assign(f.f.keys.size(), false);
+    search_local_points(f, map_, all_points, cam_, 3);
+    if (optimize(f) >= kMinTrackedInliers) {
+      records_.push_back({f.index, 0, f.Tcw});
+      ++result_.frames_tracked;
+    }
+  }
+  pending_.clear();
+  reference_kf_ = 1;
+  last_kf_frame_ = cur.index;
+  result_.keyframes_created = 2;
+  initialised_ = true;
+  ++result_.frames_tracked;  // the reference frame (the caller counts `cur`)
+  return true;
+}
+
+Eigen::Isometry3d Vo::final_pose(int kf) const {
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  for (int hops = 0; kf >= 0 && hops < 10000; ++hops) {
+    const KeyFrame& k = map_.kfs[static_cast<std::size_t>(kf)];
+    if (!k.bad) return T * k.Tcw;
+    T = T * k.T_cp;
+    kf = k.parent;
+  }
+  return T;
+}
+
+RealRunResult Vo::run() {
+  const Clock::time_point start = Clock::now();
+  result_.frames = static_cast<int>(seq_.image_files.size());
+  bool was_tracked = false;
+  for (int i = 0; i < result_.frames; ++i) {
+    cv::Mat grey, depth;
+    if (!seq_.load(static_cast<std::size_t>(i), &grey, &depth, &result_.error)) return result_;
+    TrackedFrame cur;
+    cur.index = i;
+    extractor_.extract(grey, seq_.rgbd ? &depth : nullptr, &cur.f);
+    bool tracked = false;
+    if (!initialised_) {
+      if (seq_.rgbd) {
+        if (cur.f.keys.size() >= 500) {
+          initialize_rgbd(cur);
+          tracked = true;
+        }
+      } else {
+        tracked = initialize_monocular(cur);
+      }
+      if (tracked) last_ = cur;
+    } else {
+      const Eigen::Isometry3d before = last_.Tcw;
+      tracked = track(cur);
+      if (tracked) {
+        velocity_ = cur.Tcw * before.inverse();
+        have_velocity_ = true;
+        last_ = cur;
+      } else {
+        have_velocity_ = false;
+      }
+    }
+    if (tracked) {
+      ++result_.frames_tracked;
+      const int ref = reference_kf_;
+      records_.push_back({i, ref, cur.Tcw * map_.kfs[static_cast<std::size_t>(ref)].Tcw.inverse()});
+    } else if (was_tracked) {
+      ++result_.tracking_losses;
+    }
+    was_tracked = tracked;
+    if (opt_.verbose && (i % 50 == 0 || i + 1 == result_.frames)) {
+      std::fprintf(stderr, "  [%s %s] frame %d: tracked %d, %d KFs, %d MPs, %.1f s\n", seq_.name.c_str(),
+                   to_string(opt_.selector), i, result_.frames_tracked, map_.alive_keyframes(), map_.alive_points(),
+                   seconds_since(start));
+    }
+  }
+  result_.total_seconds = seconds_since(start);
+  result_.map_points = map_.alive_points();
+  result_.keyframes = map_.alive_keyframes();
+  for (const MapPoint& m : map_.points) {
+    if (!m.bad) result_.observations += static_cast<std::int64_t>(m.obs.size());
+  }
+  result_.mean_kept_fraction = windows_ > 0 ? kept_fraction_sum_ / windows_ : 1.0;
+  for (double s : calibration_sum_) result_.calibration_kept_fraction.push_back(windows_ > 0 ? s / windows_ : 1.0);
+  std::vector<Pose> estimate, truth;
+  for (const FrameRecord& r : records_) {
+    const Eigen::Isometry3d Twc = (r.T_cr * final_pose(r.ref_kf)).inverse();
+    Pose p;
+    p.q = Eigen::Quaterniond(Twc.linear()).normalized();
+    p.t = Twc.translation();
+    estimate.push_back(p);
+    truth.push_back(seq_.ground_truth[static_cast<std::size_t>(r.frame)]);
+  }
+  if (!estimate.empty()) {
+    const Ate ate = absolute_trajectory_error(estimate, truth, !seq_.rgbd);
+    result_.ate_m = ate.rms_m;
+    result_.ate_r_deg = ate.rms_r_deg;
+    std::vector<Eigen::Vector3d> src, dst;
+    for (std::size_t k = 0; k < estimate.size(); ++k) src.push_back(estimate[k].t), dst.push_back(truth[k].t);
+    const Alignment a = umeyama(src, dst, !seq_.rgbd);
+    for (Pose& p : estimate) p.t = a.s * (a.R * p.t) + a.t;
+  }
+  result_.estimate = std::move(estimate);
+  result_.ground_truth = std::move(truth);
+  return result_;
+}
+
+}  // namespace
+
+RealRunResult run_real_vo(const RealSequence& sequence, const RealVoOptions& options) {
+  cv::setNumThreads(1);
+  cv::theRNG().state = options.seed;
+  Vo vo(sequence, options);
+  return vo.run();
+}
+
+}  // namespace keepless::eval::vo

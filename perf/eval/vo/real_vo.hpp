@@ -1,0 +1,60 @@
+#pragma once
+// A compact ORB-SLAM2-style visual odometry on real images (RGB-D or
+// monocular), with a point selector deciding, through keepless::opencv,
+// which of the new keyframe's map points survive before every local BA.
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "geometry.hpp"
+#include "keepless/core/config.hpp"
+#include "real_sequence.hpp"
+
+namespace keepless::eval::vo {
+
+// What decides before each local BA. kOriginal: nothing (ORB-SLAM2's own
+// culling only). The baselines cull exactly as many of the new keyframe's
+// evaluated points as keepless culls on the same window.
+enum class Selector : std::uint8_t { kOriginal, kKeepless, kRandom, kLongestTrack, kAnms };
+const char* to_string(Selector s);
+
+struct RealVoOptions {
+  int features = 0;  // ORB features per frame; 0: ORB-SLAM2's 1000 (RGB-D) or 2000 (monocular KITTI)
+  std::uint64_t seed = 1;  // RANSAC sampling order and the random baseline's priorities
+  Selector selector = Selector::kOriginal;
+  core::Params params;               // keepless (M = params.pair_capacity)
+  int max_local_keyframes = 20;      // local BA / keepless window: the new keyframe and its best covisibles
+  std::vector<std::int64_t> calibrate_M;  // original runs: mean kept fraction per M, on every window
+  bool verbose = false;
+};
+
+struct KeypointMark {
+  float u = 0, v = 0;
+  std::uint8_t state = 0;  // 0 unmapped, 1 kept, 2 culled
+};
+
+struct RealRunResult {
+  std::string error;  // non-empty: the run did not happen (unreadable input)
+  int frames = 0;
+  int frames_tracked = 0;
+  int tracking_losses = 0;  // tracked -> lost transitions
+  int map_points = 0;       // alive at the end
+  int keyframes = 0;        // alive at the end
+  int keyframes_created = 0;
+  std::int64_t observations = 0;  // of the alive points at the end
+  std::int64_t points_culled_by_selector = 0;
+  int local_bas = 0;
+  int window_rejections = 0;  // windows the adapter or Sparsifier refused (nothing culled there)
+  double local_ba_seconds = 0, selector_seconds = 0, total_seconds = 0;
+  double ate_m = 0, ate_r_deg = 0;  // RMS over tracked frames, SE(3) for RGB-D, Sim(3) monocular
+  double mean_kept_fraction = 1;    // of the new keyframes' evaluated points (>= 2 views in the window), over windows
+  std::vector<double> calibration_kept_fraction;  // per calibrate_M
+  std::vector<Pose> estimate, ground_truth;       // tracked frames, aligned estimate
+  std::vector<KeypointMark> marks;                // one keyframe's keypoints (the window with most culls)
+  int marked_frame = -1;
+};
+
+RealRunResult run_real_vo(const RealSequence& sequence, const RealVoOptions& options);
+
+}  // namespace keepless::eval::vo

@@ -1,0 +1,53 @@
+#pragma once
+// Ceres bundle adjustment for the VO, as ORB-SLAM2's Optimizer does it with
+// g2o: poses T_cw as angle-axis + translation, reprojection residuals in
+// pixels weighted by 1/scale of the keypoint's level, monocular (u, v) or
+// RGB-D (u, v, u_r) with Huber at the chi-square 95 % thresholds (5.991,
+// 7.815). Single-threaded: the same input gives the same output.
+
+#include <array>
+#include <vector>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include "real_sequence.hpp"
+
+namespace keepless::eval::vo {
+
+constexpr double kChi2Mono = 5.991;
+constexpr double kChi2Stereo = 7.815;
+
+using PoseBlock = std::array<double, 6>;  // angle-axis, t of T_cw
+PoseBlock to_block(const Eigen::Isometry3d& Tcw);
+Eigen::Isometry3d from_block(const PoseBlock& b);
+
+struct BaObservation {
+  int pose = 0, point = 0;
+  double u = 0, v = 0, ur = -1;  // ur < 0: monocular
+  int level = 0;
+};
+
+// Motion-only BA (ORB-SLAM2 PoseOptimization): 4 rounds of 10 iterations,
+// outliers re-classified after each, Huber in the first two. `outlier` is
+// in/out (one per observation); returns the inliers.
+int optimize_pose(const PinholeCamera& cam, const std::vector<Eigen::Vector3d>& points,
+                  const std::vector<BaObservation>& obs, Eigen::Isometry3d* Tcw, std::vector<bool>* outlier);
+
+struct LocalBaProblem {
+  std::vector<PoseBlock> poses;
+  std::vector<bool> pose_fixed;
+  std::vector<Eigen::Vector3d> points;
+  std::vector<BaObservation> observations;
+};
+
+// Local BA (ORB-SLAM2 LocalBundleAdjustment): 5 robust iterations, outliers
+// dropped, 10 more without the robust kernel. Returns per observation
+// whether it is an outlier after the solve.
+std::vector<bool> solve_local_ba(const PinholeCamera& cam, LocalBaProblem* problem);
+
+// chi2 of one observation (weighted squared error); +inf behind the camera.
+double chi2(const PinholeCamera& cam, const Eigen::Isometry3d& Tcw, const Eigen::Vector3d& X,
+            const BaObservation& o);
+
+}  // namespace keepless::eval::vo

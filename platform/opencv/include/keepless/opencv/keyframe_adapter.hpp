@@ -1,0 +1,107 @@
+#pragma once
+// keepless::opencv: what an ORB-SLAM-style system holds (cv::KeyPoint, map
+// point ids, a pose as cv::Mat Tcw or Eigen) to core::Window keyframes, and
+// the Sparsifier's decisions back to sets of map point ids. Every call that
+// can fail returns a Status and leaves its outputs and the window unchanged.
+//
+// Unmapped keypoints: the authors' N(p, f) counts every detected keypoint
+// near a point, not only the mapped ones. Passing them adds each as a
+// one-view observation of a reserved id (top bit set, see kUnmappedBit):
+// one view means the Sparsifier skips it, but it counts in N(p, f). They use
+// window capacity (max_points, max_observations); the decision sets below
+// never contain them.
+
+#include <cstdint>
+#include <vector>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <opencv2/core.hpp>
+
+#include "keepless/core/config.hpp"
+#include "keepless/core/sparsifier.hpp"
+#include "keepless/core/status.hpp"
+#include "keepless/core/window.hpp"
+
+namespace keepless::opencv {
+
+enum class [[nodiscard]] Status : std::uint8_t {
+  kOk = 0,
+  kBadMatrix,        // a pose cv::Mat that is not 4x4 or 3x4 CV_32F/CV_64F
+  kNonFinite,        // NaN or infinity in a pose or keypoint
+  kNotRotation,      // rotation not orthonormal with det +1, or quaternion not unit
+  kSizeMismatch,     // keypoints and point ids of different lengths
+  kDuplicatePoint,   // a map point id given twice for one keyframe
+  kReservedPointId,  // a map point id with kUnmappedBit set
+  kWindowRejected,   // core::Window::add_keyframe refused it (see window_status())
+};
+
+const char* to_string(Status s);
+
+// Map point ids must leave this bit clear: it marks unmapped keypoints.
+constexpr core::PointId kUnmappedBit = core::PointId{1} << 63;
+
+// Tolerance on |R^T R - I| (max abs entry) and |1 - |q||: float poses from
+// ORB-SLAM pass, a scaled or sheared matrix does not.
+constexpr double kRotationTolerance = 1e-4;
+
+// A keyframe pose as the window and keyframe_t hold it: the camera centre in
+// the world and the world-from-camera unit quaternion.
+struct CameraPose {
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+  Eigen::Quaterniond orientation = Eigen::Quaterniond::Identity();  // R_wc
+};
+
+// From ORB-SLAM's Tcw (world to camera), 4x4 or 3x4, CV_32F or CV_64F.
+[[nodiscard]] Status pose_from_tcw(const cv::Mat& Tcw, CameraPose* out);
+// From Tcw as an Eigen isometry (pass Twc.inverse() for camera-to-world).
+[[nodiscard]] Status pose_from_tcw(const Eigen::Isometry3d& Tcw, CameraPose* out);
+// From the world-from-camera rotation and the centre; q is re-normalised.
+[[nodiscard]] Status pose_from_orientation(const Eigen::Quaterniond& q_wc, const Eigen::Vector3d& centre,
+                                           CameraPose* out);
+
+// A keyframe converted for the window: what add_keyframe and keyframe_t take.
+struct KeyframeRecord {
+  core::Keyframe keyframe;
+  std::vector<core::Observation> observations;  // mapped first, then unmapped
+  std::uint32_t mapped = 0;                     // observations[0, mapped) are map points
+};
+
+// Converts keyframes into a window. Its buffers are reserved once from the
+// capacities (a keyframe never holds more than max_observations).
+class KeyframeAdapter {
+ public:
+  explicit KeyframeAdapter(const core::Capacities& capacities);
+
+  // keypoints[i] observes map point point_ids[i]; `unmapped` (may be null)
+  // are the keyframe's other detections. Validates, then fills `out`.
+  [[nodiscard]] Status convert(core::KeyframeId id, const CameraPose& pose,
+                               const std::vector<cv::KeyPoint>& keypoints,
+                               const std::vector<core::PointId>& point_ids,
+                               const std::vector<cv::KeyPoint>* unmapped, KeyframeRecord* out);
+
+  // convert() then window.add_keyframe(); on kWindowRejected, window_status()
+  // says why (e.g. kCapacityExceeded, kDuplicateKeyframe).
+  [[nodiscard]] Status add_keyframe(core::Window& window, core::KeyframeId id, const CameraPose& pose,
+                                    const std::vector<cv::KeyPoint>& keypoints,
+                                    const std::vector<core::PointId>& point_ids,
+                                    const std::vector<cv::KeyPoint>* unmapped = nullptr);
+  core::Status window_status() const { return window_status_; }
+  const KeyframeRecord& last() const { return record_; }
+
+ private:
+  KeyframeRecord record_;
+  std::vector<core::PointId> sorted_;    // duplicate check
+  std::uint64_t next_unmapped_ = 0;      // unique reserved ids across keyframes
+  core::Status window_status_ = core::Status::kOk;
+};
+
+// The map point ids the last run()/update() gave `verdict`, ascending (use
+// std::binary_search), without unmapped keypoints. `out` is replaced.
+void points_with_verdict(const core::Sparsifier& sparsifier, core::Verdict verdict,
+                         std::vector<core::PointId>* out);
+inline void culled_points(const core::Sparsifier& s, std::vector<core::PointId>* out) {
+  points_with_verdict(s, core::Verdict::kCull, out);
+}
+
+}  // namespace keepless::opencv

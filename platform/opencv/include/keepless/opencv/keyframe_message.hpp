@@ -1,0 +1,41 @@
+#pragma once
+// A KeyframeRecord as the keyframe_t message keepless_node takes. Header-only
+// and apart from keyframe_adapter.hpp so that the adapter itself needs no LCM:
+// include this only when linking keepless::lcm_types.
+
+#include <cstdint>
+
+#include "keepless/keyframe_t.hpp"
+#include "keepless/opencv/keyframe_adapter.hpp"
+
+namespace keepless::opencv {
+
+// Fills `out` (its vectors reused) from `record`. with_unmapped: also send
+// the unmapped keypoints (their reserved ids), so the node's N(p, f) counts
+// them as the window's did. No status: the record was validated
+// when it was made.
+inline void to_keyframe_message(const KeyframeRecord& record, std::int64_t sequence, std::int64_t utime,
+                                std::int32_t image_width, std::int32_t image_height, bool with_unmapped,
+                                keepless::keyframe_t* out) {
+  const std::uint32_t n =
+      with_unmapped ? static_cast<std::uint32_t>(record.observations.size()) : record.mapped;
+  out->sequence = sequence;
+  out->utime = utime;
+  out->keyframe_id = static_cast<std::int64_t>(record.keyframe.id);
+  for (int i = 0; i < 3; ++i) out->centre[i] = record.keyframe.centre[i];
+  for (int i = 0; i < 4; ++i) out->orientation[i] = record.keyframe.orientation[i];
+  out->image_width = image_width;
+  out->image_height = image_height;
+  out->num_observations = static_cast<std::int32_t>(n);
+  out->point_id.resize(n);
+  out->u.resize(n);
+  out->v.resize(n);
+  for (std::uint32_t i = 0; i < n; ++i) {
+    const core::Observation& o = record.observations[i];
+    out->point_id[i] = static_cast<std::int64_t>(o.point);
+    out->u[i] = static_cast<float>(o.u);
+    out->v[i] = static_cast<float>(o.v);
+  }
+}
+
+}  // namespace keepless::opencv

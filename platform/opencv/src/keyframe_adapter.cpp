@@ -1,0 +1,141 @@
+#include "keepless/opencv/keyframe_adapter.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace keepless::opencv {
+
+const char* to_string(Status s) {
+  switch (s) {
+    case Status::kOk: return "ok";
+    case Status::kBadMatrix: return "bad pose matrix (need 4x4 or 3x4, CV_32F or CV_64F)";
+    case Status::kNonFinite: return "non-finite number";
+    case Status::kNotRotation: return "not a rotation";
+    case Status::kSizeMismatch: return "keypoints and point ids differ in length";
+    case Status::kDuplicatePoint: return "map point id given twice";
+    case Status::kReservedPointId: return "map point id uses the reserved top bit";
+    case Status::kWindowRejected: return "window rejected the keyframe";
+  }
+  return "unknown";
+}
+
+namespace {
+
+Status pose_from_rotation(const Eigen::Matrix3d& Rcw, const Eigen::Vector3d& tcw, CameraPose* out) {
+  if (!Rcw.allFinite() || !tcw.allFinite()) return Status::kNonFinite;
+  const double off = (Rcw.transpose() * Rcw - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
+  if (off > kRotationTolerance || Rcw.determinant() <= 0) return Status::kNotRotation;
+  // Re-orthonormalised through the quaternion: float poses come back unit.
+  const Eigen::Matrix3d Rwc = Rcw.transpose();
+  out->orientation = Eigen::Quaterniond(Rwc).normalized();
+  out->centre = -(Rwc * tcw);
+  return Status::kOk;
+}
+
+bool finite(const cv::KeyPoint& k) { return std::isfinite(k.pt.x) && std::isfinite(k.pt.y); }
+
+}  // namespace
+
+Status pose_from_tcw(const cv::Mat& Tcw, CameraPose* out) {
+  if (Tcw.dims != 2 || Tcw.cols != 4 || (Tcw.rows != 4 && Tcw.rows != 3) || Tcw.channels() != 1 ||
+      (Tcw.depth() != CV_32F && Tcw.depth() != CV_64F)) {
+    return Status::kBadMatrix;
+  }
+  cv::Mat T;
+  Tcw.convertTo(T, CV_64F);
+  Eigen::Matrix3d R;
+  Eigen::Vector3d t;
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) R(r, c) = T.at<double>(r, c);
+    t(r) = T.at<double>(r, 3);
+  }
+  if (!R.allFinite() || !t.allFinite()) return Status::kNonFinite;
+  if (T.rows == 4) {
+    const bool last_row = T.at<double>(3, 0) == 0 && T.at<double>(3, 1) == 0 &&
+                          T.at<double>(3, 2) == 0 && T.at<double>(3, 3) == 1;
+    if (!last_row) return Status::kBadMatrix;
+  }
+  return pose_from_rotation(R, t, out);
+}
+
+Status pose_from_tcw(const Eigen::Isometry3d& Tcw, CameraPose* out) {
+  return pose_from_rotation(Tcw.linear(), Tcw.translation(), out);
+}
+
+Status pose_from_orientation(const Eigen::Quaterniond& q_wc, const Eigen::Vector3d& centre,
+                             CameraPose* out) {
+  if (!q_wc.coeffs().allFinite() || !centre.allFinite()) return Status::kNonFinite;
+  if (std::abs(q_wc.norm() - 1.0) > kRotationTolerance) return Status::kNotRotation;
+  out->orientation = q_wc.normalized();
+  out->centre = centre;
+  return Status::kOk;
+}
+
+KeyframeAdapter::KeyframeAdapter(const core::Capacities& capacities) {
+  record_.observations.reserve(capacities.max_observations);
+  sorted_.reserve(capacities.max_observations);
+}
+
+Status KeyframeAdapter::convert(core::KeyframeId id, const CameraPose& pose,
+                                const std::vector<cv::KeyPoint>& keypoints,
+                                const std::vector<core::PointId>& point_ids,
+                                const std::vector<cv::KeyPoint>* unmapped, KeyframeRecord* out) {
+  if (keypoints.size() != point_ids.size()) return Status::kSizeMismatch;
+  if (!pose.centre.allFinite() || !pose.orientation.coeffs().allFinite()) return Status::kNonFinite;
+  if (std::abs(pose.orientation.norm() - 1.0) > kRotationTolerance) return Status::kNotRotation;
+  for (const cv::KeyPoint& k : keypoints) {
+    if (!finite(k)) return Status::kNonFinite;
+  }
+  if (unmapped != nullptr) {
+    for (const cv::KeyPoint& k : *unmapped) {
+      if (!finite(k)) return Status::kNonFinite;
+    }
+  }
+  sorted_.assign(point_ids.begin(), point_ids.end());
+  std::sort(sorted_.begin(), sorted_.end());
+  if (!sorted_.empty() && (sorted_.back() & kUnmappedBit) != 0) return Status::kReservedPointId;
+  if (std::adjacent_find(sorted_.begin(), sorted_.end()) != sorted_.end()) return Status::kDuplicatePoint;
+
+  out->keyframe.id = id;
+  for (int i = 0; i < 3; ++i) out->keyframe.centre[i] = pose.centre[i];
+  const Eigen::Quaterniond q = pose.orientation.normalized();
+  out->keyframe.orientation[0] = q.w();
+  out->keyframe.orientation[1] = q.x();
+  out->keyframe.orientation[2] = q.y();
+  out->keyframe.orientation[3] = q.z();
+  out->observations.clear();
+  for (std::size_t i = 0; i < keypoints.size(); ++i) {
+    out->observations.push_back({point_ids[i], keypoints[i].pt.x, keypoints[i].pt.y});
+  }
+  out->mapped = static_cast<std::uint32_t>(keypoints.size());
+  if (unmapped != nullptr) {
+    for (const cv::KeyPoint& k : *unmapped) {
+      out->observations.push_back({kUnmappedBit | next_unmapped_, k.pt.x, k.pt.y});
+      next_unmapped_ = (next_unmapped_ + 1) & ~kUnmappedBit;
+    }
+  }
+  return Status::kOk;
+}
+
+Status KeyframeAdapter::add_keyframe(core::Window& window, core::KeyframeId id, const CameraPose& pose,
+                                     const std::vector<cv::KeyPoint>& keypoints,
+                                     const std::vector<core::PointId>& point_ids,
+                                     const std::vector<cv::KeyPoint>* unmapped) {
+  window_status_ = core::Status::kOk;
+  const Status converted = convert(id, pose, keypoints, point_ids, unmapped, &record_);
+  if (converted != Status::kOk) return converted;
+  window_status_ = window.add_keyframe(record_.keyframe, record_.observations.data(),
+                                       static_cast<std::uint32_t>(record_.observations.size()));
+  return window_status_ == core::Status::kOk ? Status::kOk : Status::kWindowRejected;
+}
+
+void points_with_verdict(const core::Sparsifier& sparsifier, core::Verdict verdict,
+                         std::vector<core::PointId>* out) {
+  out->clear();
+  const core::PointDecision* d = sparsifier.decisions();
+  for (std::uint32_t i = 0; i < sparsifier.decision_count(); ++i) {
+    if (d[i].verdict == verdict && (d[i].point & kUnmappedBit) == 0) out->push_back(d[i].point);
+  }
+}
+
+}  // namespace keepless::opencv

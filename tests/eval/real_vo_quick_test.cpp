@@ -1,0 +1,89 @@
+// Runs keepless_vo_eval --quick on 7-Scenes redkitchen (60 real RGB-D
+// frames) and checks that the VO is sound and its report complete: the
+// original run tracks >= 95 % of the frames with RMS ATE below 5 cm (the
+// full 600-frame target; measured on this slice: well under 1 cm), every
+// JSON key of the contract is present, the SVGs are written. The comparison
+// between variants is evidence, never asserted here.
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+namespace {
+
+constexpr double kAteBoundM = 0.05;
+constexpr double kTrackedFraction = 0.95;
+
+// The number after "key": in a flat JSON object; NAN when absent or null.
+double number_after(const std::string& json, const std::string& key, bool* present) {
+  const std::string tag = "\"" + key + "\":";
+  const std::size_t at = json.find(tag);
+  *present = at != std::string::npos;
+  if (!*present) return NAN;
+  const char* s = json.c_str() + at + tag.size();
+  if (*s == '"') return 0;  // a string value: present
+  char* end = nullptr;
+  const double v = std::strtod(s, &end);
+  return end == s ? NAN : v;
+}
+
+TEST(RealVoQuick, SevenScenesSliceIsTrackedAccuratelyAndReportedInFull) {
+  const std::string bin = KEEPLESS_VO_EVAL_BIN;
+  const std::string data = std::string(KEEPLESS_EVAL_DATA) + "/7scenes_redkitchen_first600";
+  ASSERT_TRUE(std::filesystem::exists(bin))
+      << bin << " is missing: build target keepless_vo_eval (perf/eval/vo; needs Ceres, OpenCV, keepless::opencv)";
+  if (!std::filesystem::exists(data + "/frame-000059.color.jpg")) {
+    GTEST_SKIP() << "no 7-Scenes data at " << data << " (see /work/shared/data/SOURCES.md)";
+  }
+  const std::string out = ::testing::TempDir() + "/real_vo_quick";
+  std::filesystem::remove_all(out);
+  const std::string cmd = "'" + bin + "' --rgbd '" + data + "' --quick --out '" + out + "' 2>&1";
+  std::unique_ptr<FILE, int (*)(FILE*)> pipe(popen(cmd.c_str(), "r"), pclose);
+  ASSERT_NE(pipe, nullptr);
+  std::string all, last;
+  char buf[4096];
+  while (std::fgets(buf, sizeof buf, pipe.get()) != nullptr) {
+    all += buf;
+    std::string line(buf);
+    while (!line.empty() && (line.back() == '\n' || line.back() == '\r')) line.pop_back();
+    if (!line.empty()) last = line;
+  }
+  const int status = pclose(pipe.release());
+  ASSERT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << all;
+  ASSERT_EQ(last.rfind("{\"runs\":[{", 0), 0u) << "last line is not the JSON summary:\n" << all;
+
+  for (const char* key : {"input", "kind", "seeds", "M", "mp_percent", "kf_percent", "ba_time_percent",
+                          "ate_original_m", "ate_ours_m", "ate_ours_sd_m", "ate_random_m", "ate_longest_track_m",
+                          "ate_anms_m", "better_seeds", "worse_seeds", "sqrt_obs_ratio", "frames_tracked"}) {
+    bool present = false;
+    number_after(last, key, &present);
+    EXPECT_TRUE(present) << "JSON key " << key << " missing: " << last;
+  }
+  EXPECT_NE(last.find("\"kind\":\"rgbd\""), std::string::npos);
+  bool present = false;
+  const double frames = number_after(last, "frames", &present);
+  ASSERT_EQ(frames, 60.0);
+  EXPECT_GE(number_after(last, "frames_tracked_original", &present), kTrackedFraction * frames);
+  const double ate = number_after(last, "ate_original_m", &present);
+  EXPECT_GT(ate, 0.0);
+  EXPECT_LT(ate, kAteBoundM);
+  // Every variant ran to the end and was scored.
+  for (const char* key : {"ate_ours_m", "ate_random_m", "ate_longest_track_m", "ate_anms_m", "frames_tracked",
+                          "mp_percent", "ba_time_percent", "sqrt_obs_ratio"}) {
+    const double v = number_after(last, key, &present);
+    EXPECT_TRUE(std::isfinite(v) && v > 0) << key << " = " << v;
+  }
+  for (const char* svg : {"_trajectory.svg", "_keypoints.svg"}) {
+    const std::string path = out + "/7scenes_redkitchen_first600" + svg;
+    EXPECT_TRUE(std::filesystem::exists(path) && std::filesystem::file_size(path) > 200) << path;
+  }
+}
+
+}  // namespace

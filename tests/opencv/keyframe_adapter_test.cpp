@@ -1,0 +1,237 @@
+// keepless::opencv: poses from cv::Mat / Eigen, keyframes into a window,
+// input validation, unmapped keypoints in N(p, f), decisions back to ids.
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <vector>
+
+#include "keepless/opencv/keyframe_adapter.hpp"
+
+namespace keepless::opencv {
+namespace {
+
+// A camera at centre c, rotated by `angle` about the unit `axis` (world from camera).
+Eigen::Isometry3d twc(double angle, const Eigen::Vector3d& axis, const Eigen::Vector3d& c) {
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear() = Eigen::AngleAxisd(angle, axis.normalized()).toRotationMatrix();
+  T.translation() = c;
+  return T;
+}
+
+cv::Mat to_mat(const Eigen::Isometry3d& T, int rows, int type) {
+  cv::Mat m(rows, 4, CV_64F);
+  for (int r = 0; r < rows; ++r)
+    for (int c = 0; c < 4; ++c) m.at<double>(r, c) = T.matrix()(r, c);
+  cv::Mat out;
+  m.convertTo(out, type);
+  return out;
+}
+
+TEST(OpencvPose, TcwMatGivesCentreAndWorldFromCameraOrientation) {
+  const Eigen::Isometry3d Twc = twc(0.7, {0.2, 1.0, -0.3}, {1.5, -2.0, 0.25});
+  for (int rows : {4, 3}) {
+    for (int type : {CV_64F, CV_32F}) {
+      CameraPose pose;
+      ASSERT_EQ(pose_from_tcw(to_mat(Twc.inverse(), rows, type), &pose), Status::kOk);
+      const double tol = type == CV_32F ? 1e-5 : 1e-12;
+      EXPECT_LT((pose.centre - Twc.translation()).norm(), tol);
+      EXPECT_LT(pose.orientation.angularDistance(Eigen::Quaterniond(Twc.linear())), tol);
+      EXPECT_NEAR(pose.orientation.norm(), 1.0, 1e-12);
+    }
+  }
+  CameraPose from_eigen;
+  ASSERT_EQ(pose_from_tcw(Twc.inverse(), &from_eigen), Status::kOk);
+  EXPECT_LT((from_eigen.centre - Twc.translation()).norm(), 1e-12);
+  CameraPose from_q;
+  ASSERT_EQ(pose_from_orientation(Eigen::Quaterniond(Twc.linear()), Twc.translation(), &from_q), Status::kOk);
+  EXPECT_LT(from_q.orientation.angularDistance(from_eigen.orientation), 1e-12);
+}
+
+TEST(OpencvPose, RejectsMalformedPosesAndLeavesOutputUnchanged) {
+  const Eigen::Isometry3d Tcw = twc(0.3, {0, 0, 1}, {1, 2, 3});
+  CameraPose pose;
+  pose.centre = {7, 8, 9};
+  const CameraPose before = pose;
+  auto unchanged = [&] { return pose.centre == before.centre; };
+
+  EXPECT_EQ(pose_from_tcw(cv::Mat::eye(3, 3, CV_64F), &pose), Status::kBadMatrix);
+  EXPECT_EQ(pose_from_tcw(cv::Mat::eye(4, 4, CV_8U), &pose), Status::kBadMatrix);
+  EXPECT_EQ(pose_from_tcw(cv::Mat::eye(4, 4, CV_64FC2), &pose), Status::kBadMatrix);
+  cv::Mat bad_row = to_mat(Tcw, 4, CV_64F);
+  bad_row.at<double>(3, 3) = 2;
+  EXPECT_EQ(pose_from_tcw(bad_row, &pose), Status::kBadMatrix);
+  cv::Mat nan = to_mat(Tcw, 4, CV_64F);
+  nan.at<double>(1, 3) = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_EQ(pose_from_tcw(nan, &pose), Status::kNonFinite);
+  cv::Mat inf = to_mat(Tcw, 3, CV_32F);
+  inf.at<float>(0, 0) = std::numeric_limits<float>::infinity();
+  EXPECT_EQ(pose_from_tcw(inf, &pose), Status::kNonFinite);
+  cv::Mat scaled = to_mat(Tcw, 4, CV_64F);
+  scaled(cv::Rect(0, 0, 3, 3)) *= 1.01;  // a similarity, not a rotation
+  EXPECT_EQ(pose_from_tcw(scaled, &pose), Status::kNotRotation);
+  Eigen::Isometry3d mirror = Tcw;
+  mirror.linear().col(2) *= -1;  // orthonormal but det -1
+  EXPECT_EQ(pose_from_tcw(mirror, &pose), Status::kNotRotation);
+  EXPECT_EQ(pose_from_orientation(Eigen::Quaterniond(1.1, 0, 0, 0), {0, 0, 0}, &pose), Status::kNotRotation);
+  EXPECT_EQ(pose_from_orientation(Eigen::Quaterniond(1, 0, 0, 0), {0, NAN, 0}, &pose), Status::kNonFinite);
+  EXPECT_TRUE(unchanged());
+}
+
+// A keyframe seeing points first..first+n-1 on a grid that shifts with k.
+struct Frame {
+  std::vector<cv::KeyPoint> keypoints;
+  std::vector<core::PointId> ids;
+};
+Frame frame(int k, int first, int n) {
+  Frame f;
+  for (int i = 0; i < n; ++i) {
+    const int p = first + i;
+    f.keypoints.emplace_back(cv::Point2f(float(20 + 23 * (p % 20) - 30 * k), float(15 + 19 * (p % 11))), 31.f);
+    f.ids.push_back(static_cast<core::PointId>(1000 + p));
+  }
+  return f;
+}
+CameraPose centre_at(double x) {
+  CameraPose p;
+  p.centre = {x, 0, 0};
+  return p;
+}
+
+core::Capacities small_capacities() {
+  core::Capacities c;
+  c.max_keyframes = 8;
+  c.max_points = 2048;
+  c.max_observations = 4096;
+  c.max_pair_arcs = 16384;
+  return c;
+}
+
+TEST(OpencvKeyframes, ConvertsIntoTheWindowAndRejectsBadInputAtomically) {
+  const core::Capacities caps = small_capacities();
+  core::Window window(caps);
+  KeyframeAdapter adapter(caps);
+  Frame f = frame(0, 0, 30);
+  ASSERT_EQ(adapter.add_keyframe(window, 7, centre_at(0), f.keypoints, f.ids), Status::kOk);
+  ASSERT_EQ(window.keyframe_count(), 1u);
+  EXPECT_EQ(window.keyframe(0).id, 7u);
+  ASSERT_EQ(window.observation_count(0), 30u);
+  EXPECT_EQ(window.observations(0)[3].point, 1003u);
+  EXPECT_DOUBLE_EQ(window.observations(0)[3].u, f.keypoints[3].pt.x);
+  EXPECT_DOUBLE_EQ(window.observations(0)[3].v, f.keypoints[3].pt.y);
+
+  // Every rejection leaves the window as it was.
+  Frame g = frame(1, 10, 30);
+  Frame dup = g;
+  dup.ids[5] = dup.ids[6];
+  EXPECT_EQ(adapter.add_keyframe(window, 8, centre_at(1), dup.keypoints, dup.ids), Status::kDuplicatePoint);
+  Frame reserved = g;
+  reserved.ids[0] |= kUnmappedBit;
+  EXPECT_EQ(adapter.add_keyframe(window, 8, centre_at(1), reserved.keypoints, reserved.ids),
+            Status::kReservedPointId);
+  Frame nan = g;
+  nan.keypoints[2].pt.y = std::numeric_limits<float>::quiet_NaN();
+  EXPECT_EQ(adapter.add_keyframe(window, 8, centre_at(1), nan.keypoints, nan.ids), Status::kNonFinite);
+  std::vector<cv::KeyPoint> bad_unmapped = {cv::KeyPoint(cv::Point2f(NAN, 1), 31.f)};
+  EXPECT_EQ(adapter.add_keyframe(window, 8, centre_at(1), g.keypoints, g.ids, &bad_unmapped),
+            Status::kNonFinite);
+  Frame short_ids = g;
+  short_ids.ids.pop_back();
+  EXPECT_EQ(adapter.add_keyframe(window, 8, centre_at(1), short_ids.keypoints, short_ids.ids),
+            Status::kSizeMismatch);
+  CameraPose bad_pose = centre_at(1);
+  bad_pose.orientation.coeffs() *= 2;
+  EXPECT_EQ(adapter.add_keyframe(window, 8, bad_pose, g.keypoints, g.ids), Status::kNotRotation);
+  EXPECT_EQ(adapter.add_keyframe(window, 7, centre_at(1), g.keypoints, g.ids), Status::kWindowRejected);
+  EXPECT_EQ(adapter.window_status(), core::Status::kDuplicateKeyframe);
+  EXPECT_EQ(window.keyframe_count(), 1u);
+  EXPECT_EQ(window.total_observations(), 30u);
+
+  ASSERT_EQ(adapter.add_keyframe(window, 8, centre_at(1), g.keypoints, g.ids), Status::kOk);
+  EXPECT_EQ(adapter.window_status(), core::Status::kOk);
+  EXPECT_EQ(window.distinct_points(), 40u);
+}
+
+TEST(OpencvKeyframes, CapacityRefusalIsReportedWithTheWindowsReason) {
+  core::Capacities caps = small_capacities();
+  caps.max_observations = 40;
+  core::Window window(caps);
+  KeyframeAdapter adapter(caps);
+  Frame f = frame(0, 0, 30);
+  ASSERT_EQ(adapter.add_keyframe(window, 1, centre_at(0), f.keypoints, f.ids), Status::kOk);
+  EXPECT_EQ(adapter.add_keyframe(window, 2, centre_at(1), f.keypoints, f.ids), Status::kWindowRejected);
+  EXPECT_EQ(adapter.window_status(), core::Status::kCapacityExceeded);
+  EXPECT_EQ(window.keyframe_count(), 1u);
+}
+
+// Fills a window of `keyframes` overlapping keyframes, with `clutter`
+// unmapped keypoints around each mapped one when asked.
+void fill(core::Window& window, KeyframeAdapter& adapter, int keyframes, bool clutter) {
+  for (int k = 0; k < keyframes; ++k) {
+    Frame f = frame(k, 12 * k, 40);
+    std::vector<cv::KeyPoint> unmapped;
+    if (clutter) {
+      for (const cv::KeyPoint& kp : f.keypoints) {
+        for (int j = 0; j < 3; ++j) unmapped.emplace_back(kp.pt + cv::Point2f(2.f + j, 1.f), 31.f);
+      }
+    }
+    ASSERT_EQ(adapter.add_keyframe(window, 100 + k, centre_at(0.3 * k), f.keypoints, f.ids,
+                                   clutter ? &unmapped : nullptr),
+              Status::kOk);
+  }
+}
+
+TEST(OpencvKeyframes, UnmappedKeypointsCountInTheSpatialCostButAreNeverDecided) {
+  const core::Capacities caps = small_capacities();
+  core::Params params;
+  params.pair_capacity = 6;
+  core::Window plain(caps), cluttered(caps);
+  KeyframeAdapter a(caps), b(caps);
+  fill(plain, a, 5, false);
+  fill(cluttered, b, 5, true);
+  EXPECT_EQ(cluttered.total_observations(), plain.total_observations() * 4);
+
+  core::Sparsifier sp(caps, params), sc(caps, params);
+  ASSERT_EQ(sp.run(plain), core::Status::kOk);
+  ASSERT_EQ(sc.run(cluttered), core::Status::kOk);
+  // Same points and pairs, same flow; denser neighbourhoods cost more.
+  EXPECT_EQ(sc.summary().evaluated, sp.summary().evaluated);
+  EXPECT_EQ(sc.summary().max_flow, sp.summary().max_flow);
+  EXPECT_GT(sc.summary().total_cost, sp.summary().total_cost);
+  EXPECT_EQ(sc.summary().skipped - sp.summary().skipped, cluttered.total_observations() * 3 / 4);
+
+  std::vector<core::PointId> culled, kept, skipped;
+  culled_points(sc, &culled);
+  points_with_verdict(sc, core::Verdict::kKeep, &kept);
+  points_with_verdict(sc, core::Verdict::kSkip, &skipped);
+  EXPECT_EQ(culled.size(), sc.summary().culled);
+  EXPECT_EQ(kept.size(), sc.summary().kept);
+  EXPECT_EQ(skipped.size(), sp.summary().skipped);  // only the map's own one-view points
+  EXPECT_GT(culled.size(), 0u);
+  EXPECT_GT(kept.size(), 0u);
+  EXPECT_TRUE(std::is_sorted(culled.begin(), culled.end()));
+  for (core::PointId id : culled) {
+    EXPECT_EQ(id & kUnmappedBit, 0u);
+    EXPECT_FALSE(std::binary_search(kept.begin(), kept.end(), id));
+  }
+  // The set agrees with the raw decisions.
+  std::vector<core::PointId> raw;
+  for (std::uint32_t i = 0; i < sc.decision_count(); ++i) {
+    if (sc.decisions()[i].verdict == core::Verdict::kCull) raw.push_back(sc.decisions()[i].point);
+  }
+  EXPECT_EQ(raw, culled);
+}
+
+TEST(OpencvKeyframes, UnmappedIdsStayUniqueAcrossKeyframes) {
+  const core::Capacities caps = small_capacities();
+  core::Window window(caps);
+  KeyframeAdapter adapter(caps);
+  fill(window, adapter, 3, true);
+  // Each unmapped keypoint is its own one-view point.
+  EXPECT_EQ(window.distinct_points(), 40u + 2 * 12u + 3u * 40u * 3u);
+}
+
+}  // namespace
+}  // namespace keepless::opencv

@@ -1,0 +1,51 @@
+// keyframe_t from a KeyframeRecord: fields, unmapped keypoints on request,
+// and an LCM encode/decode round trip.
+
+#include <gtest/gtest.h>
+
+#include <vector>
+
+#include "keepless/opencv/keyframe_message.hpp"
+
+namespace keepless::opencv {
+namespace {
+
+TEST(OpencvKeyframeMessage, CarriesPoseAndObservationsAndRoundTrips) {
+  core::Capacities caps;
+  KeyframeAdapter adapter(caps);
+  CameraPose pose;
+  ASSERT_EQ(pose_from_orientation(Eigen::Quaterniond(Eigen::AngleAxisd(0.4, Eigen::Vector3d::UnitY())),
+                                  {1, 2, 3}, &pose),
+            Status::kOk);
+  std::vector<cv::KeyPoint> kps = {cv::KeyPoint(10.5f, 20.25f, 31.f), cv::KeyPoint(300.f, 40.f, 31.f)};
+  std::vector<core::PointId> ids = {5, core::PointId{1} << 40};
+  std::vector<cv::KeyPoint> unmapped = {cv::KeyPoint(11.f, 21.f, 31.f)};
+  KeyframeRecord record;
+  ASSERT_EQ(adapter.convert(42, pose, kps, ids, &unmapped, &record), Status::kOk);
+
+  keepless::keyframe_t msg;
+  to_keyframe_message(record, 9, 1000, 640, 480, false, &msg);
+  EXPECT_EQ(msg.keyframe_id, 42);
+  EXPECT_EQ(msg.num_observations, 2);
+  EXPECT_EQ(msg.point_id, (std::vector<std::int64_t>{5, std::int64_t{1} << 40}));
+  EXPECT_FLOAT_EQ(msg.u[0], 10.5f);
+  EXPECT_FLOAT_EQ(msg.v[0], 20.25f);
+  EXPECT_DOUBLE_EQ(msg.centre[2], 3.0);
+  EXPECT_DOUBLE_EQ(msg.orientation[0], pose.orientation.w());
+  EXPECT_DOUBLE_EQ(msg.orientation[2], pose.orientation.y());
+
+  std::vector<std::uint8_t> buf(static_cast<std::size_t>(msg.getEncodedSize()));
+  ASSERT_EQ(msg.encode(buf.data(), 0, static_cast<int>(buf.size())), static_cast<int>(buf.size()));
+  keepless::keyframe_t back;
+  ASSERT_EQ(back.decode(buf.data(), 0, static_cast<int>(buf.size())), static_cast<int>(buf.size()));
+  EXPECT_EQ(back.point_id, msg.point_id);
+  EXPECT_EQ(back.u, msg.u);
+  EXPECT_EQ(back.image_width, 640);
+
+  to_keyframe_message(record, 10, 2000, 640, 480, true, &msg);
+  ASSERT_EQ(msg.num_observations, 3);
+  EXPECT_NE(static_cast<std::uint64_t>(msg.point_id[2]) & kUnmappedBit, 0u);
+}
+
+}  // namespace
+}  // namespace keepless::opencv
