@@ -13,6 +13,7 @@
 #include <functional>
 #include <iostream>
 #include <map>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -251,28 +252,33 @@ ke::RunResult run(const ke::Scenario& sc, const ke::VariantSpec& spec, const ke:
 }
 
 // The M at which keepless keeps `fraction` of the original's points on this
-// scenario: bracketing search with linear interpolation on the kept share.
+// scenario: bisection over M on the kept share, each step at the linear
+// interpolation of the bracket clamped to its middle half (the share can
+// jump steeply with M once the pair capacity stops binding).
 std::int64_t find_M(const ke::Scenario& sc, const ke::SimOptions& o, std::uint64_t seed, double original_mps,
                     double fraction, int max_runs) {
   std::vector<std::pair<std::int64_t, double>> tried;  // (M, share)
   std::int64_t M = 100;
   for (int i = 0; i < max_runs; ++i) {
     const ke::RunResult r = run(sc, variant("search", ke::Selector::kKeepless, M), o, seed);
-    const double share = original_mps > 0 ? r.mps / original_mps : 0;
-    tried.emplace_back(M, share);
-    if (std::abs(share - fraction) <= 0.015) break;
-    const std::pair<std::int64_t, double>* lo = nullptr;
-    const std::pair<std::int64_t, double>* hi = nullptr;
+    tried.emplace_back(M, original_mps > 0 ? r.mps / original_mps : 0);
+    if (std::abs(tried.back().second - fraction) <= 0.015) break;
+    std::optional<std::pair<std::int64_t, double>> lo, hi;
     for (const auto& t : tried) {
-      if (t.second < fraction && (!lo || t.second > lo->second)) lo = &t;
-      if (t.second > fraction && (!hi || t.second < hi->second)) hi = &t;
+      if (t.second < fraction && (!lo || t.first > lo->first)) lo = t;
+      if (t.second > fraction && (!hi || t.first < hi->first)) hi = t;
     }
     double next;
-    if (lo && hi) next = lo->first + (fraction - lo->second) * double(hi->first - lo->first) / (hi->second - lo->second);
-    else next = double(M) * std::clamp(fraction / std::max(share, 1e-3), 0.25, 4.0);
-    const std::int64_t nM = std::max<std::int64_t>(1, std::llround(next));
-    if (std::any_of(tried.begin(), tried.end(), [&](const auto& t) { return t.first == nM; })) break;
-    M = nM;
+    if (lo && hi) {
+      if (hi->first - lo->first <= 1) break;
+      const double span = double(hi->first - lo->first);
+      next = lo->first + (fraction - lo->second) * span / (hi->second - lo->second);
+      next = std::clamp(next, lo->first + 0.25 * span, hi->first - 0.25 * span);
+    } else {
+      const double share = tried.back().second;
+      next = double(M) * std::clamp(fraction / std::max(share, 1e-3), 0.25, 4.0);
+    }
+    M = std::max<std::int64_t>(1, std::llround(next));
   }
   return std::min_element(tried.begin(), tried.end(), [&](const auto& a, const auto& b) {
            return std::abs(a.second - fraction) < std::abs(b.second - fraction);
@@ -301,7 +307,7 @@ void evaluate(const std::function<ke::Scenario(std::uint64_t)>& make, const ke::
         ke::Comparison c;
         c.info = info;
         c.target_fraction = a.ops[p].fraction;
-        c.M = std::isfinite(c.target_fraction) ? find_M(sc, so, seed, original.mps, c.target_fraction, a.quick ? 3 : 5)
+        c.M = std::isfinite(c.target_fraction) ? find_M(sc, so, seed, original.mps, c.target_fraction, a.quick ? 3 : 6)
                                                : a.ops[p].M;
         summary->comparisons.push_back(c);
       }
