@@ -368,8 +368,8 @@ int main(int argc, char** argv) {
     std::string err;
     if (!ke::read_trajectory(t.path, tf, &traj, &err)) fail(err);
     ke::WorldOptions w = ke::world_defaults(tf);
-    w.keypoints_per_frame = a.keypoints > 0 ? a.keypoints : (a.quick ? 400 : 800);
-    w.max_keyframes = a.max_keyframes >= 0 ? a.max_keyframes : (a.quick ? 40 : 60);
+    w.keypoints_per_frame = a.keypoints > 0 ? a.keypoints : (a.quick ? 400 : 600);
+    w.max_keyframes = a.max_keyframes >= 0 ? a.max_keyframes : (a.quick ? 40 : 50);
     if (a.noise_free) {
       w.pixel_noise = 0;
       w.outlier_ratio = 0;
