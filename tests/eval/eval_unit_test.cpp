@@ -155,6 +155,8 @@ TEST(EvalContract, SummarizeGivesMeanSdSeedCountsAndRatios) {
   EXPECT_EQ(r.below_random_seeds, 2);
   EXPECT_NEAR(r.mp_percent.mean, 32.0, 1e-12);
   EXPECT_DOUBLE_EQ(r.sqrt_obs_ratio, 2.0);
+  EXPECT_DOUBLE_EQ(r.sqrt_obs_ratio_random, 2.0);
+  EXPECT_TRUE(std::isnan(r.sqrt_obs_ratio_anms));
   EXPECT_NEAR(r.ate_ratio, (6.5 / 3) / 2.0, 1e-12);
   const double an = 6.5 / 3;
   EXPECT_NEAR(r.ate_ratio_floored, std::sqrt(an * an + 0.09) / std::sqrt(4.0 + 0.09), 1e-12);

@@ -36,7 +36,8 @@ struct GroupRow {
   std::string group;
   int inputs = 0;
   double mp = 0, kf = 0, ba = 0;
-  double ours = 0, random = 0, longest = 0, anms = 0;
+  double ours = 0, random = 0, longest = 0, anms = 0;                  // ATE / original
+  double sq_ours = 0, sq_random = 0, sq_longest = 0, sq_anms = 0;      // sqrt(obs ratio)
 };
 
 std::vector<GroupRow> group_rows(const std::vector<ContractRun>& runs, const std::string& label) {
@@ -56,9 +57,15 @@ std::vector<GroupRow> group_rows(const std::vector<ContractRun>& runs, const std
     it->random += ratio(r.ate_random, r.ate_original);
     it->longest += ratio(r.ate_longest_track, r.ate_original);
     it->anms += ratio(r.ate_anms, r.ate_original);
+    it->sq_ours += r.sqrt_obs_ratio;
+    it->sq_random += r.sqrt_obs_ratio_random;
+    it->sq_longest += r.sqrt_obs_ratio_longest_track;
+    it->sq_anms += r.sqrt_obs_ratio_anms;
   }
   for (GroupRow& g : rows)
-    for (double* v : {&g.mp, &g.kf, &g.ba, &g.ours, &g.random, &g.longest, &g.anms}) *v /= g.inputs;
+    for (double* v : {&g.mp, &g.kf, &g.ba, &g.ours, &g.random, &g.longest, &g.anms, &g.sq_ours, &g.sq_random,
+                      &g.sq_longest, &g.sq_anms})
+      *v /= g.inputs;
   return rows;
 }
 
@@ -214,7 +221,8 @@ std::string markdown_tables(const EvalSummary& s) {
     o << "\n#### Baselines keeping the same count per window (" << label << "; ATE in m, lowest mean in bold; "
          "\"ours below\": seeds on which ours had the lower ATE)\n\n"
          "| Input | ours | random | longest track | ANMS (SSC) | MP % ours / random / longest / ANMS | "
-         "ours below random | below longest | below ANMS |\n|---|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+         "KF % ours / random / longest / ANMS | ATE ratio (√(obs ratio)) ours / random / longest / ANMS | "
+         "ours below random | below longest | below ANMS |\n|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
     for (const ContractRun& r : s.runs) {
       if (op_label(r) != label) continue;
       double best = r.ate_ours.mean;
@@ -222,23 +230,32 @@ std::string markdown_tables(const EvalSummary& s) {
         if (a->n > 0) best = std::min(best, a->mean);
       auto cell = [&](const Stat& a) { return a.n == 0 ? std::string("–") : bold_if(a.mean == best, ate_pm(a)); };
       auto below = [&](const Stat& a, int n) { return a.n == 0 ? std::string("–") : std::to_string(n) + " / " + std::to_string(r.seeds); };
+      auto quad = [](double a, double b, double c, double d, int prec) {
+        return f(a, prec) + " / " + f(b, prec) + " / " + f(c, prec) + " / " + f(d, prec);
+      };
+      auto rq = [&](const Stat& a, double sq) { return f(ratio(a, r.ate_original), 2) + " (" + f(sq, 2) + ")"; };
       o << "| " << r.info.name << " | " << cell(r.ate_ours) << " | " << cell(r.ate_random) << " | "
-        << cell(r.ate_longest_track) << " | " << cell(r.ate_anms) << " | " << f(r.mp_percent.mean, 1) << " / "
-        << f(r.mp_percent_random.mean, 1) << " / " << f(r.mp_percent_longest_track.mean, 1) << " / "
-        << f(r.mp_percent_anms.mean, 1) << " | " << below(r.ate_random, r.below_random_seeds) << " | "
-        << below(r.ate_longest_track, r.below_longest_track_seeds) << " | " << below(r.ate_anms, r.below_anms_seeds) << " |\n";
+        << cell(r.ate_longest_track) << " | " << cell(r.ate_anms) << " | "
+        << quad(r.mp_percent.mean, r.mp_percent_random.mean, r.mp_percent_longest_track.mean, r.mp_percent_anms.mean, 1) << " | "
+        << quad(r.kf_percent.mean, r.kf_percent_random.mean, r.kf_percent_longest_track.mean, r.kf_percent_anms.mean, 0) << " | "
+        << rq(r.ate_ours, r.sqrt_obs_ratio) << " / " << rq(r.ate_random, r.sqrt_obs_ratio_random) << " / "
+        << rq(r.ate_longest_track, r.sqrt_obs_ratio_longest_track) << " / " << rq(r.ate_anms, r.sqrt_obs_ratio_anms) << " | "
+        << below(r.ate_random, r.below_random_seeds) << " | " << below(r.ate_longest_track, r.below_longest_track_seeds)
+        << " | " << below(r.ate_anms, r.below_anms_seeds) << " |\n";
     }
     const std::vector<GroupRow> groups = group_rows(s.runs, label);
     if (!groups.empty()) {
       o << "\n#### Per trajectory group (" << label << "; as the paper's Table V, but each ATE as a ratio to the "
-           "original's, averaged over the group's inputs; lowest in bold)\n\n"
+           "original's, averaged over the group's inputs, √(obs ratio) in brackets; lowest in bold)\n\n"
            "| Group | inputs | MP % | KF % | BA time % | ours | random | longest track | ANMS |\n"
            "|---|---:|---:|---:|---:|---:|---:|---:|---:|\n";
       for (const GroupRow& g : groups) {
         const double best = std::min({g.ours, g.random, g.longest, g.anms});
         o << "| " << g.group << " | " << g.inputs << " | " << f(g.mp, 1) << " | " << f(g.kf, 1) << " | " << f(g.ba, 1)
-          << " | " << bold_if(g.ours == best, f(g.ours, 2)) << " | " << bold_if(g.random == best, f(g.random, 2))
-          << " | " << bold_if(g.longest == best, f(g.longest, 2)) << " | " << bold_if(g.anms == best, f(g.anms, 2)) << " |\n";
+          << " | " << bold_if(g.ours == best, f(g.ours, 2)) << " (" << f(g.sq_ours, 2) << ") | "
+          << bold_if(g.random == best, f(g.random, 2)) << " (" << f(g.sq_random, 2) << ") | "
+          << bold_if(g.longest == best, f(g.longest, 2)) << " (" << f(g.sq_longest, 2) << ") | "
+          << bold_if(g.anms == best, f(g.anms, 2)) << " (" << f(g.sq_anms, 2) << ") |\n";
       }
     }
   }

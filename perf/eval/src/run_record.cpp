@@ -29,12 +29,6 @@ int count_below(const std::vector<RunRecord>& a, const std::vector<RunRecord>& b
   return n;
 }
 
-double mean_of(const std::vector<RunRecord>& v, double RunRecord::*field) {
-  std::vector<double> x;
-  for (const RunRecord& r : v) x.push_back(r.*field);
-  return stat_of(x).mean;
-}
-
 double mean_observations(const std::vector<RunRecord>& v) {
   std::vector<double> x;
   for (const RunRecord& r : v) x.push_back(double(r.observations));
@@ -76,9 +70,15 @@ ContractRun summarize(const Comparison& c) {
   auto mp_of = [&](const std::vector<RunRecord>& v) {
     return paired(v, g, [](const RunRecord& a, const RunRecord& o) { return pct(double(a.mps), double(o.mps)); });
   };
+  auto kf_of = [&](const std::vector<RunRecord>& v) {
+    return paired(v, g, [](const RunRecord& a, const RunRecord& o) { return pct(double(a.kfs), double(o.kfs)); });
+  };
   r.mp_percent_random = mp_of(c.random);
   r.mp_percent_longest_track = mp_of(c.longest_track);
   r.mp_percent_anms = mp_of(c.anms);
+  r.kf_percent_random = kf_of(c.random);
+  r.kf_percent_longest_track = kf_of(c.longest_track);
+  r.kf_percent_anms = kf_of(c.anms);
   auto ate = [](const RunRecord& a) { return a.ate_m; };
   r.ate_original = stat_over(g, ate);
   r.ate_ours = stat_over(c.ours, ate);
@@ -92,10 +92,17 @@ ContractRun summarize(const Comparison& c) {
   r.below_random_seeds = count_below(c.ours, c.random);
   r.below_longest_track_seeds = count_below(c.ours, c.longest_track);
   r.below_anms_seeds = count_below(c.ours, c.anms);
-  const double ao = mean_of(g, &RunRecord::ate_m), an = mean_of(c.ours, &RunRecord::ate_m);
+  const double ao = r.ate_original.mean, an = r.ate_ours.mean;
   r.ate_ratio = ao > 0 ? an / ao : NAN;
-  const double oo = mean_observations(g), on = mean_observations(c.ours);
-  r.sqrt_obs_ratio = on > 0 ? std::sqrt(oo / on) : NAN;
+  const double oo = mean_observations(g);
+  auto sqrt_obs = [&](const std::vector<RunRecord>& v) {
+    const double n = mean_observations(v);
+    return n > 0 ? std::sqrt(oo / n) : NAN;
+  };
+  r.sqrt_obs_ratio = sqrt_obs(c.ours);
+  r.sqrt_obs_ratio_random = sqrt_obs(c.random);
+  r.sqrt_obs_ratio_longest_track = sqrt_obs(c.longest_track);
+  r.sqrt_obs_ratio_anms = sqrt_obs(c.anms);
   const double f2 = c.info.error_floor_m * c.info.error_floor_m;
   if (c.info.error_floor_m > 0) r.ate_ratio_floored = std::sqrt(an * an + f2) / std::sqrt(ao * ao + f2);
   return r;
@@ -142,6 +149,9 @@ std::string run_json(const ContractRun& r) {
   field(o, "mp_percent_random", json_number(r.mp_percent_random.mean, 3));
   field(o, "mp_percent_longest_track", json_number(r.mp_percent_longest_track.mean, 3));
   field(o, "mp_percent_anms", json_number(r.mp_percent_anms.mean, 3));
+  field(o, "kf_percent_random", json_number(r.kf_percent_random.mean, 3));
+  field(o, "kf_percent_longest_track", json_number(r.kf_percent_longest_track.mean, 3));
+  field(o, "kf_percent_anms", json_number(r.kf_percent_anms.mean, 3));
   field(o, "better_seeds", std::to_string(r.better_seeds));
   field(o, "worse_seeds", std::to_string(r.worse_seeds));
   field(o, "below_random_seeds", std::to_string(r.below_random_seeds));
@@ -149,6 +159,9 @@ std::string run_json(const ContractRun& r) {
   field(o, "below_anms_seeds", std::to_string(r.below_anms_seeds));
   field(o, "ate_ratio", json_number(r.ate_ratio, 4));
   field(o, "sqrt_obs_ratio", json_number(r.sqrt_obs_ratio, 4));
+  field(o, "sqrt_obs_ratio_random", json_number(r.sqrt_obs_ratio_random, 4));
+  field(o, "sqrt_obs_ratio_longest_track", json_number(r.sqrt_obs_ratio_longest_track, 4));
+  field(o, "sqrt_obs_ratio_anms", json_number(r.sqrt_obs_ratio_anms, 4));
   field(o, "error_floor_m", json_number(r.info.error_floor_m, 4));
   field(o, "ate_ratio_floored", json_number(r.ate_ratio_floored, 4));
   o << "}";

@@ -66,10 +66,12 @@ struct ContractRun {
   Stat ate_original, ate_ours, ate_random, ate_longest_track, ate_anms;  // metres (BAL: its units)
   Stat ate_r_original, ate_r_ours;
   Stat mp_percent_random, mp_percent_longest_track, mp_percent_anms;
+  Stat kf_percent_random, kf_percent_longest_track, kf_percent_anms;
   int better_seeds = 0, worse_seeds = 0;  // ours vs original, seed by seed
   int below_random_seeds = 0, below_longest_track_seeds = 0, below_anms_seeds = 0;
   double ate_ratio = NAN;        // mean ours / mean original
   double sqrt_obs_ratio = NAN;   // sqrt(mean observations original / ours)
+  double sqrt_obs_ratio_random = NAN, sqrt_obs_ratio_longest_track = NAN, sqrt_obs_ratio_anms = NAN;
   double ate_ratio_floored = NAN;  // with error_floor_m added in quadrature to both
 };
 
