@@ -235,6 +235,17 @@ TEST(KeeplessEval, QuickRunReportsTheContractForEveryInput) {
   for (const char* h : {"Accuracy at equal kept fraction", "Baselines keeping the same count", "Per trajectory group",
                         "Cost ablation", "Which claims held"})
     EXPECT_NE(t.find(h), std::string::npos) << h;
+  // --report regenerates the same contract from runs.csv, without running.
+  const RunOutput again = run("--report " + out);
+  ASSERT_EQ(again.status, 0);
+  Json k;
+  ASSERT_TRUE(Parser(again.last_line).parse(&k)) << again.last_line;
+  ASSERT_EQ(k.at("runs").items.size(), j.at("runs").items.size());
+  for (std::size_t i = 0; i < k.at("runs").items.size(); ++i)
+    for (const char* key : {"seeds", "M", "mp_percent", "kf_percent", "ate_original_m", "ate_ours_m", "ate_random_m",
+                            "better_seeds", "worse_seeds", "sqrt_obs_ratio"})
+      EXPECT_EQ(num(k.at("runs").items[i], key), num(j.at("runs").items[i], key)) << key;
+  EXPECT_EQ(k.at("ablation").items.size(), 4u);
   std::filesystem::remove_all(out);
 }
 

@@ -38,13 +38,15 @@ const char* kUsage =
     "                     [--error-floor none|GROUP=METRES,...] [--out DIR] [--max-keyframes N] [--keypoints N]\n"
     "                     [--window N] [--ba-iterations N] [--image-frames N] [--noise-free] [--no-baselines]\n"
     "                     [--no-ablation] [--ablation-all]\n"
+    "       keepless_eval --report DIR [--error-floor ...] [--out DIR2]\n"
     "  --data-root DIR     add the standard inputs under DIR (../shared/data layout; --quick: a small subset)\n"
     "  --format            applies to the --trajectory just before it; without it the format is guessed\n"
     "  --kept-fraction F   per input, the M (found on the first seed) at which keepless keeps F of the original's\n"
     "                      map points (default 0.3); --M gives M directly instead\n"
     "  --seeds N           seeds FIRST .. FIRST+N-1 (default 5, --quick 2); tables show mean +- sd over them\n"
     "  --error-floor       ATE added in quadrature to both sides of a ratio, per group (default: the paper's\n"
-    "                      published original ATE: tum=0.0183,euroc_mh=0.0658,euroc_v=0.0658,kitti=0.537)\n";
+    "                      published original ATE: tum=0.0183,euroc_mh=0.0658,euroc_v=0.0658,kitti=0.537)\n"
+    "  --report DIR        regenerate the tables and the JSON line from DIR's runs.csv (an earlier --out), no runs\n";
 
 struct TrajectoryArg {
   std::string path;
@@ -67,7 +69,7 @@ struct Args {
   int seeds = -1;
   std::uint64_t first_seed = 1;
   std::map<std::string, double> error_floor{{"tum", 0.0183}, {"euroc_mh", 0.0658}, {"euroc_v", 0.0658}, {"kitti", 0.537}};
-  std::string out;
+  std::string out, report;
   int max_keyframes = -1, keypoints = -1, window = -1, ba_iterations = -1, image_frames = -1;
   bool noise_free = false, baselines = true, ablation = true, ablation_all = false;
 };
@@ -139,6 +141,7 @@ Args parse(int argc, char** argv) {
           a.error_floor[t.substr(0, eq)] = parse_double("--error-floor", t.substr(eq + 1), 0, 1e3);
         }
     } else if (f == "--out") a.out = val();
+    else if (f == "--report") a.report = val();
     else if (f == "--max-keyframes") a.max_keyframes = static_cast<int>(parse_int(f, val(), 0, 1000000));
     else if (f == "--keypoints") a.keypoints = static_cast<int>(parse_int(f, val(), 10, 100000));
     else if (f == "--window") a.window = static_cast<int>(parse_int(f, val(), 2, 64));
@@ -229,6 +232,9 @@ ke::RunRecord record_of(const ke::RunResult& r, std::uint64_t seed) {
   x.total_s = r.total_s;
   x.ate_m = r.ate_m;
   x.ate_r_deg = r.ate_r_deg;
+  x.C = r.C;
+  x.F = r.F;
+  x.S = r.S;
   return x;
 }
 
@@ -285,8 +291,8 @@ std::int64_t find_M(const ke::Scenario& sc, const ke::SimOptions& o, std::uint64
          })->first;
 }
 
-// The paper's ablation (section IV-F): all costs, c_c, c_c + c_s, c_c + c_b.
-constexpr std::uint8_t kAblationCosts[4] = {7, 1, 3, 5};
+// The paper's ablation (section IV-F) besides all costs (ours): c_c, c_c + c_s, c_c + c_b.
+const std::pair<const char*, std::uint8_t> kAblation[3] = {{"c_c", 1}, {"c_c+c_s", 3}, {"c_c+c_b", 5}};
 
 // Runs one input over every seed: the original, then per operating point
 // keepless and the equal-count baselines; the ablation on TUM.
@@ -294,8 +300,6 @@ void evaluate(const std::function<ke::Scenario(std::uint64_t)>& make, const ke::
               const ke::SimOptions& o, ke::EvalSummary* summary) {
   const std::size_t first = summary->comparisons.size();
   const bool ablate = a.ablation && info.kind == "trajectory" && (info.group == "tum" || a.ablation_all);
-  std::vector<ke::AblationRow> ablation;
-  for (const char* name : {"all", "c_c", "c_c+c_s", "c_c+c_b"}) ablation.push_back(ke::AblationRow{info.name, name, 0, {}});
   for (int si = 0; si < a.seeds; ++si) {
     const std::uint64_t seed = a.first_seed + static_cast<std::uint64_t>(si);
     const ke::Scenario sc = make(seed);
@@ -323,15 +327,38 @@ void evaluate(const std::function<ke::Scenario(std::uint64_t)>& make, const ke::
         if (si == 0 && p == 0) summary->snapshots.push_back(ke::Snapshot{info.name, info.kind, sc.cam.width, sc.cam.height, c.M, ours.snapshot, anms.snapshot});
       }
       if (ablate && p == 0)
-        for (std::size_t v = 0; v < ablation.size(); ++v) {
-          const ke::RunResult r = v == 0 ? ours : run(sc, variant(ablation[v].costs, ke::Selector::kKeepless, c.M, kAblationCosts[v]), so, seed);
-          ablation[v].M = c.M;
-          ablation[v].runs.push_back(ke::AblationRun{r.ate_m, r.C, r.F, r.S, original.mps ? 100.0 * r.mps / original.mps : 0});
-        }
+        for (const auto& [costs, terms] : kAblation)
+          c.ablation.push_back(record_of(run(sc, variant(costs, ke::Selector::kKeepless, c.M, terms), so, seed), seed));
     }
   }
-  if (ablate)
-    for (const auto& row : ablation) summary->ablation.push_back(row);
+}
+
+double error_floor_of(const Args& a, const std::string& group) {
+  const auto it = a.error_floor.find(group);
+  return it == a.error_floor.end() ? 0.0 : it->second;
+}
+
+// Prints (and writes to --out) the outputs of the runs in `summary`.
+int finish(const Args& a, ke::EvalSummary* summary) {
+  for (ke::Comparison& c : summary->comparisons) {
+    c.info.error_floor_m = error_floor_of(a, c.info.group);
+    summary->runs.push_back(ke::summarize(c));
+  }
+  summary->error_floor = a.error_floor;
+  if (!a.out.empty()) {
+    std::string err;
+    if (!ke::write_outputs(*summary, a.out, &err)) fail(err);
+  }
+  if (summary->mode != "quick") std::cout << ke::markdown_tables(*summary) << "\n";
+  std::cout << ke::json_summary(*summary) << std::endl;
+  return 0;
+}
+
+int report_again(const Args& a) {
+  ke::EvalSummary summary;
+  std::string err;
+  if (!ke::read_outputs(a.report, &summary, &err)) fail(err);
+  return finish(a, &summary);
 }
 
 }  // namespace
@@ -340,13 +367,13 @@ int main(int argc, char** argv) {
   const auto t0 = std::chrono::steady_clock::now();
   Args a = parse(argc, argv);
   if (!a.data_root.empty()) add_data_root(&a);
+  if (!a.report.empty()) return report_again(a);
   if (a.trajectories.empty() && a.images.empty() && a.bal.empty())
     fail(std::string("no input: give --data-root, --trajectory, --images or --bal\n") + kUsage);
 
   ke::EvalSummary summary;
   summary.mode = a.quick ? "quick" : "full";
   for (int i = 0; i < a.seeds; ++i) summary.seeds.push_back(a.first_seed + static_cast<std::uint64_t>(i));
-  summary.error_floor = a.error_floor;
   for (int i = 0; i < argc; ++i) summary.command += (i ? " " : "") + std::string(argv[i]);
 
   ke::SimOptions sim;
@@ -355,10 +382,6 @@ int main(int argc, char** argv) {
   sim.ba_robust_iterations = std::max(1, sim.ba_iterations / 2);
   summary.settings = "window " + std::to_string(sim.window) + ", local BA " + std::to_string(sim.ba_robust_iterations) +
                      " + " + std::to_string(sim.ba_iterations) + " iterations";
-  auto floor_of = [&](const std::string& group) {
-    auto it = a.error_floor.find(group);
-    return it == a.error_floor.end() ? 0.0 : it->second;
-  };
 
   for (const auto& t : a.trajectories) {
     const std::string fmt = t.format.empty() ? guess_format(t.path) : t.format;
@@ -382,7 +405,6 @@ int main(int argc, char** argv) {
     info.group = group_of(fmt, info.name);
     info.kind = "trajectory";
     info.sim3 = w.cam.baseline <= 0;
-    info.error_floor_m = floor_of(info.group);
     std::cerr << "keepless_eval: " << t.path << " (" << fmt << ")\n";
     summary.settings_inputs.push_back(info.name + ": " + std::to_string(w.keypoints_per_frame) + " keypoints, first " +
                                       std::to_string(w.max_keyframes) + " keyframes");
@@ -410,7 +432,6 @@ int main(int argc, char** argv) {
     info.group = base.group;
     info.kind = base.kind;
     info.sim3 = base.cam.baseline <= 0;  // monocular: scale is not observable
-    info.error_floor_m = floor_of(info.group);
     // The ORB tracks are fixed; each seed draws its own odometry noise.
     evaluate([&](std::uint64_t seed) {
                ke::Scenario sc = base;
@@ -420,27 +441,21 @@ int main(int argc, char** argv) {
              info, a, sim, &summary);
   }
 
-  for (const std::string& b : a.bal) {
-    ke::BalOptions bo;
-    bo.target_fraction = a.ops[0].fraction;
-    bo.M = a.ops[0].M;
-    bo.max_iterations = a.quick ? 10 : 50;
-    bo.seeds = summary.seeds;
-    bo.baselines = a.baselines;
-    ke::Comparison c;
-    std::string err;
-    std::cerr << "keepless_eval: BAL " << b << "\n";
-    if (!ke::run_bal(b, bo, &c, &err)) fail(err);
-    summary.comparisons.push_back(std::move(c));
-  }
+  for (const std::string& b : a.bal)
+    for (const OperatingPoint& op : a.ops) {
+      ke::BalOptions bo;
+      bo.target_fraction = op.fraction;
+      bo.M = op.M;
+      bo.max_iterations = a.quick ? 10 : 50;
+      bo.seeds = summary.seeds;
+      bo.baselines = a.baselines;
+      ke::Comparison c;
+      std::string err;
+      std::cerr << "keepless_eval: BAL " << b << "\n";
+      if (!ke::run_bal(b, bo, &c, &err)) fail(err);
+      summary.comparisons.push_back(std::move(c));
+    }
 
-  for (const auto& c : summary.comparisons) summary.runs.push_back(ke::summarize(c));
   summary.elapsed_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  if (!a.out.empty()) {
-    std::string err;
-    if (!ke::write_outputs(summary, a.out, &err)) fail(err);
-  }
-  if (!a.quick) std::cout << ke::markdown_tables(summary) << "\n";
-  std::cout << ke::json_summary(summary) << std::endl;
-  return 0;
+  return finish(a, &summary);
 }

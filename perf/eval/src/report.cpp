@@ -11,6 +11,10 @@
 namespace keepless::eval {
 namespace {
 
+constexpr const char* kCsvHeader =
+    "input,name,group,kind,alignment,variant,seed,M,target_fraction,compared_M,mps,kfs,observations,ba_s,total_s,"
+    "ate_m,ate_r_deg,C,F,S";
+
 std::string f(double v, int prec) {
   if (!std::isfinite(v)) return "–";
   char buf[64];
@@ -76,10 +80,32 @@ std::vector<std::string> labels_of(const std::vector<ContractRun>& runs) {
   return out;
 }
 
-Stat ablation_stat(const AblationRow& row, double AblationRun::*field) {
-  std::vector<double> v;
-  for (const AblationRun& r : row.runs) v.push_back(r.*field);
-  return stat_of(v);
+// The cost ablation of one comparison: "all" (ours), then each ablation
+// variant, in the order run; every row's records by seed.
+std::vector<std::pair<std::string, std::vector<RunRecord>>> ablation_rows(const Comparison& c) {
+  std::vector<std::pair<std::string, std::vector<RunRecord>>> rows;
+  if (c.ablation.empty()) return rows;
+  rows.emplace_back("all", c.ours);
+  for (const RunRecord& r : c.ablation) {
+    auto it = std::find_if(rows.begin(), rows.end(), [&](const auto& row) { return row.first == r.variant; });
+    if (it == rows.end()) rows.emplace_back(r.variant, std::vector<RunRecord>{r});
+    else it->second.push_back(r);
+  }
+  return rows;
+}
+
+template <typename F>
+Stat stat_by(const std::vector<RunRecord>& v, F fn) {
+  std::vector<double> x;
+  for (const RunRecord& r : v) x.push_back(fn(r));
+  return stat_of(x);
+}
+
+// A record's map points as % of the original's of the same seed.
+double mp_percent_of(const Comparison& c, const RunRecord& r) {
+  for (const RunRecord& g : c.original)
+    if (g.seed == r.seed && g.mps > 0) return 100.0 * double(r.mps) / double(g.mps);
+  return NAN;
 }
 
 // ---- SVG ----
@@ -260,14 +286,20 @@ std::string markdown_tables(const EvalSummary& s) {
     }
   }
 
-  if (!s.ablation.empty()) {
+  bool any_ablation = false;
+  for (const Comparison& c : s.comparisons) any_ablation |= !c.ablation.empty();
+  if (any_ablation) {
     o << "\n#### Cost ablation (as the paper's Table VI; C observations per point, F mean keyframe span per point, "
          "S % of a 64×48 grid occupied; at the first operating point's M)\n\n"
          "| Input | costs | M | MP % | C | F | S | ATE (m) |\n|---|---|---:|---:|---:|---:|---:|---:|\n";
-    for (const AblationRow& row : s.ablation)
-      o << "| " << row.input << " | " << row.costs << " | " << row.M << " | " << pm(ablation_stat(row, &AblationRun::mp_percent), 1)
-        << " | " << pm(ablation_stat(row, &AblationRun::C), 2) << " | " << pm(ablation_stat(row, &AblationRun::F), 2)
-        << " | " << pm(ablation_stat(row, &AblationRun::S), 2) << " | " << ate_pm(ablation_stat(row, &AblationRun::ate_m)) << " |\n";
+    for (const Comparison& c : s.comparisons)
+      for (const auto& [costs, runs] : ablation_rows(c))
+        o << "| " << c.info.name << " | " << costs << " | " << c.M << " | "
+          << pm(stat_by(runs, [&](const RunRecord& r) { return mp_percent_of(c, r); }), 1) << " | "
+          << pm(stat_by(runs, [](const RunRecord& r) { return r.C; }), 2) << " | "
+          << pm(stat_by(runs, [](const RunRecord& r) { return r.F; }), 2) << " | "
+          << pm(stat_by(runs, [](const RunRecord& r) { return r.S; }), 2) << " | "
+          << ate_pm(stat_by(runs, [](const RunRecord& r) { return r.ate_m; })) << " |\n";
   }
 
   // Claims, computed from the runs above.
@@ -325,15 +357,20 @@ bool write_outputs(const EvalSummary& s, const std::string& out_dir, std::string
     return static_cast<bool>(out);
   };
   std::ostringstream csv;
-  csv << "input,name,group,kind,alignment,variant,seed,M,target_fraction,mps,kfs,observations,ba_s,total_s,ate_m,ate_r_deg\n";
+  csv << kCsvHeader << "\n";
   for (const Comparison& c : s.comparisons)
-    for (const auto* v : {&c.original, &c.ours, &c.random, &c.longest_track, &c.anms})
+    for (const auto* v : {&c.original, &c.ours, &c.random, &c.longest_track, &c.anms, &c.ablation})
       for (const RunRecord& r : *v)
         csv << c.info.input << "," << c.info.name << "," << c.info.group << "," << c.info.kind << ","
             << (c.info.sim3 ? "sim3" : "se3") << "," << r.variant << "," << r.seed << "," << r.M << ","
-            << json_number(c.target_fraction, 3) << "," << r.mps << "," << r.kfs << "," << r.observations << ","
-            << f(r.ba_s, 4) << "," << f(r.total_s, 4) << "," << json_number(r.ate_m, 6) << "," << json_number(r.ate_r_deg, 6) << "\n";
+            << json_number(c.target_fraction, 3) << "," << c.M << "," << r.mps << "," << r.kfs << "," << r.observations
+            << "," << f(r.ba_s, 4) << "," << f(r.total_s, 4) << "," << json_number(r.ate_m, 9) << ","
+            << json_number(r.ate_r_deg, 6) << "," << json_number(r.C, 4) << "," << json_number(r.F, 4) << ","
+            << json_number(r.S, 4) << "\n";
   bool ok = write("runs.csv", csv.str());
+  std::string meta = s.command + "\n" + s.mode + "\n" + s.settings + "\n" + json_number(s.elapsed_s, 1) + "\n";
+  for (const std::string& i : s.settings_inputs) meta += i + "\n";
+  ok = ok && write("meta.txt", meta);
   ok = ok && write("tables.md", "`" + s.command + "` (" + s.mode + ", " + f(s.elapsed_s / 60.0, 1) + " min)\n\n" + markdown_tables(s));
   if (!s.runs.empty()) ok = ok && write("ate_vs_kept.svg", svg_ate_vs_kept(s));
   // One frame's keypoints: a real image if there is one.
@@ -355,17 +392,116 @@ std::string json_summary(const EvalSummary& s) {
     first = false;
   }
   o << "},\"ablation\":[";
-  for (std::size_t i = 0; i < s.ablation.size(); ++i) {
-    const AblationRow& row = s.ablation[i];
-    const Stat ate = ablation_stat(row, &AblationRun::ate_m);
-    o << (i ? "," : "") << "{\"input\":" << json_string(row.input) << ",\"costs\":" << json_string(row.costs)
-      << ",\"M\":" << row.M << ",\"seeds\":" << row.runs.size() << ",\"ate_m\":" << json_number(ate.mean)
-      << ",\"ate_sd_m\":" << json_number(ate.sd) << ",\"C\":" << json_number(ablation_stat(row, &AblationRun::C).mean, 4)
-      << ",\"F\":" << json_number(ablation_stat(row, &AblationRun::F).mean, 4)
-      << ",\"S\":" << json_number(ablation_stat(row, &AblationRun::S).mean, 4) << "}";
-  }
+  first = true;
+  for (const Comparison& c : s.comparisons)
+    for (const auto& [costs, runs] : ablation_rows(c)) {
+      const Stat ate = stat_by(runs, [](const RunRecord& r) { return r.ate_m; });
+      o << (first ? "" : ",") << "{\"input\":" << json_string(c.info.name) << ",\"costs\":" << json_string(costs)
+        << ",\"M\":" << c.M << ",\"seeds\":" << runs.size() << ",\"ate_m\":" << json_number(ate.mean)
+        << ",\"ate_sd_m\":" << json_number(ate.sd)
+        << ",\"C\":" << json_number(stat_by(runs, [](const RunRecord& r) { return r.C; }).mean, 4)
+        << ",\"F\":" << json_number(stat_by(runs, [](const RunRecord& r) { return r.F; }).mean, 4)
+        << ",\"S\":" << json_number(stat_by(runs, [](const RunRecord& r) { return r.S; }).mean, 4) << "}";
+      first = false;
+    }
   o << "],\"elapsed_s\":" << json_number(s.elapsed_s, 2);
   return contract_json(s.runs, o.str());
+}
+
+bool read_outputs(const std::string& out_dir, EvalSummary* s, std::string* error) {
+  namespace fsys = std::filesystem;
+  const std::string csv_path = (fsys::path(out_dir) / "runs.csv").string();
+  std::ifstream csv(csv_path);
+  if (!csv) {
+    *error = csv_path + ":0: cannot open";
+    return false;
+  }
+  std::ifstream meta((fsys::path(out_dir) / "meta.txt").string());
+  std::string elapsed, line;
+  if (meta && std::getline(meta, s->command) && std::getline(meta, s->mode) && std::getline(meta, s->settings) &&
+      std::getline(meta, elapsed)) {
+    s->elapsed_s = std::strtod(elapsed.c_str(), nullptr);
+    while (std::getline(meta, line))
+      if (!line.empty()) s->settings_inputs.push_back(line);
+  }
+  auto split = [](const std::string& l) {
+    std::vector<std::string> v;
+    std::stringstream ss(l);
+    std::string t;
+    while (std::getline(ss, t, ',')) v.push_back(t);
+    return v;
+  };
+  std::getline(csv, line);
+  const std::vector<std::string> header = split(line);
+  auto col = [&](const char* name) {
+    const auto it = std::find(header.begin(), header.end(), name);
+    return it == header.end() ? -1 : static_cast<int>(it - header.begin());
+  };
+  for (const char* need : {"input", "name", "group", "kind", "alignment", "variant", "seed", "M", "target_fraction",
+                           "mps", "kfs", "observations", "ba_s", "total_s", "ate_m", "ate_r_deg"})
+    if (col(need) < 0) {
+      *error = csv_path + ":1: no column " + need;
+      return false;
+    }
+  std::vector<std::string> keys;
+  int lineno = 1;
+  while (std::getline(csv, line)) {
+    ++lineno;
+    if (line.empty()) continue;
+    const std::vector<std::string> v = split(line);
+    if (v.size() < header.size()) {
+      *error = csv_path + ":" + std::to_string(lineno) + ": " + std::to_string(v.size()) + " fields, want " +
+               std::to_string(header.size());
+      return false;
+    }
+    auto str = [&](const char* name) { return col(name) < 0 ? std::string() : v[static_cast<std::size_t>(col(name))]; };
+    auto num = [&](const char* name) {
+      const std::string t = str(name);
+      return t.empty() || t == "null" ? NAN : std::strtod(t.c_str(), nullptr);
+    };
+    RunRecord r;
+    r.variant = str("variant");
+    r.seed = static_cast<std::uint64_t>(num("seed"));
+    r.M = static_cast<std::int64_t>(num("M"));
+    r.mps = static_cast<std::uint64_t>(num("mps"));
+    r.kfs = static_cast<std::uint64_t>(num("kfs"));
+    r.observations = static_cast<std::uint64_t>(num("observations"));
+    r.ba_s = num("ba_s");
+    r.total_s = num("total_s");
+    r.ate_m = num("ate_m");
+    r.ate_r_deg = num("ate_r_deg");
+    r.C = num("C");
+    r.F = num("F");
+    r.S = num("S");
+    // One comparison per input and operating point (compared_M tells --M points apart).
+    const std::string key = str("input") + "|" + str("target_fraction") + "|" + str("compared_M");
+    auto it = std::find(keys.begin(), keys.end(), key);
+    if (it == keys.end()) {
+      keys.push_back(key);
+      Comparison c;
+      c.info.input = str("input");
+      c.info.name = str("name");
+      c.info.group = str("group");
+      c.info.kind = str("kind");
+      c.info.sim3 = str("alignment") == "sim3";
+      c.target_fraction = num("target_fraction");
+      c.M = static_cast<std::int64_t>(num("compared_M"));  // absent in older files: from the variants below
+      s->comparisons.push_back(c);
+      it = keys.end() - 1;
+    }
+    Comparison& c = s->comparisons[static_cast<std::size_t>(it - keys.begin())];
+    if (r.variant != "original" && col("compared_M") < 0) c.M = r.M;
+    std::vector<RunRecord>* to = &c.ablation;
+    if (r.variant == "original") to = &c.original;
+    else if (r.variant == "ours") to = &c.ours;
+    else if (r.variant == "random") to = &c.random;
+    else if (r.variant == "longest_track") to = &c.longest_track;
+    else if (r.variant == "anms") to = &c.anms;
+    to->push_back(r);
+    if (std::find(s->seeds.begin(), s->seeds.end(), r.seed) == s->seeds.end()) s->seeds.push_back(r.seed);
+  }
+  std::sort(s->seeds.begin(), s->seeds.end());
+  return true;
 }
 
 }  // namespace keepless::eval

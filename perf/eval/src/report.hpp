@@ -3,7 +3,8 @@
 // Markdown tables (accuracy at equal kept fraction with mean ± sd over seeds,
 // the equal-count baselines, the per-group comparison shaped like the paper's
 // Table V, the cost ablation, and which claims held), a CSV of every run,
-// SVG plots, and the JSON line. README's Evidence section is tables.md.
+// SVG plots, and the JSON line. README's Evidence section is tables.md;
+// `keepless_eval --report DIR` regenerates it from DIR's runs.csv.
 
 #include <cstdint>
 #include <map>
@@ -14,17 +15,6 @@
 #include "slam_sim.hpp"
 
 namespace keepless::eval {
-
-struct AblationRun {
-  double ate_m, C, F, S, mp_percent;
-};
-
-struct AblationRow {
-  std::string input;  // short name
-  std::string costs;  // all, c_c, c_c+c_s, c_c+c_b
-  std::int64_t M = 0;
-  std::vector<AblationRun> runs;  // per seed
-};
 
 // One keyframe's keypoints, ours vs ANMS (the SVG).
 struct Snapshot {
@@ -42,13 +32,15 @@ struct EvalSummary {
   std::vector<std::string> settings_inputs;
   std::vector<Comparison> comparisons;  // every record
   std::vector<ContractRun> runs;        // summarize(comparisons[i])
-  std::vector<AblationRow> ablation;
   std::vector<Snapshot> snapshots;
   double elapsed_s = 0;
 };
 
 std::string markdown_tables(const EvalSummary& s);
 bool write_outputs(const EvalSummary& s, const std::string& out_dir, std::string* error);
+// The comparisons, command and settings back from write_outputs' runs.csv
+// and meta.txt, so the tables can be regenerated without re-running.
+bool read_outputs(const std::string& out_dir, EvalSummary* s, std::string* error);
 std::string json_summary(const EvalSummary& s);
 
 }  // namespace keepless::eval

@@ -28,6 +28,7 @@ struct RunRecord {
   std::uint64_t observations = 0; // residuals over every (local) BA: the information used
   double ba_s = 0, total_s = 0;
   double ate_m = NAN, ate_r_deg = NAN;
+  double C = NAN, F = NAN, S = NAN;  // section IV-F: observations per point, keyframe span, grid occupancy %
 };
 
 struct InputInfo {
@@ -47,6 +48,7 @@ struct Comparison {
   double target_fraction = NAN;   // --kept-fraction, or NaN for a given M
   std::int64_t M = 0;
   std::vector<RunRecord> original, ours, random, longest_track, anms;
+  std::vector<RunRecord> ablation;  // the cost ablation's variants (by name), every seed; ours is "all"
 };
 
 struct Stat {
