@@ -38,7 +38,7 @@ const char* kUsage =
     "                     [--error-floor none|GROUP=METRES,...] [--out DIR] [--max-keyframes N] [--keypoints N]\n"
     "                     [--window N] [--ba-iterations N] [--image-frames N] [--noise-free] [--no-baselines]\n"
     "                     [--no-ablation] [--ablation-all]\n"
-    "       keepless_eval --report DIR [--error-floor ...] [--out DIR2]\n"
+    "       keepless_eval --report DIR [--report DIR]... [--error-floor ...] [--out DIR2]\n"
     "  --data-root DIR     add the standard inputs under DIR (../shared/data layout; --quick: a small subset)\n"
     "  --format            applies to the --trajectory just before it; without it the format is guessed\n"
     "  --kept-fraction F   per input, the M (found on the first seed) at which keepless keeps F of the original's\n"
@@ -46,7 +46,8 @@ const char* kUsage =
     "  --seeds N           seeds FIRST .. FIRST+N-1 (default 5, --quick 2); tables show mean +- sd over them\n"
     "  --error-floor       ATE added in quadrature to both sides of a ratio, per group (default: the paper's\n"
     "                      published original ATE: tum=0.0183,euroc_mh=0.0658,euroc_v=0.0658,kitti=0.537)\n"
-    "  --report DIR        regenerate the tables and the JSON line from DIR's runs.csv (an earlier --out), no runs\n";
+    "  --report DIR        regenerate the tables and the JSON line from DIR's runs.csv (an earlier --out; repeat\n"
+    "                      to merge runs), without running anything\n";
 
 struct TrajectoryArg {
   std::string path;
@@ -69,7 +70,8 @@ struct Args {
   int seeds = -1;
   std::uint64_t first_seed = 1;
   std::map<std::string, double> error_floor{{"tum", 0.0183}, {"euroc_mh", 0.0658}, {"euroc_v", 0.0658}, {"kitti", 0.537}};
-  std::string out, report;
+  std::string out;
+  std::vector<std::string> report;
   int max_keyframes = -1, keypoints = -1, window = -1, ba_iterations = -1, image_frames = -1;
   bool noise_free = false, baselines = true, ablation = true, ablation_all = false;
 };
@@ -141,7 +143,7 @@ Args parse(int argc, char** argv) {
           a.error_floor[t.substr(0, eq)] = parse_double("--error-floor", t.substr(eq + 1), 0, 1e3);
         }
     } else if (f == "--out") a.out = val();
-    else if (f == "--report") a.report = val();
+    else if (f == "--report") a.report.push_back(val());
     else if (f == "--max-keyframes") a.max_keyframes = static_cast<int>(parse_int(f, val(), 0, 1000000));
     else if (f == "--keypoints") a.keypoints = static_cast<int>(parse_int(f, val(), 10, 100000));
     else if (f == "--window") a.window = static_cast<int>(parse_int(f, val(), 2, 64));
@@ -357,7 +359,8 @@ int finish(const Args& a, ke::EvalSummary* summary) {
 int report_again(const Args& a) {
   ke::EvalSummary summary;
   std::string err;
-  if (!ke::read_outputs(a.report, &summary, &err)) fail(err);
+  for (const std::string& dir : a.report)
+    if (!ke::read_outputs(dir, &summary, &err)) fail(err);
   return finish(a, &summary);
 }
 

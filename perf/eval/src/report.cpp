@@ -409,6 +409,7 @@ std::string json_summary(const EvalSummary& s) {
 }
 
 bool read_outputs(const std::string& out_dir, EvalSummary* s, std::string* error) {
+  const std::size_t before = s->comparisons.size();
   namespace fsys = std::filesystem;
   const std::string csv_path = (fsys::path(out_dir) / "runs.csv").string();
   std::ifstream csv(csv_path);
@@ -416,11 +417,14 @@ bool read_outputs(const std::string& out_dir, EvalSummary* s, std::string* error
     *error = csv_path + ":0: cannot open";
     return false;
   }
+  // Several runs may be read into one summary: their commands and times add up.
   std::ifstream meta((fsys::path(out_dir) / "meta.txt").string());
-  std::string elapsed, line;
-  if (meta && std::getline(meta, s->command) && std::getline(meta, s->mode) && std::getline(meta, s->settings) &&
+  std::string command, elapsed, line;
+  if (meta && std::getline(meta, command) && std::getline(meta, s->mode) && std::getline(meta, s->settings) &&
       std::getline(meta, elapsed)) {
-    s->elapsed_s = std::strtod(elapsed.c_str(), nullptr);
+    s->command += (s->command.empty() ? "" : "` and `") + command;
+    s->elapsed_s += std::strtod(elapsed.c_str(), nullptr);
+    s->settings_inputs.clear();
     while (std::getline(meta, line))
       if (!line.empty()) s->settings_inputs.push_back(line);
   }
@@ -489,7 +493,7 @@ bool read_outputs(const std::string& out_dir, EvalSummary* s, std::string* error
       s->comparisons.push_back(c);
       it = keys.end() - 1;
     }
-    Comparison& c = s->comparisons[static_cast<std::size_t>(it - keys.begin())];
+    Comparison& c = s->comparisons[before + static_cast<std::size_t>(it - keys.begin())];
     if (r.variant != "original" && col("compared_M") < 0) c.M = r.M;
     std::vector<RunRecord>* to = &c.ablation;
     if (r.variant == "original") to = &c.original;

@@ -39,7 +39,8 @@ struct EvalSummary {
 std::string markdown_tables(const EvalSummary& s);
 bool write_outputs(const EvalSummary& s, const std::string& out_dir, std::string* error);
 // The comparisons, command and settings back from write_outputs' runs.csv
-// and meta.txt, so the tables can be regenerated without re-running.
+// and meta.txt, appended to `s`, so the tables can be regenerated (from one
+// run or several) without re-running.
 bool read_outputs(const std::string& out_dir, EvalSummary* s, std::string* error);
 std::string json_summary(const EvalSummary& s);
 
