@@ -127,15 +127,6 @@ struct Svg {
   void circle(double x, double y, double r, const char* c) {
     o << "<circle cx=\"" << f(x, 1) << "\" cy=\"" << f(y, 1) << "\" r=\"" << f(r, 1) << "\" fill=\"" << c << "\"/>\n";
   }
-  void square(double x, double y, double r, const char* c) {
-    o << "<rect x=\"" << f(x - r, 1) << "\" y=\"" << f(y - r, 1) << "\" width=\"" << f(2 * r, 1) << "\" height=\""
-      << f(2 * r, 1) << "\" fill=\"" << c << "\"/>\n";
-  }
-  void polyline(const std::vector<std::pair<double, double>>& p, const char* c) {
-    o << "<polyline fill=\"none\" stroke=\"" << c << "\" stroke-width=\"2\" points=\"";
-    for (const auto& q : p) o << f(q.first, 1) << "," << f(q.second, 1) << " ";
-    o << "\"/>\n";
-  }
   std::string str() { return o.str() + "</svg>\n"; }
 };
 
