@@ -11,6 +11,7 @@ PACKAGES=(
   cmake g++ make pkg-config
   libeigen3-dev liblcm-dev liblcm-bin liblcm-java libglib2.0-dev
   libopencv-core-dev libopencv-features2d-dev libopencv-imgproc-dev libopencv-imgcodecs-dev
+  libopencv-dev  # the only package with OpenCV's CMake config (keepless_eval)
   libgtest-dev libgmock-dev libbenchmark-dev liblemon-dev libceres-dev
   colmap  # the map tests' external checker (ctest -L colmap)
 )

@@ -17,6 +17,14 @@
 namespace keepless::eval {
 namespace {
 
+struct BalRun {
+  std::uint32_t points = 0;
+  std::uint32_t observations = 0;
+  double solve_s = 0;
+  int iterations = 0;
+  double final_cost = 0;
+};
+
 struct BalProblem {
   std::uint32_t ncams = 0, npoints = 0;
   std::vector<std::uint32_t> cam, point;
@@ -113,34 +121,49 @@ std::vector<Pose> camera_poses(const std::vector<double>& cams, std::uint32_t n)
   return out;
 }
 
-void compare(const std::vector<double>& cams, const std::vector<Pose>& reference, std::uint32_t n, BalRun* run) {
+void compare(const std::vector<double>& cams, const std::vector<Pose>& reference, std::uint32_t n, RunRecord* run) {
   const Ate e = absolute_trajectory_error(camera_poses(cams, n), reference, true);
-  run->pos_rms = e.rms_m;
-  run->rot_rms_deg = e.rms_r_deg;
+  run->ate_m = e.rms_m;
+  run->ate_r_deg = e.rms_r_deg;
+}
+
+// BAL solve as a RunRecord (solve time as BA time; observations used).
+RunRecord record_of(const BalRun& b, const std::string& variant, std::int64_t M, std::uint32_t cameras) {
+  RunRecord r;
+  r.variant = variant;
+  r.M = M;
+  r.mps = b.points;
+  r.kfs = cameras;
+  r.observations = b.observations;
+  r.ba_s = r.total_s = b.solve_s;
+  return r;
+}
+
+// Keeps `count` of the evaluated points in `order`'s order; the rest of the
+// points (not evaluated: seen once) are kept.
+std::vector<char> keep_first(const std::vector<std::uint32_t>& order, std::uint32_t count,
+                             const std::vector<char>& evaluated) {
+  std::vector<char> keep(evaluated.size(), 0);
+  for (std::size_t j = 0; j < evaluated.size(); ++j) keep[j] = !evaluated[j];
+  for (std::uint32_t i = 0; i < count && i < order.size(); ++i) keep[order[i]] = 1;
+  return keep;
 }
 
 }  // namespace
 
-bool run_bal(const std::string& path, const BalOptions& o, BalResult* out, std::string* error) {
+bool run_bal(const std::string& path, const BalOptions& o, Comparison* out, std::string* error) {
   BalProblem p;
   if (!read_bal(path, &p, error)) return false;
-  out->input = path;
-  out->cameras = p.ncams;
-  out->points = p.npoints;
-  out->observations = static_cast<std::uint32_t>(p.cam.size());
+  out->info.input = path;
+  out->info.name = "bal";
+  out->info.group = "bal";
+  out->info.kind = "bal";
+  out->info.sim3 = true;
+  out->target_fraction = o.target_fraction;
 
   std::vector<double> full_cams;
-  out->full = solve(p, std::vector<char>(p.npoints, 1), o.max_iterations, &full_cams);
-  out->full.variant = "full";
+  const BalRun full = solve(p, std::vector<char>(p.npoints, 1), o.max_iterations, &full_cams);
   const std::vector<Pose> reference = camera_poses(full_cams, p.ncams);
-  {
-    Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-    for (const Pose& q : reference) mean += q.t;
-    mean /= double(p.ncams);
-    double s = 0;
-    for (const Pose& q : reference) s += (q.t - mean).squaredNorm();
-    out->extent = std::sqrt(s / p.ncams);
-  }
 
   // The window: every camera a keyframe (its "-pre" centre, as a SLAM
   // system would sparsify before solving), BAL's centred pixel offsets as u, v.
@@ -158,58 +181,80 @@ bool run_bal(const std::string& path, const BalOptions& o, BalResult* out, std::
   for (std::uint32_t v : views) arcs += std::uint64_t(v) * (v - (v > 0 ? 1 : 0)) / 2;
   caps.max_pair_arcs = static_cast<std::uint32_t>(std::max<std::uint64_t>(arcs, 1));
   const std::vector<Pose> initial = camera_poses(p.cameras, p.ncams);
-
-  for (std::int64_t M : o.Ms) {
-    core::Params params;
-    params.pair_capacity = M;
-    core::Window window(caps);
-    core::Sparsifier sparsifier(caps, params);
-    const auto t0 = std::chrono::steady_clock::now();
-    for (std::uint32_t c = 0; c < p.ncams; ++c) {
-      core::Keyframe kf;
-      kf.id = c;
-      for (int a = 0; a < 3; ++a) kf.centre[a] = initial[c].t[a];
-      kf.orientation[0] = initial[c].q.w(); kf.orientation[1] = initial[c].q.x();
-      kf.orientation[2] = initial[c].q.y(); kf.orientation[3] = initial[c].q.z();
-      if (window.add_keyframe(kf, per_cam[c].data(), static_cast<std::uint32_t>(per_cam[c].size())) != core::Status::kOk) {
-        *error = path + ": keepless window rejected camera " + std::to_string(c);
-        return false;
-      }
-    }
-    if (sparsifier.run(window) != core::Status::kOk) {
-      *error = path + ": keepless solve failed";
+  core::Window window(caps);
+  for (std::uint32_t c = 0; c < p.ncams; ++c) {
+    core::Keyframe kf;
+    kf.id = c;
+    for (int a = 0; a < 3; ++a) kf.centre[a] = initial[c].t[a];
+    kf.orientation[0] = initial[c].q.w(); kf.orientation[1] = initial[c].q.x();
+    kf.orientation[2] = initial[c].q.y(); kf.orientation[3] = initial[c].q.z();
+    if (window.add_keyframe(kf, per_cam[c].data(), static_cast<std::uint32_t>(per_cam[c].size())) != core::Status::kOk) {
+      *error = path + ": keepless window rejected camera " + std::to_string(c);
       return false;
     }
-    out->sparsify_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    std::vector<char> keep(p.npoints, 0), evaluated(p.npoints, 0);
+  }
+  std::vector<char> keep(p.npoints, 0), evaluated(p.npoints, 0);
+  auto sparsify = [&](std::int64_t M) {
+    core::Params params;
+    params.pair_capacity = M;
+    core::Sparsifier sparsifier(caps, params);
+    if (sparsifier.run(window) != core::Status::kOk) return false;
     const core::PointDecision* d = sparsifier.decisions();
     for (std::uint32_t i = 0; i < sparsifier.decision_count(); ++i) {
       keep[d[i].point] = d[i].verdict != core::Verdict::kCull;
       evaluated[d[i].point] = d[i].verdict != core::Verdict::kSkip;
     }
-    std::vector<double> cams;
-    BalRun ours = solve(p, keep, o.max_iterations, &cams);
-    ours.variant = "ours";
-    ours.M = M;
-    compare(cams, reference, p.ncams, &ours);
+    return true;
+  };
+  auto kept_share = [&]() { return double(std::count(keep.begin(), keep.end(), 1)) / double(p.npoints); };
+  std::int64_t M = o.M;
+  if (std::isfinite(o.target_fraction)) {
+    // Bisection over M on the kept share (sparsifying alone is cheap here).
+    std::int64_t lo = 1, hi = 1 << 16;
+    while (lo < hi) {
+      const std::int64_t mid = lo + (hi - lo) / 2;
+      if (!sparsify(mid)) break;
+      if (kept_share() < o.target_fraction) lo = mid + 1;
+      else hi = mid;
+    }
+    M = lo;
+  }
+  if (!sparsify(M)) {
+    *error = path + ": keepless solve failed";
+    return false;
+  }
+  out->M = M;
+  std::vector<double> cams;
+  RunRecord ours = record_of(solve(p, keep, o.max_iterations, &cams), "ours", M, p.ncams);
+  compare(cams, reference, p.ncams, &ours);
+  std::vector<std::uint32_t> candidates;
+  std::uint32_t kept_evaluated = 0;
+  for (std::uint32_t j = 0; j < p.npoints; ++j)
+    if (evaluated[j]) {
+      candidates.push_back(j);
+      kept_evaluated += keep[j] ? 1 : 0;
+    }
+  RunRecord longest;
+  if (o.baselines) {
+    std::vector<std::uint32_t> order = candidates;
+    std::stable_sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) { return views[a] > views[b]; });
+    longest = record_of(solve(p, keep_first(order, kept_evaluated, evaluated), o.max_iterations, &cams), "longest_track", M, p.ncams);
+    compare(cams, reference, p.ncams, &longest);
+  }
+  for (std::uint64_t seed : o.seeds) {
+    RunRecord g = record_of(full, "original", 0, p.ncams);
+    g.seed = seed;
+    g.ate_m = g.ate_r_deg = 0;  // the reference itself
+    out->original.push_back(g);
+    ours.seed = seed;
     out->ours.push_back(ours);
-
-    // Random at the same count, a fixed priority per point.
-    std::vector<std::uint32_t> order;
-    std::uint32_t kept_evaluated = 0;
-    for (std::uint32_t j = 0; j < p.npoints; ++j)
-      if (evaluated[j]) {
-        order.push_back(j);
-        kept_evaluated += keep[j] ? 1 : 0;
-      }
-    std::sort(order.begin(), order.end(),
-              [&](std::uint32_t a, std::uint32_t b) { return mix(o.seed, a) < mix(o.seed, b); });
-    std::vector<char> rnd(p.npoints, 0);
-    for (std::uint32_t j = 0; j < p.npoints; ++j) rnd[j] = !evaluated[j];
-    for (std::uint32_t i = 0; i < kept_evaluated; ++i) rnd[order[i]] = 1;
-    BalRun random = solve(p, rnd, o.max_iterations, &cams);
-    random.variant = "random";
-    random.M = M;
+    if (!o.baselines) continue;
+    longest.seed = seed;
+    out->longest_track.push_back(longest);
+    std::vector<std::uint32_t> order = candidates;
+    std::sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) { return mix(seed, a) < mix(seed, b); });
+    RunRecord random = record_of(solve(p, keep_first(order, kept_evaluated, evaluated), o.max_iterations, &cams), "random", M, p.ncams);
+    random.seed = seed;
     compare(cams, reference, p.ncams, &random);
     out->random.push_back(random);
   }

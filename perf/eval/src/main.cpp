@@ -1,14 +1,19 @@
-// keepless_eval: reproduces the paper's evaluation on real trajectories, real
-// images and a real BA problem (issue 6). The last stdout line is a JSON
-// summary; --out DIR receives tables.md, runs.csv and SVG plots.
+// keepless_eval: the paper's evaluation on real trajectories, real images and
+// a real BA problem (issues 6, 11), over several seeds, every variant compared
+// at the same kept count. The last stdout line is the JSON contract
+// (run_record.hpp); --out DIR receives tables.md, runs.csv and SVG plots.
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <iostream>
+#include <map>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -17,6 +22,7 @@
 #include "kitti_images.hpp"
 #include "prng.hpp"
 #include "report.hpp"
+#include "run_record.hpp"
 #include "scenario.hpp"
 #include "slam_sim.hpp"
 #include "trajectory_io.hpp"
@@ -27,16 +33,31 @@ namespace {
 
 const char* kUsage =
     "usage: keepless_eval [--quick] [--data-root DIR] [--trajectory FILE [--format tum|euroc|kitti]]...\n"
-    "                     [--images DIR --calib FILE --poses FILE] [--bal FILE]... [--M 100,200,300]\n"
-    "                     [--seed N] [--out DIR] [--max-keyframes N] [--keypoints N] [--window N]\n"
-    "                     [--ba-iterations N] [--image-frames N] [--noise-free] [--no-baselines] [--no-ablation]\n"
-    "                     [--ablation-all]\n"
-    "  --data-root DIR  add the standard inputs under DIR (../shared/data layout; --quick: a small subset)\n"
-    "  --format         applies to the --trajectory just before it; without it the format is guessed\n";
+    "                     [--images DIR --calib FILE --poses FILE] [--bal FILE]...\n"
+    "                     [--kept-fraction 0.3,0.4 | --M 100,200] [--seeds N] [--seed FIRST]\n"
+    "                     [--error-floor none|GROUP=METRES,...] [--out DIR] [--max-keyframes N] [--keypoints N]\n"
+    "                     [--window N] [--ba-iterations N] [--image-frames N] [--noise-free] [--no-baselines]\n"
+    "                     [--no-ablation] [--ablation-all]\n"
+    "       keepless_eval --report DIR [--report DIR]... [--error-floor ...] [--out DIR2]\n"
+    "  --data-root DIR     add the standard inputs under DIR (../shared/data layout; --quick: a small subset)\n"
+    "  --format            applies to the --trajectory just before it; without it the format is guessed\n"
+    "  --kept-fraction F   per input, the M (found on the first seed) at which keepless keeps F of the original's\n"
+    "                      map points (default 0.3); --M gives M directly instead\n"
+    "  --seeds N           seeds FIRST .. FIRST+N-1 (default 5, --quick 2); tables show mean +- sd over them\n"
+    "  --error-floor       ATE added in quadrature to both sides of a ratio, per group (default: the paper's\n"
+    "                      published original ATE: tum=0.0183,euroc_mh=0.0658,euroc_v=0.0658,kitti=0.537)\n"
+    "  --report DIR        regenerate the tables and the JSON line from DIR's runs.csv (an earlier --out; repeat\n"
+    "                      to merge runs), without running anything\n";
 
 struct TrajectoryArg {
   std::string path;
   std::string format;  // empty: guess
+};
+
+// An operating point: a kept fraction (M searched per input) or an M.
+struct OperatingPoint {
+  double fraction = NAN;
+  std::int64_t M = 0;
 };
 
 struct Args {
@@ -45,9 +66,12 @@ struct Args {
   std::vector<TrajectoryArg> trajectories;
   std::string images, calib, poses;
   std::vector<std::string> bal;
-  std::vector<std::int64_t> Ms;
-  std::uint64_t seed = 1;
+  std::vector<OperatingPoint> ops;
+  int seeds = -1;
+  std::uint64_t first_seed = 1;
+  std::map<std::string, double> error_floor{{"tum", 0.0183}, {"euroc_mh", 0.0658}, {"euroc_v", 0.0658}, {"kitti", 0.537}};
   std::string out;
+  std::vector<std::string> report;
   int max_keyframes = -1, keypoints = -1, window = -1, ba_iterations = -1, image_frames = -1;
   bool noise_free = false, baselines = true, ablation = true, ablation_all = false;
 };
@@ -64,8 +88,24 @@ long parse_int(const std::string& flag, const std::string& v, long lo, long hi) 
   return x;
 }
 
+double parse_double(const std::string& flag, const std::string& v, double lo, double hi) {
+  char* end = nullptr;
+  const double x = std::strtod(v.c_str(), &end);
+  if (v.empty() || *end != '\0' || !(x >= lo && x <= hi)) fail(flag + ": expected a number in [" + std::to_string(lo) + ", " + std::to_string(hi) + "], got '" + v + "'");
+  return x;
+}
+
+std::vector<std::string> split(const std::string& s, char sep) {
+  std::vector<std::string> out;
+  std::stringstream ss(s);
+  std::string tok;
+  while (std::getline(ss, tok, sep)) out.push_back(tok);
+  return out;
+}
+
 Args parse(int argc, char** argv) {
   Args a;
+  bool by_M = false, by_fraction = false;
   for (int i = 1; i < argc; ++i) {
     const std::string f = argv[i];
     auto val = [&]() -> std::string {
@@ -86,15 +126,24 @@ Args parse(int argc, char** argv) {
     else if (f == "--poses") a.poses = val();
     else if (f == "--bal") a.bal.push_back(val());
     else if (f == "--M") {
-      std::stringstream ss(val());
-      std::string tok;
-      while (std::getline(ss, tok, ',')) a.Ms.push_back(parse_int("--M", tok, 1, 1000000));
-    } else if (f == "--seed") {
+      by_M = true;
+      for (const auto& t : split(val(), ',')) a.ops.push_back({NAN, parse_int("--M", t, 1, 1000000)});
+    } else if (f == "--kept-fraction") {
+      by_fraction = true;
+      for (const auto& t : split(val(), ',')) a.ops.push_back({parse_double("--kept-fraction", t, 0.01, 0.99), 0});
+    } else if (f == "--seeds") a.seeds = static_cast<int>(parse_int(f, val(), 1, 1000));
+    else if (f == "--seed") a.first_seed = static_cast<std::uint64_t>(parse_int(f, val(), 0, 1L << 40));
+    else if (f == "--error-floor") {
       const std::string v = val();
-      char* end = nullptr;
-      a.seed = std::strtoull(v.c_str(), &end, 10);
-      if (v.empty() || *end) fail("--seed: expected an unsigned integer");
+      a.error_floor.clear();
+      if (v != "none")
+        for (const auto& t : split(v, ',')) {
+          const auto eq = t.find('=');
+          if (eq == std::string::npos || eq == 0) fail("--error-floor: expected none or GROUP=METRES,..., got '" + t + "'");
+          a.error_floor[t.substr(0, eq)] = parse_double("--error-floor", t.substr(eq + 1), 0, 1e3);
+        }
     } else if (f == "--out") a.out = val();
+    else if (f == "--report") a.report.push_back(val());
     else if (f == "--max-keyframes") a.max_keyframes = static_cast<int>(parse_int(f, val(), 0, 1000000));
     else if (f == "--keypoints") a.keypoints = static_cast<int>(parse_int(f, val(), 10, 100000));
     else if (f == "--window") a.window = static_cast<int>(parse_int(f, val(), 2, 64));
@@ -109,8 +158,10 @@ Args parse(int argc, char** argv) {
       std::exit(0);
     } else fail("unknown flag '" + f + "'\n" + kUsage);
   }
+  if (by_M && by_fraction) fail("--M and --kept-fraction exclude each other");
   if (!a.images.empty() && (a.calib.empty() || a.poses.empty())) fail("--images needs --calib and --poses");
-  if (a.Ms.empty()) a.Ms = a.quick ? std::vector<std::int64_t>{100} : std::vector<std::int64_t>{100, 200, 300};
+  if (a.ops.empty()) a.ops.push_back({0.3, 0});
+  if (a.seeds < 0) a.seeds = a.quick ? 2 : 5;
   return a;
 }
 
@@ -171,43 +222,146 @@ std::string group_of(const std::string& format, const std::string& name) {
   return "euroc";
 }
 
-ke::InputReport run_scenario(const ke::Scenario& sc, const Args& a, const ke::SimOptions& base) {
-  ke::InputReport rep;
-  rep.input = sc.input;
-  rep.name = sc.name;
-  rep.group = sc.group;
-  rep.kind = sc.kind;
-  rep.keyframes = static_cast<std::uint32_t>(sc.frames.size());
-  rep.landmarks = sc.landmark_count;
-  rep.width = static_cast<std::uint32_t>(sc.cam.width);
-  rep.height = static_cast<std::uint32_t>(sc.cam.height);
-  rep.op_index = 0;
-  for (std::size_t i = 0; i < a.Ms.size(); ++i)
-    if (a.Ms[i] == 100) rep.op_index = i;
-  rep.op_M = a.Ms[rep.op_index];
-  ke::SimOptions o = base;
-  o.snapshot_frame = static_cast<int>(sc.frames.size() / 2);
-  auto run = [&](const std::string& name, ke::Selector sel, std::int64_t M, std::uint8_t costs) {
-    const ke::VariantSpec spec{name, sel, M, costs};
-    ke::RunResult r = ke::run_slam(sc, spec, o);
-    std::cerr << "  " << sc.name << " " << name << " M=" << M << ": mps " << r.mps << "/" << r.mps_created << " culled " << r.selector_culled << " kfs " << r.kfs << " ate "
-              << r.ate_m << " m, ba " << r.ba_s << " s, total " << r.total_s << " s\n";
-    return r;
-  };
-  rep.original = run("original", ke::Selector::kNone, 0, 7);
-  for (std::int64_t M : a.Ms) rep.ours.push_back(run("ours", ke::Selector::kKeepless, M, 7));
-  if (a.baselines) {
-    rep.has_baselines = true;
-    rep.anms = run("anms", ke::Selector::kAnms, rep.op_M, 7);
-    rep.random = run("random", ke::Selector::kRandom, rep.op_M, 7);
+ke::RunRecord record_of(const ke::RunResult& r, std::uint64_t seed) {
+  ke::RunRecord x;
+  x.variant = r.spec.name;
+  x.seed = seed;
+  x.M = r.spec.selector == ke::Selector::kNone ? 0 : r.spec.params.pair_capacity;
+  x.mps = r.mps;
+  x.kfs = r.kfs;
+  x.observations = r.ba_observations;
+  x.ba_s = r.ba_s;
+  x.total_s = r.total_s;
+  x.ate_m = r.ate_m;
+  x.ate_r_deg = r.ate_r_deg;
+  x.C = r.C;
+  x.F = r.F;
+  x.S = r.S;
+  return x;
+}
+
+ke::VariantSpec variant(const std::string& name, ke::Selector sel, std::int64_t M, std::uint8_t costs = 7) {
+  ke::VariantSpec v;
+  v.name = name;
+  v.selector = sel;
+  v.params.pair_capacity = M;
+  v.params.cost_terms = costs;
+  return v;
+}
+
+ke::RunResult run(const ke::Scenario& sc, const ke::VariantSpec& spec, const ke::SimOptions& o, std::uint64_t seed) {
+  ke::SimOptions so = o;
+  so.seed = seed;
+  ke::RunResult r = ke::run_slam(sc, spec, so);
+  std::cerr << "  " << sc.name << " seed " << seed << " " << spec.name << " M=" << spec.params.pair_capacity << ": mps "
+            << r.mps << "/" << r.mps_created << " culled " << r.selector_culled << " kfs " << r.kfs << " lost "
+            << r.track_failures << " ate " << r.ate_m << " m, ba " << r.ba_s << " s, total " << r.total_s << " s\n";
+  return r;
+}
+
+// The M at which keepless keeps `fraction` of the original's points on this
+// scenario: bisection over M on the kept share, each step at the linear
+// interpolation of the bracket clamped to its middle half (the share can
+// jump steeply with M once the pair capacity stops binding).
+std::int64_t find_M(const ke::Scenario& sc, const ke::SimOptions& o, std::uint64_t seed, double original_mps,
+                    double fraction, int max_runs) {
+  std::vector<std::pair<std::int64_t, double>> tried;  // (M, share)
+  std::int64_t M = 100;
+  for (int i = 0; i < max_runs; ++i) {
+    const ke::RunResult r = run(sc, variant("search", ke::Selector::kKeepless, M), o, seed);
+    tried.emplace_back(M, original_mps > 0 ? r.mps / original_mps : 0);
+    if (std::abs(tried.back().second - fraction) <= 0.015) break;
+    std::optional<std::pair<std::int64_t, double>> lo, hi;
+    for (const auto& t : tried) {
+      if (t.second < fraction && (!lo || t.first > lo->first)) lo = t;
+      if (t.second > fraction && (!hi || t.first < hi->first)) hi = t;
+    }
+    double next;
+    if (lo && hi) {
+      if (hi->first - lo->first <= 1) break;
+      const double span = double(hi->first - lo->first);
+      next = lo->first + (fraction - lo->second) * span / (hi->second - lo->second);
+      next = std::clamp(next, lo->first + 0.25 * span, hi->first - 0.25 * span);
+    } else {
+      const double share = tried.back().second;
+      next = double(M) * std::clamp(fraction / std::max(share, 1e-3), 0.25, 4.0);
+    }
+    M = std::max<std::int64_t>(1, std::llround(next));
   }
-  // The paper runs its ablation on TUM; so do we (every trajectory with --ablation-all).
-  if (a.ablation && sc.kind == "trajectory" && (sc.group == "tum" || a.ablation_all)) {
-    rep.ablation.push_back(run("c_c", ke::Selector::kKeepless, rep.op_M, 1));
-    rep.ablation.push_back(run("c_c+c_s", ke::Selector::kKeepless, rep.op_M, 3));
-    rep.ablation.push_back(run("c_c+c_b", ke::Selector::kKeepless, rep.op_M, 5));
+  return std::min_element(tried.begin(), tried.end(), [&](const auto& a, const auto& b) {
+           return std::abs(a.second - fraction) < std::abs(b.second - fraction);
+         })->first;
+}
+
+// The paper's ablation (section IV-F) besides all costs (ours): c_c, c_c + c_s, c_c + c_b.
+const std::pair<const char*, std::uint8_t> kAblation[3] = {{"c_c", 1}, {"c_c+c_s", 3}, {"c_c+c_b", 5}};
+
+// Runs one input over every seed: the original, then per operating point
+// keepless and the equal-count baselines; the ablation on TUM.
+void evaluate(const std::function<ke::Scenario(std::uint64_t)>& make, const ke::InputInfo& info, const Args& a,
+              const ke::SimOptions& o, ke::EvalSummary* summary) {
+  const std::size_t first = summary->comparisons.size();
+  const bool ablate = a.ablation && info.kind == "trajectory" && (info.group == "tum" || a.ablation_all);
+  for (int si = 0; si < a.seeds; ++si) {
+    const std::uint64_t seed = a.first_seed + static_cast<std::uint64_t>(si);
+    const ke::Scenario sc = make(seed);
+    ke::SimOptions so = o;
+    so.snapshot_frame = static_cast<int>(sc.frames.size() / 2);
+    const ke::RunResult original = run(sc, variant("original", ke::Selector::kNone, 0), so, seed);
+    for (std::size_t p = 0; p < a.ops.size(); ++p) {
+      if (si == 0) {
+        ke::Comparison c;
+        c.info = info;
+        c.target_fraction = a.ops[p].fraction;
+        c.M = std::isfinite(c.target_fraction) ? find_M(sc, so, seed, original.mps, c.target_fraction, a.quick ? 3 : 6)
+                                               : a.ops[p].M;
+        summary->comparisons.push_back(c);
+      }
+      ke::Comparison& c = summary->comparisons[first + p];
+      c.original.push_back(record_of(original, seed));
+      const ke::RunResult ours = run(sc, variant("ours", ke::Selector::kKeepless, c.M), so, seed);
+      c.ours.push_back(record_of(ours, seed));
+      if (a.baselines) {
+        const ke::RunResult anms = run(sc, variant("anms", ke::Selector::kAnms, c.M), so, seed);
+        c.random.push_back(record_of(run(sc, variant("random", ke::Selector::kRandom, c.M), so, seed), seed));
+        c.longest_track.push_back(record_of(run(sc, variant("longest_track", ke::Selector::kLongestTrack, c.M), so, seed), seed));
+        c.anms.push_back(record_of(anms, seed));
+        if (si == 0 && p == 0) summary->snapshots.push_back(ke::Snapshot{info.name, info.kind, sc.cam.width, sc.cam.height, c.M, ours.snapshot, anms.snapshot});
+      }
+      if (ablate && p == 0)
+        for (const auto& [costs, terms] : kAblation)
+          c.ablation.push_back(record_of(run(sc, variant(costs, ke::Selector::kKeepless, c.M, terms), so, seed), seed));
+    }
   }
-  return rep;
+}
+
+double error_floor_of(const Args& a, const std::string& group) {
+  const auto it = a.error_floor.find(group);
+  return it == a.error_floor.end() ? 0.0 : it->second;
+}
+
+// Prints (and writes to --out) the outputs of the runs in `summary`.
+int finish(const Args& a, ke::EvalSummary* summary) {
+  for (ke::Comparison& c : summary->comparisons) {
+    c.info.error_floor_m = error_floor_of(a, c.info.group);
+    summary->runs.push_back(ke::summarize(c));
+  }
+  summary->error_floor = a.error_floor;
+  if (!a.out.empty()) {
+    std::string err;
+    if (!ke::write_outputs(*summary, a.out, &err)) fail(err);
+  }
+  if (summary->mode != "quick") std::cout << ke::markdown_tables(*summary) << "\n";
+  std::cout << ke::json_summary(*summary) << std::endl;
+  return 0;
+}
+
+int report_again(const Args& a) {
+  ke::EvalSummary summary;
+  std::string err;
+  for (const std::string& dir : a.report)
+    if (!ke::read_outputs(dir, &summary, &err)) fail(err);
+  return finish(a, &summary);
 }
 
 }  // namespace
@@ -216,22 +370,23 @@ int main(int argc, char** argv) {
   const auto t0 = std::chrono::steady_clock::now();
   Args a = parse(argc, argv);
   if (!a.data_root.empty()) add_data_root(&a);
+  if (!a.report.empty()) return report_again(a);
   if (a.trajectories.empty() && a.images.empty() && a.bal.empty())
     fail(std::string("no input: give --data-root, --trajectory, --images or --bal\n") + kUsage);
 
   ke::EvalSummary summary;
   summary.mode = a.quick ? "quick" : "full";
-  summary.seed = a.seed;
-  summary.Ms = a.Ms;
+  for (int i = 0; i < a.seeds; ++i) summary.seeds.push_back(a.first_seed + static_cast<std::uint64_t>(i));
   for (int i = 0; i < argc; ++i) summary.command += (i ? " " : "") + std::string(argv[i]);
 
   ke::SimOptions sim;
-  sim.window = a.window > 0 ? a.window : (a.quick ? 6 : 10);
+  sim.window = a.window > 0 ? a.window : (a.quick ? 6 : 8);
   sim.ba_iterations = a.ba_iterations > 0 ? a.ba_iterations : (a.quick ? 5 : 10);
-  sim.seed = a.seed;
+  sim.ba_robust_iterations = std::max(1, sim.ba_iterations / 2);
+  summary.settings = "window " + std::to_string(sim.window) + ", local BA " + std::to_string(sim.ba_robust_iterations) +
+                     " + " + std::to_string(sim.ba_iterations) + " iterations";
 
-  for (std::size_t i = 0; i < a.trajectories.size(); ++i) {
-    const auto& t = a.trajectories[i];
+  for (const auto& t : a.trajectories) {
     const std::string fmt = t.format.empty() ? guess_format(t.path) : t.format;
     ke::TrajectoryFormat tf;
     if (!ke::parse_format(fmt, &tf)) fail("bad format " + fmt);
@@ -239,57 +394,71 @@ int main(int argc, char** argv) {
     std::string err;
     if (!ke::read_trajectory(t.path, tf, &traj, &err)) fail(err);
     ke::WorldOptions w = ke::world_defaults(tf);
-    w.seed = ke::mix(a.seed, i);
-    w.keypoints_per_frame = a.keypoints > 0 ? a.keypoints : (a.quick ? 400 : 1000);
-    w.max_keyframes = a.max_keyframes >= 0 ? a.max_keyframes : (a.quick ? 40 : 150);
+    w.keypoints_per_frame = a.keypoints > 0 ? a.keypoints : (a.quick ? 400 : 600);
+    w.max_keyframes = a.max_keyframes >= 0 ? a.max_keyframes : (a.quick ? 40 : 50);
     if (a.noise_free) {
       w.pixel_noise = 0;
       w.outlier_ratio = 0;
       w.odom_noise_t = 0;
       w.odom_noise_r_deg = 0;
     }
-    const std::string name = short_name(t.path);
+    ke::InputInfo info;
+    info.input = t.path;
+    info.name = short_name(t.path);
+    info.group = group_of(fmt, info.name);
+    info.kind = "trajectory";
+    info.sim3 = w.cam.baseline <= 0;
     std::cerr << "keepless_eval: " << t.path << " (" << fmt << ")\n";
-    const ke::Scenario sc = ke::make_synthetic_scenario(traj, w, t.path, name, group_of(fmt, name));
-    summary.inputs.push_back(run_scenario(sc, a, sim));
+    summary.settings_inputs.push_back(info.name + ": " + std::to_string(w.keypoints_per_frame) + " keypoints, first " +
+                                      std::to_string(w.max_keyframes) + " keyframes");
+    evaluate([&](std::uint64_t seed) {
+               ke::WorldOptions ws = w;
+               ws.seed = ke::input_seed(seed, info.name);  // by name, never by list position
+               return ke::make_synthetic_scenario(traj, ws, t.path, info.name, info.group);
+             },
+             info, a, sim, &summary);
   }
 
   if (!a.images.empty()) {
     ke::ImageOptions io;
     io.max_frames = a.image_frames >= 0 ? a.image_frames : (a.quick ? 12 : 0);
     io.features = a.quick ? 1000 : 2000;
-    io.seed = ke::mix(a.seed, 0x1A);
     if (a.noise_free) io.odom_noise_t = io.odom_noise_r_deg = 0;
-    ke::Scenario sc;
+    ke::Scenario base;
     std::string err;
     std::cerr << "keepless_eval: images " << a.images << "\n";
-    if (!ke::make_image_scenario(a.images, a.calib, a.poses, io, &sc, &err)) fail(err);
-    summary.inputs.push_back(run_scenario(sc, a, sim));
+    io.seed = ke::input_seed(a.first_seed, "images");
+    if (!ke::make_image_scenario(a.images, a.calib, a.poses, io, &base, &err)) fail(err);
+    ke::InputInfo info;
+    info.input = base.input;
+    info.name = base.name;
+    info.group = base.group;
+    info.kind = base.kind;
+    info.sim3 = base.cam.baseline <= 0;  // monocular: scale is not observable
+    // The ORB tracks are fixed; each seed draws its own odometry noise.
+    evaluate([&](std::uint64_t seed) {
+               ke::Scenario sc = base;
+               ke::add_odometry(&sc, io.odom_noise_t, io.odom_noise_r_deg, ke::input_seed(seed, info.name));
+               return sc;
+             },
+             info, a, sim, &summary);
   }
 
-  for (const std::string& b : a.bal) {
-    ke::BalOptions bo;
-    bo.Ms = {a.Ms[0]};
-    for (std::int64_t M : a.Ms)
-      if (M == 100) bo.Ms = {100};
-    if (!a.quick)
-      for (std::int64_t M : a.Ms)
-        if (M != bo.Ms[0]) bo.Ms.push_back(M);
-    bo.max_iterations = a.quick ? 10 : 50;
-    bo.seed = a.seed;
-    ke::BalResult r;
-    std::string err;
-    std::cerr << "keepless_eval: BAL " << b << "\n";
-    if (!ke::run_bal(b, bo, &r, &err)) fail(err);
-    summary.bal.push_back(std::move(r));
-  }
+  for (const std::string& b : a.bal)
+    for (const OperatingPoint& op : a.ops) {
+      ke::BalOptions bo;
+      bo.target_fraction = op.fraction;
+      bo.M = op.M;
+      bo.max_iterations = a.quick ? 10 : 50;
+      bo.seeds = summary.seeds;
+      bo.baselines = a.baselines;
+      ke::Comparison c;
+      std::string err;
+      std::cerr << "keepless_eval: BAL " << b << "\n";
+      if (!ke::run_bal(b, bo, &c, &err)) fail(err);
+      summary.comparisons.push_back(std::move(c));
+    }
 
   summary.elapsed_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  if (!a.out.empty()) {
-    std::string err;
-    if (!ke::write_outputs(summary, a.out, &err)) fail(err);
-  }
-  if (!a.quick) std::cout << ke::markdown_tables(summary) << "\n";
-  std::cout << ke::json_summary(summary) << std::endl;
-  return 0;
+  return finish(a, &summary);
 }

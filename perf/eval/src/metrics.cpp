@@ -90,4 +90,29 @@ Ate absolute_trajectory_error(const std::vector<Pose>& estimate, const std::vect
   return out;
 }
 
+std::vector<Pose> resolve_keyframe_poses(const std::vector<Pose>& pose, const std::vector<CulledLink>& link) {
+  const std::size_t n = pose.size();
+  std::vector<Pose> out(pose);
+  std::vector<char> done(n, 0);
+  std::vector<std::size_t> chain;
+  for (std::size_t k = 0; k < n; ++k) {
+    // Walk up to an alive (or resolved) ancestor, then compose back down.
+    // A parent was alive when its child was culled, so the walk ends; the
+    // bound guards a malformed link table.
+    chain.clear();
+    std::size_t c = k;
+    while (!done[c] && c < link.size() && link[c].parent >= 0 && static_cast<std::size_t>(link[c].parent) < n &&
+           chain.size() <= n) {
+      chain.push_back(c);
+      c = static_cast<std::size_t>(link[c].parent);
+    }
+    done[c] = 1;
+    for (auto it = chain.rbegin(); it != chain.rend(); ++it) {
+      out[*it] = out[static_cast<std::size_t>(link[*it].parent)] * link[*it].rel;
+      done[*it] = 1;
+    }
+  }
+  return out;
+}
+
 }  // namespace keepless::eval

@@ -27,7 +27,21 @@ struct Ate {
   double rms_r_deg = 0;
 };
 
+// with_scale: Sim(3) alignment (evo's --align --correct_scale), for
+// monocular runs whose scale is not observable; otherwise SE(3) (--align).
 Ate absolute_trajectory_error(const std::vector<Pose>& estimate, const std::vector<Pose>& ground_truth,
                               bool with_scale);
+
+// A keyframe culled on the way, as ORB-SLAM2 keeps it: its parent at the time
+// (a keyframe then alive) and the relative pose T_parent,kf then.
+struct CulledLink {
+  int parent = -1;  // -1: the keyframe is alive
+  Pose rel;
+};
+
+// The trajectory ORB-SLAM2 outputs: an alive keyframe's own pose; a culled
+// one's parent pose (resolved the same way, recursively) composed with the
+// stored relative pose, so culled keyframes follow their parent's correction.
+std::vector<Pose> resolve_keyframe_poses(const std::vector<Pose>& pose, const std::vector<CulledLink>& link);
 
 }  // namespace keepless::eval

@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <string>
 
 namespace keepless::eval {
 
@@ -19,6 +20,15 @@ inline std::uint64_t splitmix64(std::uint64_t x) {
 inline std::uint64_t mix(std::uint64_t a, std::uint64_t b) {
   return splitmix64(a ^ splitmix64(b + 0x632BE59BD9B4E019ull));
 }
+
+// FNV-1a of a name: an input's seed depends on what it is, never on where it
+// stands in the input list (a trajectory run alone gives the same numbers).
+inline std::uint64_t name_hash(const std::string& name) {
+  std::uint64_t h = 0xCBF29CE484222325ull;
+  for (unsigned char c : name) h = (h ^ c) * 0x100000001B3ull;
+  return h;
+}
+inline std::uint64_t input_seed(std::uint64_t seed, const std::string& name) { return mix(seed, name_hash(name)); }
 
 class Rng {
  public:

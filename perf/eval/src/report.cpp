@@ -1,41 +1,113 @@
 #include "report.hpp"
 
 #include <algorithm>
-#include <array>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
-#include <map>
+#include <functional>
 #include <sstream>
+#include <tuple>
 
 namespace keepless::eval {
 namespace {
 
+constexpr const char* kCsvHeader =
+    "input,name,group,kind,alignment,variant,seed,M,target_fraction,compared_M,mps,kfs,observations,ba_s,total_s,"
+    "ate_m,ate_r_deg,C,F,S";
+
 std::string f(double v, int prec) {
-  if (!std::isfinite(v)) return "nan";
+  if (!std::isfinite(v)) return "–";
   char buf[64];
   std::snprintf(buf, sizeof buf, "%.*f", prec, v);
   return buf;
 }
-std::string fs(double v, int prec) {  // signed
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%+.*f", prec, v);
-  return buf;
+// mean ± sd, with significant digits suited to the magnitude.
+std::string pm(const Stat& s, int prec) {
+  if (s.n == 0 || !std::isfinite(s.mean)) return "–";
+  return f(s.mean, prec) + " ± " + f(s.sd, prec);
 }
-double pct(double a, double b) { return b > 0 ? 100.0 * a / b : 0.0; }
-std::string jnum(double v, int prec = 6) { return std::isfinite(v) ? f(v, prec) : "null"; }
-std::string jstr(const std::string& s) {
-  std::string o = "\"";
-  for (char c : s) {
-    if (c == '"' || c == '\\') o += '\\';
-    o += c;
-  }
-  return o + "\"";
-}
+int ate_digits(double v) { return v >= 1 ? 3 : v >= 0.1 ? 4 : v >= 0.01 ? 5 : 6; }
+std::string ate_pm(const Stat& s) { return pm(s, ate_digits(s.mean)); }
 std::string bold_if(bool b, const std::string& s) { return b ? "**" + s + "**" : s; }
+std::string op_label(const ContractRun& r) {
+  return std::isfinite(r.target_fraction) ? "F = " + f(r.target_fraction, 2) : "M = " + std::to_string(r.M);
+}
+double ratio(const Stat& a, const Stat& g) { return g.mean > 0 ? a.mean / g.mean : NAN; }
 
-const RunResult& op(const InputReport& in) { return in.ours[in.op_index]; }
+// The four trajectory groups of the paper's Table V (ours: TUM, EuRoC MH,
+// EuRoC V, KITTI), each the mean over its inputs of ATE / original ATE.
+struct GroupRow {
+  std::string group;
+  int inputs = 0;
+  double mp = 0, kf = 0, ba = 0;
+  double ours = 0, random = 0, longest = 0, anms = 0;                  // ATE / original
+  double sq_ours = 0, sq_random = 0, sq_longest = 0, sq_anms = 0;      // sqrt(obs ratio)
+};
+
+std::vector<GroupRow> group_rows(const std::vector<ContractRun>& runs, const std::string& label) {
+  std::vector<GroupRow> rows;
+  for (const ContractRun& r : runs) {
+    if (r.info.kind != "trajectory" || op_label(r) != label) continue;
+    auto it = std::find_if(rows.begin(), rows.end(), [&](const GroupRow& g) { return g.group == r.info.group; });
+    if (it == rows.end()) {
+      rows.push_back(GroupRow{r.info.group});
+      it = rows.end() - 1;
+    }
+    ++it->inputs;
+    it->mp += r.mp_percent.mean;
+    it->kf += r.kf_percent.mean;
+    it->ba += r.ba_time_percent.mean;
+    it->ours += r.ate_ratio;
+    it->random += ratio(r.ate_random, r.ate_original);
+    it->longest += ratio(r.ate_longest_track, r.ate_original);
+    it->anms += ratio(r.ate_anms, r.ate_original);
+    it->sq_ours += r.sqrt_obs_ratio;
+    it->sq_random += r.sqrt_obs_ratio_random;
+    it->sq_longest += r.sqrt_obs_ratio_longest_track;
+    it->sq_anms += r.sqrt_obs_ratio_anms;
+  }
+  for (GroupRow& g : rows)
+    for (double* v : {&g.mp, &g.kf, &g.ba, &g.ours, &g.random, &g.longest, &g.anms, &g.sq_ours, &g.sq_random,
+                      &g.sq_longest, &g.sq_anms})
+      *v /= g.inputs;
+  return rows;
+}
+
+std::vector<std::string> labels_of(const std::vector<ContractRun>& runs) {
+  std::vector<std::string> out;
+  for (const ContractRun& r : runs)
+    if (std::find(out.begin(), out.end(), op_label(r)) == out.end()) out.push_back(op_label(r));
+  return out;
+}
+
+// The cost ablation of one comparison: "all" (ours), then each ablation
+// variant, in the order run; every row's records by seed.
+std::vector<std::pair<std::string, std::vector<RunRecord>>> ablation_rows(const Comparison& c) {
+  std::vector<std::pair<std::string, std::vector<RunRecord>>> rows;
+  if (c.ablation.empty()) return rows;
+  rows.emplace_back("all", c.ours);
+  for (const RunRecord& r : c.ablation) {
+    auto it = std::find_if(rows.begin(), rows.end(), [&](const auto& row) { return row.first == r.variant; });
+    if (it == rows.end()) rows.emplace_back(r.variant, std::vector<RunRecord>{r});
+    else it->second.push_back(r);
+  }
+  return rows;
+}
+
+template <typename F>
+Stat stat_by(const std::vector<RunRecord>& v, F fn) {
+  std::vector<double> x;
+  for (const RunRecord& r : v) x.push_back(fn(r));
+  return stat_of(x);
+}
+
+// A record's map points as % of the original's of the same seed.
+double mp_percent_of(const Comparison& c, const RunRecord& r) {
+  for (const RunRecord& g : c.original)
+    if (g.seed == r.seed && g.mps > 0) return 100.0 * double(r.mps) / double(g.mps);
+  return NAN;
+}
 
 // ---- SVG ----
 struct Svg {
@@ -54,15 +126,6 @@ struct Svg {
   }
   void circle(double x, double y, double r, const char* c) {
     o << "<circle cx=\"" << f(x, 1) << "\" cy=\"" << f(y, 1) << "\" r=\"" << f(r, 1) << "\" fill=\"" << c << "\"/>\n";
-  }
-  void square(double x, double y, double r, const char* c) {
-    o << "<rect x=\"" << f(x - r, 1) << "\" y=\"" << f(y - r, 1) << "\" width=\"" << f(2 * r, 1) << "\" height=\""
-      << f(2 * r, 1) << "\" fill=\"" << c << "\"/>\n";
-  }
-  void polyline(const std::vector<std::pair<double, double>>& p, const char* c) {
-    o << "<polyline fill=\"none\" stroke=\"" << c << "\" stroke-width=\"2\" points=\"";
-    for (const auto& q : p) o << f(q.first, 1) << "," << f(q.second, 1) << " ";
-    o << "\"/>\n";
   }
   std::string str() { return o.str() + "</svg>\n"; }
 };
@@ -92,88 +155,43 @@ struct Axes {
 std::string svg_ate_vs_kept(const EvalSummary& s) {
   Svg svg(760, 480);
   double ymax = 1.5;
-  for (const auto& in : s.inputs) {
-    if (in.original.ate_m <= 0) continue;
-    for (const auto& r : in.ours) ymax = std::max(ymax, r.ate_m / in.original.ate_m);
-    if (in.has_baselines) ymax = std::max({ymax, in.anms.ate_m / in.original.ate_m, in.random.ate_m / in.original.ate_m});
-  }
+  for (const ContractRun& r : s.runs)
+    for (const Stat* a : {&r.ate_ours, &r.ate_random, &r.ate_longest_track, &r.ate_anms})
+      if (std::isfinite(ratio(*a, r.ate_original))) ymax = std::max(ymax, ratio(*a, r.ate_original));
   ymax = std::min(std::ceil(ymax * 2) / 2, 10.0);
   Axes ax{80, 40, 520, 380, 0, 100, 0, ymax};
-  ax.draw(svg, "map points kept (% of original)", "RMS ATE / original", "ATE vs kept points (each input, each variant)");
+  ax.draw(svg, "map points kept (% of original, mean over seeds)", "RMS ATE / original",
+          "ATE vs kept points at equal count (each input)");
   svg.line(ax.X(0), ax.Y(1), ax.X(100), ax.Y(1), "#999");
-  for (const auto& in : s.inputs) {
-    if (in.original.ate_m <= 0 || in.original.mps == 0) continue;
-    auto y = [&](const RunResult& r) { return ax.Y(std::min(ymax, r.ate_m / in.original.ate_m)); };
-    auto x = [&](const RunResult& r) { return ax.X(std::min(100.0, pct(r.mps, in.original.mps))); };
-    for (const auto& r : in.ours) svg.circle(x(r), y(r), 4, "#1f77b4");
-    if (in.has_baselines) {
-      svg.square(x(in.anms), y(in.anms), 4, "#d62728");
-      svg.square(x(in.random), y(in.random), 3, "#7f7f7f");
+  struct Series { const char* name; const char* colour; std::function<const Stat&(const ContractRun&)> ate, mp; };
+  const Series series[] = {
+      {"ours", "#1f77b4", [](const ContractRun& r) -> const Stat& { return r.ate_ours; }, [](const ContractRun& r) -> const Stat& { return r.mp_percent; }},
+      {"random", "#7f7f7f", [](const ContractRun& r) -> const Stat& { return r.ate_random; }, [](const ContractRun& r) -> const Stat& { return r.mp_percent_random; }},
+      {"longest track", "#2ca02c", [](const ContractRun& r) -> const Stat& { return r.ate_longest_track; }, [](const ContractRun& r) -> const Stat& { return r.mp_percent_longest_track; }},
+      {"ANMS (SSC)", "#d62728", [](const ContractRun& r) -> const Stat& { return r.ate_anms; }, [](const ContractRun& r) -> const Stat& { return r.mp_percent_anms; }}};
+  double ly = 60;
+  for (const Series& se : series) {
+    for (const ContractRun& r : s.runs) {
+      const double y = ratio(se.ate(r), r.ate_original), x = se.mp(r).mean;
+      if (std::isfinite(x) && std::isfinite(y)) svg.circle(ax.X(std::min(100.0, x)), ax.Y(std::min(ymax, y)), 4, se.colour);
     }
+    svg.circle(620, ly, 4, se.colour);
+    svg.text(630, ly + 4, se.name);
+    ly += 20;
   }
-  svg.circle(620, 60, 4, "#1f77b4"); svg.text(630, 64, "ours (every M)");
-  svg.square(620, 80, 4, "#d62728"); svg.text(630, 84, "ANMS (SSC), equal count");
-  svg.square(620, 100, 3, "#7f7f7f"); svg.text(630, 104, "random, equal count");
   return svg.str();
 }
 
-std::string svg_time_vs_M(const EvalSummary& s) {
-  Svg svg(760, 480);
-  Axes ax{80, 40, 520, 380, 0, 0, 0, 110};
-  std::vector<std::int64_t> Ms = s.Ms;
-  std::sort(Ms.begin(), Ms.end());
-  if (Ms.empty()) return svg.str();
-  ax.xmin = 0;
-  ax.xmax = double(Ms.back()) * 1.1;
-  std::vector<std::pair<double, double>> ba, tt, mp;
-  double ymax = 110;
-  for (std::int64_t M : Ms) {
-    double sb = 0, st = 0, sm = 0;
-    int n = 0;
-    for (const auto& in : s.inputs)
-      for (const auto& r : in.ours)
-        if (r.spec.M == M && in.original.ba_s > 0) {
-          sb += pct(r.ba_s, in.original.ba_s);
-          st += pct(r.total_s, in.original.total_s);
-          sm += pct(r.mps, in.original.mps);
-          ++n;
-        }
-    if (n == 0) continue;
-    ba.emplace_back(M, sb / n);
-    tt.emplace_back(M, st / n);
-    mp.emplace_back(M, sm / n);
-    ymax = std::max({ymax, sb / n, st / n});
-  }
-  ax.ymax = std::ceil(ymax / 10) * 10;
-  ax.draw(svg, "M (pair capacity)", "% of original (mean over inputs)", "BA time, total time and map points vs M");
-  auto map = [&](const std::vector<std::pair<double, double>>& v) {
-    std::vector<std::pair<double, double>> o;
-    for (const auto& p : v) o.emplace_back(ax.X(p.first), ax.Y(p.second));
-    return o;
-  };
-  svg.polyline(map(ba), "#d62728");
-  svg.polyline(map(tt), "#ff7f0e");
-  svg.polyline(map(mp), "#1f77b4");
-  for (const auto& p : map(ba)) svg.circle(p.first, p.second, 3, "#d62728");
-  for (const auto& p : map(tt)) svg.circle(p.first, p.second, 3, "#ff7f0e");
-  for (const auto& p : map(mp)) svg.circle(p.first, p.second, 3, "#1f77b4");
-  svg.line(ax.X(0), ax.Y(100), ax.X(ax.xmax), ax.Y(100), "#999");
-  svg.line(620, 60, 640, 60, "#d62728", 2); svg.text(645, 64, "local BA time %");
-  svg.line(620, 80, 640, 80, "#ff7f0e", 2); svg.text(645, 84, "total time %");
-  svg.line(620, 100, 640, 100, "#1f77b4", 2); svg.text(645, 104, "map points %");
-  return svg.str();
-}
-
-std::string svg_keypoints(const InputReport& in) {
-  const double scale = std::min(1.0, 700.0 / std::max<std::uint32_t>(in.width, 1));
-  const double w = in.width * scale, h = in.height * scale;
+std::string svg_keypoints(const Snapshot& sn) {
+  const double scale = std::min(1.0, 700.0 / std::max(sn.width, 1));
+  const double w = sn.width * scale, h = sn.height * scale;
   Svg svg(static_cast<int>(w + 40), static_cast<int>(2 * h + 110));
-  auto panel = [&](const RunResult& r, double y0, const std::string& title) {
+  auto panel = [&](const std::vector<SnapshotPoint>& pts, double y0, const std::string& title) {
     svg.text(20, y0 - 6, title, "start", 13);
     svg.o << "<rect x=\"20\" y=\"" << f(y0, 1) << "\" width=\"" << f(w, 1) << "\" height=\"" << f(h, 1)
           << "\" fill=\"#f7f7f7\" stroke=\"black\"/>\n";
     int kept = 0, culled = 0;
-    for (const auto& p : r.snapshot) {
+    for (const auto& p : pts) {
       const char* c = p.state == 1 ? "#2ca02c" : p.state == 2 ? "#d62728" : "#c7c7c7";
       kept += p.state == 1;
       culled += p.state == 2;
@@ -181,8 +199,8 @@ std::string svg_keypoints(const InputReport& in) {
     }
     svg.text(20 + w, y0 - 6, std::to_string(kept) + " kept (green), " + std::to_string(culled) + " culled (red)", "end");
   };
-  panel(op(in), 30, "ours (M=" + std::to_string(in.op_M) + "), " + in.name);
-  panel(in.anms, 30 + h + 50, "ANMS (SSC), equal count, " + in.name);
+  panel(sn.ours, 30, "ours (M=" + std::to_string(sn.M) + "), " + sn.input);
+  panel(sn.anms, 30 + h + 50, "ANMS (SSC), equal count, " + sn.input);
   return svg.str();
 }
 
@@ -190,139 +208,138 @@ std::string svg_keypoints(const InputReport& in) {
 
 std::string markdown_tables(const EvalSummary& s) {
   std::ostringstream o;
-  const auto& ins = s.inputs;
-  // Table I: MP and KF ratio per M.
-  o << "### Table I: selected map points and keyframes per M (as the paper's Table I)\n\n| Sequence | #MPs | #KFs |";
-  for (auto M : s.Ms) o << " MP % (M=" << M << ") | KF % (M=" << M << ") |";
-  o << "\n|---|---:|---:|";
-  for (std::size_t i = 0; i < s.Ms.size(); ++i) o << "---:|---:|";
-  o << "\n";
-  for (const auto& in : ins) {
-    o << "| " << in.name << " | " << in.original.mps << " | " << in.original.kfs << " |";
-    for (const auto& r : in.ours)
-      o << " " << f(pct(r.mps, in.original.mps), 2) << " | " << f(pct(r.kfs, in.original.kfs), 2) << " |";
-    o << "\n";
+  const int nseeds = static_cast<int>(s.seeds.size());
+  o << "Seeds " << (s.seeds.empty() ? 0 : s.seeds.front()) << "–" << (s.seeds.empty() ? 0 : s.seeds.back()) << " ("
+    << nseeds << "); every figure is mean ± sd over them. " << s.settings;
+  for (const auto& i : s.settings_inputs) o << "; " << i;
+  o << ". ATE after SE(3) alignment where scale is metric (stereo, RGB-D; evo's `--align`), Sim(3) for monocular runs "
+       "(`--align --correct_scale`); column *align*. Error floor (added in quadrature to both sides of the floored ratio): ";
+  bool first = true;
+  for (const auto& [g, v] : s.error_floor) {
+    o << (first ? "" : ", ") << g << " " << f(v, 4) << " m";
+    first = false;
   }
-  // Table III: relative differences per M.
-  o << "\n### Table III: per M, relative to the original run (as the paper's Table III; ATE differences, lower than original in bold)\n\n| Sequence |";
-  for (std::size_t i = 0; i < s.Ms.size(); ++i) o << " MP % (M=" << s.Ms[i] << ") | KF % | BA time % | time % | ΔATE_r (°) | ΔATE (m) |";
-  o << "\n|---|";
-  for (std::size_t i = 0; i < s.Ms.size(); ++i) o << "---:|---:|---:|---:|---:|---:|";
-  o << "\n";
-  std::vector<std::array<double, 6>> avg(s.Ms.size(), std::array<double, 6>{});
-  for (const auto& in : ins) {
-    o << "| " << in.name << " |";
-    for (std::size_t m = 0; m < in.ours.size(); ++m) {
-      const RunResult& r = in.ours[m];
-      const double v[6] = {pct(r.mps, in.original.mps), pct(r.kfs, in.original.kfs), pct(r.ba_s, in.original.ba_s),
-                           pct(r.total_s, in.original.total_s), r.ate_r_deg - in.original.ate_r_deg,
-                           r.ate_m - in.original.ate_m};
-      for (int j = 0; j < 6; ++j) avg[m][static_cast<std::size_t>(j)] += v[j] / double(ins.size());
-      o << " " << f(v[0], 2) << " | " << f(v[1], 2) << " | " << f(v[2], 2) << " | " << f(v[3], 2) << " | "
-        << bold_if(v[4] < 0, fs(v[4], 5)) << " | " << bold_if(v[5] < 0, fs(v[5], 5)) << " |";
+  if (s.error_floor.empty()) o << "none";
+  o << ".\n\n";
+
+  for (const std::string& label : labels_of(s.runs)) {
+    o << "#### Accuracy at equal kept fraction (" << label << ")\n\n"
+         "| Input | kind | align | seeds | M | MP % | KF % | BA time % | ATE original | ATE ours | ours / original | "
+         "√(obs ratio) | floor (m) | ratio with floor | better / worse seeds |\n"
+         "|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+    for (const ContractRun& r : s.runs) {
+      if (op_label(r) != label) continue;
+      o << "| " << r.info.name << " | " << r.info.kind << " | " << (r.info.sim3 ? "Sim(3)" : "SE(3)") << " | " << r.seeds
+        << " | " << r.M << " | " << pm(r.mp_percent, 1) << " | " << pm(r.kf_percent, 1) << " | "
+        << pm(r.ba_time_percent, 1) << " | " << ate_pm(r.ate_original) << " | " << ate_pm(r.ate_ours) << " | "
+        << bold_if(r.ate_ratio <= 1.0, f(r.ate_ratio, 2)) << " | " << f(r.sqrt_obs_ratio, 2) << " | "
+        << (r.info.error_floor_m > 0 ? f(r.info.error_floor_m, 4) : "–") << " | " << f(r.ate_ratio_floored, 3) << " | "
+        << r.better_seeds << " / " << r.worse_seeds << " |\n";
     }
-    o << "\n";
-  }
-  if (!ins.empty()) {
-    o << "| **Avg.** |";
-    for (const auto& a : avg)
-      o << " " << f(a[0], 2) << " | " << f(a[1], 2) << " | " << f(a[2], 2) << " | " << f(a[3], 2) << " | "
-        << bold_if(a[4] < 0, fs(a[4], 5)) << " | " << bold_if(a[5] < 0, fs(a[5], 5)) << " |";
-    o << "\n";
-  }
-  // Tables II/IV: absolute values, KITTI-shaped.
-  o << "\n### Table II/IV: absolute values (as the paper's Tables II and IV)\n\n| Sequence | #MPs | #KFs | time (s) | BA (s) | ATE_r (°) | ATE (m) |";
-  for (auto M : s.Ms) o << " MP % (M=" << M << ") | KF % | time % | ATE_r (°) | ATE (m) |";
-  o << "\n|---|---:|---:|---:|---:|---:|---:|";
-  for (std::size_t i = 0; i < s.Ms.size(); ++i) o << "---:|---:|---:|---:|---:|";
-  o << "\n";
-  for (const auto& in : ins) {
-    const RunResult& g = in.original;
-    o << "| " << in.name << " | " << g.mps << " | " << g.kfs << " | " << f(g.total_s, 2) << " | " << f(g.ba_s, 2)
-      << " | " << f(g.ate_r_deg, 5) << " | " << f(g.ate_m, 5) << " |";
-    for (const auto& r : in.ours)
-      o << " " << f(pct(r.mps, g.mps), 1) << " | " << f(pct(r.kfs, g.kfs), 1) << " | " << f(pct(r.total_s, g.total_s), 2)
-        << " | " << bold_if(r.ate_r_deg < g.ate_r_deg, f(r.ate_r_deg, 5)) << " | "
-        << bold_if(r.ate_m < g.ate_m, f(r.ate_m, 5)) << " |";
-    o << "\n";
-  }
-  // Table V: comparison with ANMS (and random) per group, at equal count.
-  o << "\n### Table V: comparison at equal point count, per trajectory group (as the paper's Table V; lowest ATE in bold)\n\n"
-       "| Group | inputs | #MPs | #KFs | time (s) | ATE (m) | ANMS MP % | KF % | time (s) | connect. | ATE (m) "
-       "| random MP % | KF % | time (s) | connect. | ATE (m) | ours MP % | KF % | time (s) | connect. | ATE (m) |\n"
-       "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
-  std::vector<std::string> groups;
-  for (const auto& in : ins)
-    if (in.has_baselines && std::find(groups.begin(), groups.end(), in.group) == groups.end()) groups.push_back(in.group);
-  for (const auto& g : groups) {
-    double a[4][5] = {};
-    double mp[4] = {}, kf[4] = {};
-    int n = 0;
-    for (const auto& in : ins) {
-      if (in.group != g || !in.has_baselines) continue;
-      ++n;
-      const RunResult* rs[4] = {&in.original, &in.anms, &in.random, &op(in)};
-      for (int v = 0; v < 4; ++v) {
-        a[v][0] += rs[v]->mps;
-        a[v][1] += rs[v]->kfs;
-        a[v][2] += rs[v]->total_s;
-        a[v][3] += rs[v]->C;
-        a[v][4] += rs[v]->ate_m;
-        mp[v] += pct(rs[v]->mps, in.original.mps);
-        kf[v] += pct(rs[v]->kfs, in.original.kfs);
-      }
-    }
-    for (auto& v : a)
-      for (double& x : v) x /= n;
-    for (int v = 0; v < 4; ++v) {
-      mp[v] /= n;
-      kf[v] /= n;
-    }
-    const double best = std::min({a[0][4], a[1][4], a[2][4], a[3][4]});
-    o << "| " << g << " | " << n << " | " << f(a[0][0], 0) << " | " << f(a[0][1], 0) << " | " << f(a[0][2], 2) << " | "
-      << bold_if(a[0][4] == best, f(a[0][4], 5)) << " |";
-    for (int v = 1; v < 4; ++v)
-      o << " " << f(mp[v], 1) << " | " << f(kf[v], 1) << " | " << f(a[v][2], 2) << " | " << f(a[v][3], 2) << " | "
-        << bold_if(a[v][4] == best, f(a[v][4], 5)) << " |";
-    o << "\n";
-  }
-  // Table VI: ablation.
-  bool any_ablation = false;
-  for (const auto& in : ins) any_ablation |= !in.ablation.empty();
-  if (any_ablation) {
-    o << "\n### Table VI: cost ablation at M=" << (ins.empty() ? 100 : ins[0].op_M)
-      << " (as the paper's Table VI; C connections per point, F mean keyframe span per point, S % of a 64x48 grid occupied)\n\n"
-         "| Sequence | all C | F | S | ATE (m) | c_c C | F | S | ATE (m) | c_c+c_b C | F | S | ATE (m) | c_c+c_s C | F | S | ATE (m) |\n"
-         "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
-    for (const auto& in : ins) {
-      if (in.ablation.size() != 3) continue;
-      const RunResult* rs[4] = {&op(in), &in.ablation[0], &in.ablation[2], &in.ablation[1]};
-      double best = rs[0]->ate_m;
-      for (auto* r : rs) best = std::min(best, r->ate_m);
-      o << "| " << in.name << " |";
-      for (auto* r : rs)
-        o << " " << f(r->C, 2) << " | " << f(r->F, 2) << " | " << f(r->S, 2) << " | " << bold_if(r->ate_m == best, f(r->ate_m, 5)) << " |";
-      o << "\n";
-    }
-  }
-  // BAL.
-  if (!s.bal.empty()) {
-    o << "\n### BAL: sparsify, re-solve, compare with the full solution (Sim(3)-aligned camera poses)\n\n"
-         "| Problem | variant | M | points | observations | solve (s) | solve % | iterations | centre RMS | centre RMS / extent % | rot RMS (°) |\n"
-         "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
-    for (const auto& b : s.bal) {
-      const std::string name = std::filesystem::path(b.input).filename().string();
-      auto row = [&](const BalRun& r) {
-        o << "| " << name << " | " << r.variant << " | " << (r.M ? std::to_string(r.M) : "-") << " | " << r.points << " ("
-          << f(pct(r.points, b.points), 1) << " %) | " << r.observations << " | " << f(r.solve_s, 3) << " | "
-          << f(pct(r.solve_s, b.full.solve_s), 1) << " | " << r.iterations << " | " << f(r.pos_rms, 5) << " | "
-          << f(pct(r.pos_rms, b.extent), 3) << " | " << f(r.rot_rms_deg, 4) << " |\n";
+    o << "\n#### Baselines keeping the same count per window (" << label << "; ATE in m, lowest mean in bold; "
+         "\"ours below\": seeds on which ours had the lower ATE)\n\n"
+         "| Input | ours | random | longest track | ANMS (SSC) | MP % ours / random / longest / ANMS | "
+         "KF % ours / random / longest / ANMS | ATE ratio (√(obs ratio)) ours / random / longest / ANMS | "
+         "ours below random | below longest | below ANMS |\n|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+    for (const ContractRun& r : s.runs) {
+      if (op_label(r) != label) continue;
+      double best = r.ate_ours.mean;
+      for (const Stat* a : {&r.ate_random, &r.ate_longest_track, &r.ate_anms})
+        if (a->n > 0) best = std::min(best, a->mean);
+      auto cell = [&](const Stat& a) { return a.n == 0 ? std::string("–") : bold_if(a.mean == best, ate_pm(a)); };
+      auto below = [&](const Stat& a, int n) { return a.n == 0 ? std::string("–") : std::to_string(n) + " / " + std::to_string(r.seeds); };
+      auto quad = [](double a, double b, double c, double d, int prec) {
+        return f(a, prec) + " / " + f(b, prec) + " / " + f(c, prec) + " / " + f(d, prec);
       };
-      row(b.full);
-      for (std::size_t i = 0; i < b.ours.size(); ++i) {
-        row(b.ours[i]);
-        row(b.random[i]);
+      auto rq = [&](const Stat& a, double sq) { return f(ratio(a, r.ate_original), 2) + " (" + f(sq, 2) + ")"; };
+      o << "| " << r.info.name << " | " << cell(r.ate_ours) << " | " << cell(r.ate_random) << " | "
+        << cell(r.ate_longest_track) << " | " << cell(r.ate_anms) << " | "
+        << quad(r.mp_percent.mean, r.mp_percent_random.mean, r.mp_percent_longest_track.mean, r.mp_percent_anms.mean, 1) << " | "
+        << quad(r.kf_percent.mean, r.kf_percent_random.mean, r.kf_percent_longest_track.mean, r.kf_percent_anms.mean, 0) << " | "
+        << rq(r.ate_ours, r.sqrt_obs_ratio) << " / " << rq(r.ate_random, r.sqrt_obs_ratio_random) << " / "
+        << rq(r.ate_longest_track, r.sqrt_obs_ratio_longest_track) << " / " << rq(r.ate_anms, r.sqrt_obs_ratio_anms) << " | "
+        << below(r.ate_random, r.below_random_seeds) << " | " << below(r.ate_longest_track, r.below_longest_track_seeds)
+        << " | " << below(r.ate_anms, r.below_anms_seeds) << " |\n";
+    }
+    const std::vector<GroupRow> groups = group_rows(s.runs, label);
+    if (!groups.empty()) {
+      o << "\n#### Per trajectory group (" << label << "; as the paper's Table V, but each ATE as a ratio to the "
+           "original's, averaged over the group's inputs, √(obs ratio) in brackets; lowest in bold)\n\n"
+           "| Group | inputs | MP % | KF % | BA time % | ours | random | longest track | ANMS |\n"
+           "|---|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+      for (const GroupRow& g : groups) {
+        const double best = std::min({g.ours, g.random, g.longest, g.anms});
+        o << "| " << g.group << " | " << g.inputs << " | " << f(g.mp, 1) << " | " << f(g.kf, 1) << " | " << f(g.ba, 1)
+          << " | " << bold_if(g.ours == best, f(g.ours, 2)) << " (" << f(g.sq_ours, 2) << ") | "
+          << bold_if(g.random == best, f(g.random, 2)) << " (" << f(g.sq_random, 2) << ") | "
+          << bold_if(g.longest == best, f(g.longest, 2)) << " (" << f(g.sq_longest, 2) << ") | "
+          << bold_if(g.anms == best, f(g.anms, 2)) << " (" << f(g.sq_anms, 2) << ") |\n";
       }
+    }
+  }
+
+  bool any_ablation = false;
+  for (const Comparison& c : s.comparisons) any_ablation |= !c.ablation.empty();
+  if (any_ablation) {
+    o << "\n#### Cost ablation (as the paper's Table VI; C observations per point, F mean keyframe span per point, "
+         "S % of a 64×48 grid occupied; at the first operating point's M)\n\n"
+         "| Input | costs | M | MP % | C | F | S | ATE (m) |\n|---|---|---:|---:|---:|---:|---:|---:|\n";
+    for (const Comparison& c : s.comparisons)
+      for (const auto& [costs, runs] : ablation_rows(c))
+        o << "| " << c.info.name << " | " << costs << " | " << c.M << " | "
+          << pm(stat_by(runs, [&](const RunRecord& r) { return mp_percent_of(c, r); }), 1) << " | "
+          << pm(stat_by(runs, [](const RunRecord& r) { return r.C; }), 2) << " | "
+          << pm(stat_by(runs, [](const RunRecord& r) { return r.F; }), 2) << " | "
+          << pm(stat_by(runs, [](const RunRecord& r) { return r.S; }), 2) << " | "
+          << ate_pm(stat_by(runs, [](const RunRecord& r) { return r.ate_m; })) << " |\n";
+  }
+
+  // Claims, computed from the runs above.
+  for (const std::string& label : labels_of(s.runs)) {
+    o << "\n#### Which claims held (" << label << ", trajectories unless stated)\n\n| Claim (target) | Measured | Held? |\n|---|---|---|\n";
+    double mp = 0, kf = 0, ba = 0, rat = 0;
+    int n = 0, better = 0, worse = 0, seeds = 0;
+    for (const ContractRun& r : s.runs) {
+      if (r.info.kind != "trajectory" || op_label(r) != label) continue;
+      mp += r.mp_percent.mean; kf += r.kf_percent.mean; ba += r.ba_time_percent.mean; rat += r.ate_ratio;
+      better += r.better_seeds; worse += r.worse_seeds; seeds += r.seeds;
+      ++n;
+    }
+    if (n == 0) continue;
+    mp /= n; kf /= n; ba /= n; rat /= n;
+    auto yes = [](bool b) { return b ? std::string("**yes**") : std::string("**no**"); };
+    o << "| Fewer keyframes (paper: KF % 60–75) | KF % " << f(kf, 1) << " mean at MP % " << f(mp, 1) << " | " << yes(kf <= 75) << " |\n";
+    o << "| About half the BA computation (BA time ≤ 60 %) | " << f(ba, 1) << " % mean | " << yes(ba <= 60) << " |\n";
+    o << "| Accuracy maintained (mean ATE ratio ≤ 1.05; better seeds ≥ worse) | ratio " << f(rat, 2) << "; " << better
+      << " better / " << worse << " worse of " << seeds << " input-seeds | " << yes(rat <= 1.05 && better >= worse) << " |\n";
+    const std::vector<GroupRow> groups = group_rows(s.runs, label);
+    const int ng = static_cast<int>(groups.size());
+    auto beats = [&](double GroupRow::*b) {
+      int k = 0;
+      for (const GroupRow& g : groups) k += g.ours < g.*b ? 1 : 0;
+      return k;
+    };
+    const int need = (3 * ng + 3) / 4;  // the paper's "3 of 4"
+    for (auto [name, field] : {std::pair{"random", &GroupRow::random}, std::pair{"longest-track-first", &GroupRow::longest},
+                               std::pair{"ANMS (SSC)", &GroupRow::anms}})
+      o << "| Beats " << name << " at equal count (≥ " << need << " of " << ng << " groups) | ours lower on " << beats(field)
+        << " of " << ng << " | " << yes(beats(field) >= need) << " |\n";
+    // The other kinds, input by input: against the original (not for BAL,
+    // whose original is the reference itself) and against each baseline run.
+    for (const ContractRun& r : s.runs) {
+      if (r.info.kind == "trajectory" || op_label(r) != label) continue;
+      const std::string what = r.info.kind + " " + r.info.name + " (" + (r.info.sim3 ? "Sim(3)" : "SE(3)") + ")";
+      if (r.info.kind != "bal")
+        o << "| " << what << ": not worse than the original | ratio " << f(r.ate_ratio, 2) << ", " << r.better_seeds
+          << " better / " << r.worse_seeds << " worse of " << r.seeds << " | "
+          << yes(r.ate_ratio <= 1.0 && r.better_seeds >= r.worse_seeds) << " |\n";
+      for (auto [name, a, below] : {std::tuple{"random", &r.ate_random, r.below_random_seeds},
+                                    std::tuple{"longest-track-first", &r.ate_longest_track, r.below_longest_track_seeds},
+                                    std::tuple{"ANMS (SSC)", &r.ate_anms, r.below_anms_seeds}})
+        if (a->n > 0)
+          o << "| " << what << ": beats " << name << " at equal count | " << ate_pm(r.ate_ours) << " vs "
+            << ate_pm(*a) << ", lower on " << below << " of " << r.seeds << " seeds | "
+            << yes(r.ate_ours.mean < a->mean && 2 * below > r.seeds) << " |\n";
     }
   }
   return o.str();
@@ -343,146 +360,155 @@ bool write_outputs(const EvalSummary& s, const std::string& out_dir, std::string
     return static_cast<bool>(out);
   };
   std::ostringstream csv;
-  csv << "input,name,group,kind,variant,selector,M,cost_terms,keyframes,mps,mps_created,kfs,mp_percent,kf_percent,"
-         "ba_s,select_s,total_s,ba_time_percent,time_percent,ba_calls,selector_culled,selector_errors,ate_m,ate_r_deg,C,F,S\n";
-  for (const auto& in : s.inputs) {
-    std::vector<const RunResult*> rs{&in.original};
-    for (const auto& r : in.ours) rs.push_back(&r);
-    if (in.has_baselines) {
-      rs.push_back(&in.anms);
-      rs.push_back(&in.random);
-    }
-    for (const auto& r : in.ablation) rs.push_back(&r);
-    for (const RunResult* r : rs)
-      csv << in.input << "," << in.name << "," << in.group << "," << in.kind << "," << r->spec.name << ","
-          << to_string(r->spec.selector) << "," << r->spec.M << "," << int(r->spec.cost_terms) << "," << r->kfs_total
-          << "," << r->mps << "," << r->mps_created << "," << r->kfs << "," << f(pct(r->mps, in.original.mps), 3) << ","
-          << f(pct(r->kfs, in.original.kfs), 3) << "," << f(r->ba_s, 4) << "," << f(r->select_s, 4) << ","
-          << f(r->total_s, 4) << "," << f(pct(r->ba_s, in.original.ba_s), 3) << ","
-          << f(pct(r->total_s, in.original.total_s), 3) << "," << r->ba_calls << "," << r->selector_culled << ","
-          << r->selector_errors << "," << f(r->ate_m, 6) << "," << f(r->ate_r_deg, 6) << "," << f(r->C, 3) << ","
-          << f(r->F, 3) << "," << f(r->S, 3) << "\n";
-  }
-  for (const auto& b : s.bal) {
-    std::vector<const BalRun*> rs{&b.full};
-    for (std::size_t i = 0; i < b.ours.size(); ++i) {
-      rs.push_back(&b.ours[i]);
-      rs.push_back(&b.random[i]);
-    }
-    for (const BalRun* r : rs)
-      csv << b.input << ",bal,bal,bal," << r->variant << "," << (r->variant == "ours" ? "keepless" : r->variant == "random" ? "random" : "none")
-          << "," << r->M << ",7," << b.cameras << "," << r->points << "," << b.points << "," << b.cameras << ","
-          << f(pct(r->points, b.points), 3) << ",100.000," << f(r->solve_s, 4) << "," << f(r->variant == "ours" ? b.sparsify_s : 0, 4)
-          << "," << f(r->solve_s, 4) << "," << f(pct(r->solve_s, b.full.solve_s), 3) << ","
-          << f(pct(r->solve_s, b.full.solve_s), 3) << ",1,0,0," << f(r->pos_rms, 6) << "," << f(r->rot_rms_deg, 6)
-          << ",0,0,0\n";
-  }
+  csv << kCsvHeader << "\n";
+  for (const Comparison& c : s.comparisons)
+    for (const auto* v : {&c.original, &c.ours, &c.random, &c.longest_track, &c.anms, &c.ablation})
+      for (const RunRecord& r : *v)
+        csv << c.info.input << "," << c.info.name << "," << c.info.group << "," << c.info.kind << ","
+            << (c.info.sim3 ? "sim3" : "se3") << "," << r.variant << "," << r.seed << "," << r.M << ","
+            << json_number(c.target_fraction, 3) << "," << c.M << "," << r.mps << "," << r.kfs << "," << r.observations
+            << "," << f(r.ba_s, 4) << "," << f(r.total_s, 4) << "," << json_number(r.ate_m, 9) << ","
+            << json_number(r.ate_r_deg, 6) << "," << json_number(r.C, 4) << "," << json_number(r.F, 4) << ","
+            << json_number(r.S, 4) << "\n";
   bool ok = write("runs.csv", csv.str());
-  ok = ok && write("tables.md", "# keepless_eval (" + s.mode + ", seed " + std::to_string(s.seed) + ")\n\n`" +
-                                    s.command + "`\n\n" + markdown_tables(s));
-  if (!s.inputs.empty()) {
-    ok = ok && write("ate_vs_kept.svg", svg_ate_vs_kept(s));
-    ok = ok && write("time_vs_M.svg", svg_time_vs_M(s));
-    // One frame's keypoints: a real image if there is one.
-    const InputReport* pick = nullptr;
-    for (const auto& in : s.inputs)
-      if (in.has_baselines && !op(in).snapshot.empty() && (!pick || in.kind == "images")) pick = &in;
-    if (pick) ok = ok && write("keypoints_ours_vs_anms.svg", svg_keypoints(*pick));
-  }
+  std::string meta = s.command + "\n" + s.mode + "\n" + s.settings + "\n" + json_number(s.elapsed_s, 1) + "\n";
+  for (const std::string& i : s.settings_inputs) meta += i + "\n";
+  ok = ok && write("meta.txt", meta);
+  ok = ok && write("tables.md", "`" + s.command + "` (" + s.mode + ", " + f(s.elapsed_s / 60.0, 1) + " min)\n\n" + markdown_tables(s));
+  if (!s.runs.empty()) ok = ok && write("ate_vs_kept.svg", svg_ate_vs_kept(s));
+  // One frame's keypoints: a real image if there is one.
+  const Snapshot* pick = nullptr;
+  for (const Snapshot& sn : s.snapshots)
+    if (!sn.ours.empty() && (!pick || sn.kind == "images")) pick = &sn;
+  if (pick) ok = ok && write("keypoints_ours_vs_anms.svg", svg_keypoints(*pick));
   return ok;
 }
 
 std::string json_summary(const EvalSummary& s) {
   std::ostringstream o;
-  o << "{\"tool\":\"keepless_eval\",\"mode\":" << jstr(s.mode) << ",\"seed\":" << s.seed << ",\"M\":[";
-  for (std::size_t i = 0; i < s.Ms.size(); ++i) o << (i ? "," : "") << s.Ms[i];
-  o << "],\"inputs\":[";
+  o << ",\"tool\":\"keepless_eval\",\"mode\":" << json_string(s.mode) << ",\"seeds\":[";
+  for (std::size_t i = 0; i < s.seeds.size(); ++i) o << (i ? "," : "") << s.seeds[i];
+  o << "],\"error_floor\":{";
   bool first = true;
-  // Per-group tallies for the claims.
-  std::map<std::string, std::array<double, 4>> grp;  // ours, anms, random, count
-  double sum_mp = 0, sum_ba = 0, sum_ratio = 0;
-  int n_op = 0;
-  for (const auto& in : s.inputs) {
-    const RunResult& g = in.original;
-    const RunResult& r = op(in);
-    o << (first ? "" : ",") << "{\"input\":" << jstr(in.input) << ",\"name\":" << jstr(in.name)
-      << ",\"group\":" << jstr(in.group) << ",\"kind\":" << jstr(in.kind) << ",\"keyframes\":" << in.keyframes
-      << ",\"M\":" << in.op_M << ",\"mps_original\":" << g.mps << ",\"kfs_original\":" << g.kfs
-      << ",\"mps_ours\":" << r.mps << ",\"kfs_ours\":" << r.kfs << ",\"mp_percent\":" << jnum(pct(r.mps, g.mps), 3)
-      << ",\"kf_percent\":" << jnum(pct(r.kfs, g.kfs), 3) << ",\"ba_time_percent\":" << jnum(pct(r.ba_s, g.ba_s), 3)
-      << ",\"time_percent\":" << jnum(pct(r.total_s, g.total_s), 3) << ",\"ate_original_m\":" << jnum(g.ate_m)
-      << ",\"ate_ours_m\":" << jnum(r.ate_m) << ",\"ate_anms_m\":" << (in.has_baselines ? jnum(in.anms.ate_m) : "null")
-      << ",\"ate_random_m\":" << (in.has_baselines ? jnum(in.random.ate_m) : "null")
-      << ",\"ate_r_original_deg\":" << jnum(g.ate_r_deg) << ",\"ate_r_ours_deg\":" << jnum(r.ate_r_deg)
-      << ",\"ate_r_anms_deg\":" << (in.has_baselines ? jnum(in.anms.ate_r_deg) : "null")
-      << ",\"ate_r_random_deg\":" << (in.has_baselines ? jnum(in.random.ate_r_deg) : "null")
-      << ",\"mp_percent_anms\":" << (in.has_baselines ? jnum(pct(in.anms.mps, g.mps), 3) : "null")
-      << ",\"mp_percent_random\":" << (in.has_baselines ? jnum(pct(in.random.mps, g.mps), 3) : "null")
-      << ",\"selector_errors\":" << r.selector_errors << ",\"per_M\":[";
-    for (std::size_t i = 0; i < in.ours.size(); ++i) {
-      const RunResult& q = in.ours[i];
-      o << (i ? "," : "") << "{\"M\":" << q.spec.M << ",\"mp_percent\":" << jnum(pct(q.mps, g.mps), 3)
-        << ",\"kf_percent\":" << jnum(pct(q.kfs, g.kfs), 3) << ",\"ba_time_percent\":" << jnum(pct(q.ba_s, g.ba_s), 3)
-        << ",\"time_percent\":" << jnum(pct(q.total_s, g.total_s), 3) << ",\"ate_m\":" << jnum(q.ate_m)
-        << ",\"ate_r_deg\":" << jnum(q.ate_r_deg) << "}";
-    }
-    o << "],\"ablation\":[";
-    for (std::size_t i = 0; i < in.ablation.size(); ++i) {
-      const RunResult& q = in.ablation[i];
-      o << (i ? "," : "") << "{\"costs\":" << jstr(q.spec.name) << ",\"C\":" << jnum(q.C, 4) << ",\"F\":" << jnum(q.F, 4)
-        << ",\"S\":" << jnum(q.S, 4) << ",\"ate_m\":" << jnum(q.ate_m) << ",\"mp_percent\":" << jnum(pct(q.mps, g.mps), 3) << "}";
-    }
-    o << "]}";
+  for (const auto& [g, v] : s.error_floor) {
+    o << (first ? "" : ",") << json_string(g) << ":" << json_number(v, 4);
     first = false;
-    if (g.ate_m > 0) {
-      sum_mp += pct(r.mps, g.mps);
-      sum_ba += pct(r.ba_s, g.ba_s);
-      sum_ratio += r.ate_m / g.ate_m;
-      ++n_op;
-    }
-    if (in.has_baselines && in.kind == "trajectory") {
-      auto& t = grp[in.group];
-      t[0] += r.ate_m;
-      t[1] += in.anms.ate_m;
-      t[2] += in.random.ate_m;
-      t[3] += 1;
-    }
   }
-  for (const auto& b : s.bal) {
-    for (std::size_t i = 0; i < b.ours.size(); ++i) {
-      if (i > 0) break;  // the first M is the operating point
-      const BalRun& r = b.ours[i];
-      o << (first ? "" : ",") << "{\"input\":" << jstr(b.input) << ",\"name\":\"bal\",\"group\":\"bal\",\"kind\":\"bal\""
-        << ",\"keyframes\":" << b.cameras << ",\"M\":" << r.M << ",\"mps_original\":" << b.points
-        << ",\"kfs_original\":" << b.cameras << ",\"mps_ours\":" << r.points << ",\"kfs_ours\":" << b.cameras
-        << ",\"mp_percent\":" << jnum(pct(r.points, b.points), 3) << ",\"kf_percent\":100.000"
-        << ",\"ba_time_percent\":" << jnum(pct(r.solve_s, b.full.solve_s), 3)
-        << ",\"time_percent\":" << jnum(pct(r.solve_s + b.sparsify_s, b.full.solve_s), 3)
-        << ",\"ate_original_m\":0.000000,\"ate_ours_m\":" << jnum(r.pos_rms) << ",\"ate_anms_m\":null"
-        << ",\"ate_random_m\":" << jnum(b.random[i].pos_rms) << ",\"ate_r_original_deg\":0.000000"
-        << ",\"ate_r_ours_deg\":" << jnum(r.rot_rms_deg) << ",\"ate_r_random_deg\":" << jnum(b.random[i].rot_rms_deg)
-        << ",\"extent\":" << jnum(b.extent) << ",\"solve_s_full\":" << jnum(b.full.solve_s, 4)
-        << ",\"solve_s_ours\":" << jnum(r.solve_s, 4) << ",\"sparsify_s\":" << jnum(b.sparsify_s, 4) << "}";
+  o << "},\"ablation\":[";
+  first = true;
+  for (const Comparison& c : s.comparisons)
+    for (const auto& [costs, runs] : ablation_rows(c)) {
+      const Stat ate = stat_by(runs, [](const RunRecord& r) { return r.ate_m; });
+      o << (first ? "" : ",") << "{\"input\":" << json_string(c.info.name) << ",\"costs\":" << json_string(costs)
+        << ",\"M\":" << c.M << ",\"seeds\":" << runs.size() << ",\"ate_m\":" << json_number(ate.mean)
+        << ",\"ate_sd_m\":" << json_number(ate.sd)
+        << ",\"C\":" << json_number(stat_by(runs, [](const RunRecord& r) { return r.C; }).mean, 4)
+        << ",\"F\":" << json_number(stat_by(runs, [](const RunRecord& r) { return r.F; }).mean, 4)
+        << ",\"S\":" << json_number(stat_by(runs, [](const RunRecord& r) { return r.S; }).mean, 4) << "}";
       first = false;
     }
+  o << "],\"elapsed_s\":" << json_number(s.elapsed_s, 2);
+  return contract_json(s.runs, o.str());
+}
+
+bool read_outputs(const std::string& out_dir, EvalSummary* s, std::string* error) {
+  const std::size_t before = s->comparisons.size();
+  namespace fsys = std::filesystem;
+  const std::string csv_path = (fsys::path(out_dir) / "runs.csv").string();
+  std::ifstream csv(csv_path);
+  if (!csv) {
+    *error = csv_path + ":0: cannot open";
+    return false;
   }
-  o << "],\"claims\":{\"M\":" << (s.inputs.empty() ? 0 : s.inputs[0].op_M)
-    << ",\"mean_mp_percent\":" << jnum(n_op ? sum_mp / n_op : NAN, 3)
-    << ",\"mean_ba_time_percent\":" << jnum(n_op ? sum_ba / n_op : NAN, 3)
-    << ",\"mean_ate_ratio\":" << jnum(n_op ? sum_ratio / n_op : NAN, 4) << ",\"groups\":{";
-  int beats = 0;
-  bool fg = true;
-  for (const auto& [name, t] : grp) {
-    const bool a = t[0] < t[1], b = t[0] < t[2];
-    beats += (a && b) ? 1 : 0;
-    o << (fg ? "" : ",") << jstr(name) << ":{\"inputs\":" << int(t[3]) << ",\"ate_ours_m\":" << jnum(t[0] / t[3])
-      << ",\"ate_anms_m\":" << jnum(t[1] / t[3]) << ",\"ate_random_m\":" << jnum(t[2] / t[3])
-      << ",\"ours_below_anms\":" << (a ? "true" : "false") << ",\"ours_below_random\":" << (b ? "true" : "false") << "}";
-    fg = false;
+  // Several runs may be read into one summary: their commands and times add up.
+  std::ifstream meta((fsys::path(out_dir) / "meta.txt").string());
+  std::string command, elapsed, line;
+  if (meta && std::getline(meta, command) && std::getline(meta, s->mode) && std::getline(meta, s->settings) &&
+      std::getline(meta, elapsed)) {
+    s->command += (s->command.empty() ? "" : "` and `") + command;
+    s->elapsed_s += std::strtod(elapsed.c_str(), nullptr);
+    s->settings_inputs.clear();
+    while (std::getline(meta, line))
+      if (!line.empty()) s->settings_inputs.push_back(line);
   }
-  o << "},\"groups_ours_below_both\":" << beats << ",\"groups_total\":" << grp.size() << "},\"elapsed_s\":"
-    << jnum(s.elapsed_s, 2) << "}";
-  return o.str();
+  auto split = [](const std::string& l) {
+    std::vector<std::string> v;
+    std::stringstream ss(l);
+    std::string t;
+    while (std::getline(ss, t, ',')) v.push_back(t);
+    return v;
+  };
+  std::getline(csv, line);
+  const std::vector<std::string> header = split(line);
+  auto col = [&](const char* name) {
+    const auto it = std::find(header.begin(), header.end(), name);
+    return it == header.end() ? -1 : static_cast<int>(it - header.begin());
+  };
+  for (const char* need : {"input", "name", "group", "kind", "alignment", "variant", "seed", "M", "target_fraction",
+                           "mps", "kfs", "observations", "ba_s", "total_s", "ate_m", "ate_r_deg"})
+    if (col(need) < 0) {
+      *error = csv_path + ":1: no column " + need;
+      return false;
+    }
+  std::vector<std::string> keys;
+  int lineno = 1;
+  while (std::getline(csv, line)) {
+    ++lineno;
+    if (line.empty()) continue;
+    const std::vector<std::string> v = split(line);
+    if (v.size() < header.size()) {
+      *error = csv_path + ":" + std::to_string(lineno) + ": " + std::to_string(v.size()) + " fields, want " +
+               std::to_string(header.size());
+      return false;
+    }
+    auto str = [&](const char* name) { return col(name) < 0 ? std::string() : v[static_cast<std::size_t>(col(name))]; };
+    auto num = [&](const char* name) {
+      const std::string t = str(name);
+      return t.empty() || t == "null" ? NAN : std::strtod(t.c_str(), nullptr);
+    };
+    RunRecord r;
+    r.variant = str("variant");
+    r.seed = static_cast<std::uint64_t>(num("seed"));
+    r.M = static_cast<std::int64_t>(num("M"));
+    r.mps = static_cast<std::uint64_t>(num("mps"));
+    r.kfs = static_cast<std::uint64_t>(num("kfs"));
+    r.observations = static_cast<std::uint64_t>(num("observations"));
+    r.ba_s = num("ba_s");
+    r.total_s = num("total_s");
+    r.ate_m = num("ate_m");
+    r.ate_r_deg = num("ate_r_deg");
+    r.C = num("C");
+    r.F = num("F");
+    r.S = num("S");
+    // One comparison per input and operating point (compared_M tells --M points apart).
+    const std::string key = str("input") + "|" + str("target_fraction") + "|" + str("compared_M");
+    auto it = std::find(keys.begin(), keys.end(), key);
+    if (it == keys.end()) {
+      keys.push_back(key);
+      Comparison c;
+      c.info.input = str("input");
+      c.info.name = str("name");
+      c.info.group = str("group");
+      c.info.kind = str("kind");
+      c.info.sim3 = str("alignment") == "sim3";
+      c.target_fraction = num("target_fraction");
+      c.M = static_cast<std::int64_t>(num("compared_M"));  // absent in older files: from the variants below
+      s->comparisons.push_back(c);
+      it = keys.end() - 1;
+    }
+    Comparison& c = s->comparisons[before + static_cast<std::size_t>(it - keys.begin())];
+    if (r.variant != "original" && col("compared_M") < 0) c.M = r.M;
+    std::vector<RunRecord>* to = &c.ablation;
+    if (r.variant == "original") to = &c.original;
+    else if (r.variant == "ours") to = &c.ours;
+    else if (r.variant == "random") to = &c.random;
+    else if (r.variant == "longest_track") to = &c.longest_track;
+    else if (r.variant == "anms") to = &c.anms;
+    to->push_back(r);
+    if (std::find(s->seeds.begin(), s->seeds.end(), r.seed) == s->seeds.end()) s->seeds.push_back(r.seed);
+  }
+  std::sort(s->seeds.begin(), s->seeds.end());
+  return true;
 }
 
 }  // namespace keepless::eval

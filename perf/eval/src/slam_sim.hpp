@@ -1,36 +1,52 @@
 #pragma once
 // The closed-loop keyframe SLAM back end every variant runs on the same
-// scenario: map-point creation (stereo at once, monocular by triangulation on
-// the second view), ORB-SLAM2's recent-point culling, point selection before
-// every local BA (none / keepless / ANMS / random), the local BA over the
-// last W keyframes with the other observers fixed, outlier rejection, and
-// ORB-SLAM2's keyframe culling (>= 90 % of a keyframe's points seen by >= 3
-// other keyframes), so KF % is measured, not assumed.
+// scenario, following ORB-SLAM2's tracking and local mapping:
+//   tracking   each new keyframe, from the odometry prior, by motion-only BA
+//              against the local map's points (so culled points really leave
+//              tracking); the points in its frustum count as visible, the
+//              inliers as found;
+//   mapping    recent-point culling (found ratio < 0.25, or two keyframes old
+//              with <= 2 (mono) / 3 observations, a stereo one counting twice),
+//              new points (stereo at once, monocular by triangulation) fused
+//              into the local keyframes' unmatched keypoints, so a culled
+//              feature is re-mapped when seen again;
+//   selection  none / keepless / ANMS / random / longest track, on the local
+//              keyframes, before every local BA;
+//   local BA   the new keyframe and its covisible keyframes (at most W), the
+//              other observers fixed; robust solve, chi-square outliers out,
+//              second solve without the kernel;
+//   KF culling a local keyframe whose points are >= 90 % seen by >= 3 other
+//              keyframes (close points only, for stereo) goes; its pose then
+//              follows its parent's (ORB-SLAM2's trajectory output).
 
 #include <cstdint>
 #include <string>
 #include <vector>
 
 #include "geometry.hpp"
+#include "keepless/core/config.hpp"
 #include "scenario.hpp"
 
 namespace keepless::eval {
 
-enum class Selector { kNone, kKeepless, kAnms, kRandom };
+enum class Selector { kNone, kKeepless, kAnms, kRandom, kLongestTrack };
 const char* to_string(Selector s);
 
+// One variant: a selector and, for keepless (and the count the baselines
+// match), the core parameters it runs with: M, the cost terms, and whatever
+// policy core::Params carries.
 struct VariantSpec {
-  std::string name;  // original, ours, anms, random, c_c, c_c+c_s, c_c+c_b
+  std::string name;  // original, ours, anms, random, longest_track, c_c, ...
   Selector selector = Selector::kNone;
-  std::int64_t M = 100;          // keepless pair capacity; for anms/random: the M whose count they match
-  std::uint8_t cost_terms = 7;   // bit 0 c_c, bit 1 c_s, bit 2 c_b
+  core::Params params;
 };
 
 struct SimOptions {
-  int window = 10;          // local BA keyframes
+  int window = 10;                // local keyframes (new + covisible), at most
+  int ba_robust_iterations = 5;   // ORB-SLAM2: 5 robust, then 10 without the kernel
   int ba_iterations = 10;
-  std::uint64_t seed = 1;
-  int snapshot_frame = -1;  // keyframe whose keypoints are recorded (SVG)
+  std::uint64_t seed = 1;         // baselines' priorities
+  int snapshot_frame = -1;        // keyframe whose keypoints are recorded (SVG)
 };
 
 struct SnapshotPoint {
@@ -45,12 +61,15 @@ struct RunResult {
   std::uint32_t kfs = 0;         // keyframes alive at the end
   std::uint32_t kfs_total = 0;   // keyframes inserted
   std::uint32_t ba_calls = 0;
+  std::uint64_t ba_observations = 0;  // residuals over every local BA (the information used)
+  std::uint32_t track_failures = 0;   // keyframes left at the odometry prior (< 10 inliers)
   double ba_s = 0, select_s = 0, total_s = 0;
   std::uint64_t selector_culled = 0;
   std::uint32_t selector_errors = 0;  // keepless status != ok (window kept whole)
+  bool sim3 = false;                  // ATE after Sim(3) (monocular) rather than SE(3)
   double ate_m = 0, ate_r_deg = 0;
   double C = 0, F = 0, S = 0;    // ablation metrics (section IV-F)
-  std::vector<Pose> estimate;    // every keyframe, last estimate
+  std::vector<Pose> estimate;    // every keyframe, as output (culled ones follow their parent)
   std::vector<SnapshotPoint> snapshot;
 };
 

@@ -1,0 +1,177 @@
+#include "run_record.hpp"
+
+#include <cstdio>
+#include <sstream>
+
+namespace keepless::eval {
+namespace {
+
+double pct(double a, double b) { return b > 0 ? 100.0 * a / b : NAN; }
+
+template <typename F>
+Stat stat_over(const std::vector<RunRecord>& v, F f) {
+  std::vector<double> x;
+  for (const RunRecord& r : v) x.push_back(f(r));
+  return stat_of(x);
+}
+
+// Per seed: f(variant record, original record of the same seed).
+template <typename F>
+Stat paired(const std::vector<RunRecord>& v, const std::vector<RunRecord>& original, F f) {
+  std::vector<double> x;
+  for (std::size_t i = 0; i < v.size() && i < original.size(); ++i) x.push_back(f(v[i], original[i]));
+  return stat_of(x);
+}
+
+int count_below(const std::vector<RunRecord>& a, const std::vector<RunRecord>& b) {
+  int n = 0;
+  for (std::size_t i = 0; i < a.size() && i < b.size(); ++i) n += a[i].ate_m < b[i].ate_m ? 1 : 0;
+  return n;
+}
+
+double mean_observations(const std::vector<RunRecord>& v) {
+  std::vector<double> x;
+  for (const RunRecord& r : v) x.push_back(double(r.observations));
+  return stat_of(x).mean;
+}
+
+void field(std::ostringstream& o, const char* key, const std::string& value) { o << ",\"" << key << "\":" << value; }
+void stat_fields(std::ostringstream& o, const char* key, const char* sd_key, const Stat& s, int precision = 6) {
+  field(o, key, json_number(s.mean, precision));
+  field(o, sd_key, json_number(s.sd, precision));
+}
+
+}  // namespace
+
+Stat stat_of(const std::vector<double>& v) {
+  Stat s;
+  s.n = static_cast<int>(v.size());
+  if (v.empty()) return s;
+  double sum = 0;
+  for (double x : v) sum += x;
+  s.mean = sum / double(v.size());
+  double ss = 0;
+  for (double x : v) ss += (x - s.mean) * (x - s.mean);
+  s.sd = v.size() > 1 ? std::sqrt(ss / double(v.size() - 1)) : 0.0;
+  return s;
+}
+
+ContractRun summarize(const Comparison& c) {
+  ContractRun r;
+  r.info = c.info;
+  r.variant = c.variant;
+  r.seeds = static_cast<int>(c.ours.size());
+  r.M = c.M;
+  r.target_fraction = c.target_fraction;
+  const auto& g = c.original;
+  r.mp_percent = paired(c.ours, g, [](const RunRecord& a, const RunRecord& o) { return pct(double(a.mps), double(o.mps)); });
+  r.kf_percent = paired(c.ours, g, [](const RunRecord& a, const RunRecord& o) { return pct(double(a.kfs), double(o.kfs)); });
+  r.ba_time_percent = paired(c.ours, g, [](const RunRecord& a, const RunRecord& o) { return pct(a.ba_s, o.ba_s); });
+  auto mp_of = [&](const std::vector<RunRecord>& v) {
+    return paired(v, g, [](const RunRecord& a, const RunRecord& o) { return pct(double(a.mps), double(o.mps)); });
+  };
+  auto kf_of = [&](const std::vector<RunRecord>& v) {
+    return paired(v, g, [](const RunRecord& a, const RunRecord& o) { return pct(double(a.kfs), double(o.kfs)); });
+  };
+  r.mp_percent_random = mp_of(c.random);
+  r.mp_percent_longest_track = mp_of(c.longest_track);
+  r.mp_percent_anms = mp_of(c.anms);
+  r.kf_percent_random = kf_of(c.random);
+  r.kf_percent_longest_track = kf_of(c.longest_track);
+  r.kf_percent_anms = kf_of(c.anms);
+  auto ate = [](const RunRecord& a) { return a.ate_m; };
+  r.ate_original = stat_over(g, ate);
+  r.ate_ours = stat_over(c.ours, ate);
+  r.ate_random = stat_over(c.random, ate);
+  r.ate_longest_track = stat_over(c.longest_track, ate);
+  r.ate_anms = stat_over(c.anms, ate);
+  r.ate_r_original = stat_over(g, [](const RunRecord& a) { return a.ate_r_deg; });
+  r.ate_r_ours = stat_over(c.ours, [](const RunRecord& a) { return a.ate_r_deg; });
+  r.better_seeds = count_below(c.ours, g);
+  r.worse_seeds = count_below(g, c.ours);
+  r.below_random_seeds = count_below(c.ours, c.random);
+  r.below_longest_track_seeds = count_below(c.ours, c.longest_track);
+  r.below_anms_seeds = count_below(c.ours, c.anms);
+  const double ao = r.ate_original.mean, an = r.ate_ours.mean;
+  r.ate_ratio = ao > 0 ? an / ao : NAN;
+  const double oo = mean_observations(g);
+  auto sqrt_obs = [&](const std::vector<RunRecord>& v) {
+    const double n = mean_observations(v);
+    return n > 0 ? std::sqrt(oo / n) : NAN;
+  };
+  r.sqrt_obs_ratio = sqrt_obs(c.ours);
+  r.sqrt_obs_ratio_random = sqrt_obs(c.random);
+  r.sqrt_obs_ratio_longest_track = sqrt_obs(c.longest_track);
+  r.sqrt_obs_ratio_anms = sqrt_obs(c.anms);
+  const double f2 = c.info.error_floor_m * c.info.error_floor_m;
+  if (c.info.error_floor_m > 0) r.ate_ratio_floored = std::sqrt(an * an + f2) / std::sqrt(ao * ao + f2);
+  return r;
+}
+
+std::string json_number(double v, int precision) {
+  if (!std::isfinite(v)) return "null";
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.*f", precision, v);
+  return buf;
+}
+
+std::string json_string(const std::string& s) {
+  std::string o = "\"";
+  for (char c : s) {
+    if (c == '"' || c == '\\') o += '\\';
+    if (static_cast<unsigned char>(c) < 0x20) continue;
+    o += c;
+  }
+  return o + "\"";
+}
+
+std::string run_json(const ContractRun& r) {
+  std::ostringstream o;
+  o << "{\"input\":" << json_string(r.info.input);
+  field(o, "name", json_string(r.info.name));
+  field(o, "group", json_string(r.info.group));
+  field(o, "kind", json_string(r.info.kind));
+  field(o, "variant", json_string(r.variant));
+  field(o, "alignment", json_string(r.info.sim3 ? "sim3" : "se3"));
+  field(o, "seeds", std::to_string(r.seeds));
+  field(o, "M", std::to_string(r.M));
+  field(o, "target_fraction", json_number(r.target_fraction, 4));
+  stat_fields(o, "mp_percent", "mp_percent_sd", r.mp_percent, 3);
+  stat_fields(o, "kf_percent", "kf_percent_sd", r.kf_percent, 3);
+  stat_fields(o, "ba_time_percent", "ba_time_percent_sd", r.ba_time_percent, 3);
+  stat_fields(o, "ate_original_m", "ate_original_sd_m", r.ate_original);
+  stat_fields(o, "ate_ours_m", "ate_ours_sd_m", r.ate_ours);
+  stat_fields(o, "ate_random_m", "ate_random_sd_m", r.ate_random);
+  stat_fields(o, "ate_longest_track_m", "ate_longest_track_sd_m", r.ate_longest_track);
+  stat_fields(o, "ate_anms_m", "ate_anms_sd_m", r.ate_anms);
+  field(o, "ate_r_original_deg", json_number(r.ate_r_original.mean));
+  field(o, "ate_r_ours_deg", json_number(r.ate_r_ours.mean));
+  field(o, "mp_percent_random", json_number(r.mp_percent_random.mean, 3));
+  field(o, "mp_percent_longest_track", json_number(r.mp_percent_longest_track.mean, 3));
+  field(o, "mp_percent_anms", json_number(r.mp_percent_anms.mean, 3));
+  field(o, "kf_percent_random", json_number(r.kf_percent_random.mean, 3));
+  field(o, "kf_percent_longest_track", json_number(r.kf_percent_longest_track.mean, 3));
+  field(o, "kf_percent_anms", json_number(r.kf_percent_anms.mean, 3));
+  field(o, "better_seeds", std::to_string(r.better_seeds));
+  field(o, "worse_seeds", std::to_string(r.worse_seeds));
+  field(o, "below_random_seeds", std::to_string(r.below_random_seeds));
+  field(o, "below_longest_track_seeds", std::to_string(r.below_longest_track_seeds));
+  field(o, "below_anms_seeds", std::to_string(r.below_anms_seeds));
+  field(o, "ate_ratio", json_number(r.ate_ratio, 4));
+  field(o, "sqrt_obs_ratio", json_number(r.sqrt_obs_ratio, 4));
+  field(o, "sqrt_obs_ratio_random", json_number(r.sqrt_obs_ratio_random, 4));
+  field(o, "sqrt_obs_ratio_longest_track", json_number(r.sqrt_obs_ratio_longest_track, 4));
+  field(o, "sqrt_obs_ratio_anms", json_number(r.sqrt_obs_ratio_anms, 4));
+  field(o, "error_floor_m", json_number(r.info.error_floor_m, 4));
+  field(o, "ate_ratio_floored", json_number(r.ate_ratio_floored, 4));
+  o << "}";
+  return o.str();
+}
+
+std::string contract_json(const std::vector<ContractRun>& runs, const std::string& extra) {
+  std::string o = "{\"runs\":[";
+  for (std::size_t i = 0; i < runs.size(); ++i) o += (i ? "," : "") + run_json(runs[i]);
+  return o + "]" + extra + "}";
+}
+
+}  // namespace keepless::eval

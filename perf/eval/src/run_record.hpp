@@ -1,0 +1,91 @@
+#pragma once
+// The evaluation's contract, in one place for every evaluation path (the
+// synthetic world, real VO on images or RGB-D, BAL): a RunRecord per run
+// (input, variant, seed), a Comparison per input and operating point holding
+// the records of the original and of every variant compared at the same kept
+// count, summarize() turning a Comparison into the contract's statistics
+// (mean ± sd over seeds, better / worse seeds, sqrt(observation ratio), the
+// error floor), and the JSON line users' scripts read:
+//   {"runs": [{"input", "kind", "seeds", "M", "mp_percent", "kf_percent",
+//              "ba_time_percent", "ate_original_m", "ate_ours_m", "ate_ours_sd_m",
+//              "ate_random_m", "ate_longest_track_m", "ate_anms_m", "better_seeds",
+//              "worse_seeds", "sqrt_obs_ratio", ...}, ...], ...}
+
+#include <cmath>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace keepless::eval {
+
+// One run of one variant on one input with one seed.
+struct RunRecord {
+  std::string variant;            // original, ours, random, longest_track, anms, or an ablation's name
+  std::uint64_t seed = 0;
+  std::int64_t M = 0;             // 0 for the original
+  std::uint64_t mps = 0;          // map points at the end
+  std::uint64_t kfs = 0;          // keyframes at the end
+  std::uint64_t observations = 0; // residuals over every (local) BA: the information used
+  double ba_s = 0, total_s = 0;
+  double ate_m = NAN, ate_r_deg = NAN;
+  double C = NAN, F = NAN, S = NAN;  // section IV-F: observations per point, keyframe span, grid occupancy %
+};
+
+struct InputInfo {
+  std::string input;  // file or directory
+  std::string name;   // short label
+  std::string group;  // tum, euroc_mh, euroc_v, kitti, kitti_images, bal, ...
+  std::string kind;   // trajectory | images | rgbd | bal
+  bool sim3 = false;  // ATE after Sim(3) alignment (monocular) instead of SE(3)
+  double error_floor_m = 0;  // 0: none
+};
+
+// One input at one operating point. Every vector holds one record per seed,
+// in the same seed order; a baseline not run is empty.
+struct Comparison {
+  InputInfo info;
+  std::string variant = "ours";   // the compared variant's name
+  double target_fraction = NAN;   // --kept-fraction, or NaN for a given M
+  std::int64_t M = 0;
+  std::vector<RunRecord> original, ours, random, longest_track, anms;
+  std::vector<RunRecord> ablation;  // the cost ablation's variants (by name), every seed; ours is "all"
+};
+
+struct Stat {
+  double mean = NAN, sd = NAN;  // sd: sample standard deviation (0 for one value)
+  int n = 0;
+};
+Stat stat_of(const std::vector<double>& v);
+
+// The contract's object for one Comparison.
+struct ContractRun {
+  InputInfo info;
+  std::string variant;
+  int seeds = 0;
+  std::int64_t M = 0;
+  double target_fraction = NAN;
+  Stat mp_percent, kf_percent, ba_time_percent;
+  Stat ate_original, ate_ours, ate_random, ate_longest_track, ate_anms;  // metres (BAL: its units)
+  Stat ate_r_original, ate_r_ours;
+  Stat mp_percent_random, mp_percent_longest_track, mp_percent_anms;
+  Stat kf_percent_random, kf_percent_longest_track, kf_percent_anms;
+  int better_seeds = 0, worse_seeds = 0;  // ours vs original, seed by seed
+  int below_random_seeds = 0, below_longest_track_seeds = 0, below_anms_seeds = 0;
+  double ate_ratio = NAN;        // mean ours / mean original
+  double sqrt_obs_ratio = NAN;   // sqrt(mean observations original / ours)
+  double sqrt_obs_ratio_random = NAN, sqrt_obs_ratio_longest_track = NAN, sqrt_obs_ratio_anms = NAN;
+  double ate_ratio_floored = NAN;  // with error_floor_m added in quadrature to both
+};
+
+ContractRun summarize(const Comparison& c);
+
+// One run's JSON object; the full line is {"runs":[...]<extra>} where
+// `extra` is ",\"key\":value..." (may be empty).
+std::string run_json(const ContractRun& r);
+std::string contract_json(const std::vector<ContractRun>& runs, const std::string& extra);
+
+// JSON helpers shared by the writers.
+std::string json_number(double v, int precision = 6);
+std::string json_string(const std::string& s);
+
+}  // namespace keepless::eval

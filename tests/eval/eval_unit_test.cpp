@@ -1,0 +1,173 @@
+// Units of keepless_eval (perf/eval): per-input seeding, ATE alignment, the
+// culled-keyframe trajectory, tracking's motion-only BA, the local BA's
+// outlier stage, and the contract's statistics.
+
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "local_ba.hpp"
+#include "metrics.hpp"
+#include "prng.hpp"
+#include "run_record.hpp"
+
+namespace ke = keepless::eval;
+
+namespace {
+
+ke::Pose pose(double yaw, const Eigen::Vector3d& t) {
+  ke::Pose p;
+  p.q = Eigen::Quaterniond(Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitY()));
+  p.t = t;
+  return p;
+}
+
+// A curved, non-planar trajectory (alignment is well determined).
+std::vector<ke::Pose> trajectory() {
+  std::vector<ke::Pose> out;
+  for (int i = 0; i < 30; ++i) out.push_back(pose(0.05 * i, Eigen::Vector3d(std::cos(0.2 * i), 0.1 * i, std::sin(0.2 * i))));
+  return out;
+}
+
+TEST(EvalSeeding, AnInputsSeedDependsOnItsNameNotItsPosition) {
+  EXPECT_EQ(ke::input_seed(1, "fr1_xyz"), ke::input_seed(1, std::string("fr1_") + "xyz"));
+  EXPECT_NE(ke::input_seed(1, "fr1_xyz"), ke::input_seed(1, "MH01"));
+  EXPECT_NE(ke::input_seed(1, "fr1_xyz"), ke::input_seed(2, "fr1_xyz"));
+  EXPECT_EQ(ke::name_hash(""), 0xCBF29CE484222325ull);  // FNV-1a offset basis: stable across platforms
+}
+
+TEST(EvalAlignment, Sim3RemovesAScaleErrorThatSe3Cannot) {
+  const std::vector<ke::Pose> gt = trajectory();
+  const Eigen::Quaterniond R(Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 2, 3).normalized()));
+  const Eigen::Vector3d t(4, -2, 1);
+  for (double s : {1.0, 0.5}) {
+    std::vector<ke::Pose> est;
+    for (const ke::Pose& g : gt) {
+      ke::Pose e;
+      e.q = R * g.q;
+      e.t = s * (R * g.t) + t;
+      est.push_back(e);
+    }
+    const ke::Ate sim3 = ke::absolute_trajectory_error(est, gt, true);
+    const ke::Ate se3 = ke::absolute_trajectory_error(est, gt, false);
+    EXPECT_LT(sim3.rms_m, 1e-9) << s;
+    EXPECT_LT(sim3.rms_r_deg, 1e-6) << s;
+    if (s == 1.0) EXPECT_LT(se3.rms_m, 1e-9);
+    else EXPECT_GT(se3.rms_m, 0.2);  // a half-scale copy cannot be aligned rigidly
+  }
+}
+
+TEST(EvalTrajectory, ACulledKeyframeFollowsItsParentsCorrection) {
+  // Keyframe 1 culled with parent 0, keyframe 2 culled later with parent 1:
+  // after keyframe 0 moves, both follow, composing the stored relative poses.
+  std::vector<ke::Pose> p{pose(0, {0, 0, 0}), pose(0.1, {1, 0, 0}), pose(0.2, {2, 0, 0}), pose(0, {3, 0, 0})};
+  std::vector<ke::CulledLink> link(4);
+  link[1] = ke::CulledLink{0, p[0].inverse() * p[1]};
+  link[2] = ke::CulledLink{1, p[1].inverse() * p[2]};
+  const ke::Pose correction = pose(0.3, {0.5, -0.2, 0.1});
+  p[0] = correction * p[0];
+  const ke::Pose frozen1 = p[1], frozen2 = p[2];
+  const std::vector<ke::Pose> out = ke::resolve_keyframe_poses(p, link);
+  const ke::Pose want1 = correction * frozen1, want2 = correction * frozen2;
+  EXPECT_LT((out[1].t - want1.t).norm(), 1e-12);
+  EXPECT_LT((out[2].t - want2.t).norm(), 1e-12);
+  EXPECT_LT(out[2].q.angularDistance(want2.q), 1e-12);
+  EXPECT_EQ(out[0].t, p[0].t);  // alive keyframes keep their own pose
+  EXPECT_EQ(out[3].t, p[3].t);
+}
+
+TEST(EvalTracking, MotionOnlyBaRecoversThePoseAndFlagsAWrongMatch) {
+  ke::Camera cam;  // 640x480, f 500, monocular
+  const ke::Pose truth = pose(0.1, {0.2, -0.1, 0.3});
+  const ke::Pose T_cw = truth.inverse();
+  std::vector<Eigen::Vector3d> X;
+  std::vector<ke::PoseObservation> obs;
+  for (int i = 0; i < 60; ++i) {
+    const Eigen::Vector3d pc(-1.5 + 0.05 * i, -1.0 + 0.033 * (i % 7) * 9, 3.0 + 0.05 * (i % 5));
+    X.push_back(truth * pc);
+  }
+  for (std::size_t i = 0; i < X.size(); ++i) {
+    const Eigen::Vector3d pc = T_cw * X[i];
+    obs.push_back(ke::PoseObservation{X[i].data(), cam.fx * pc.x() / pc.z() + cam.cx, cam.fy * pc.y() / pc.z() + cam.cy, -1});
+  }
+  obs[7].u += 30;  // a wrong association
+  std::array<double, 6> block = ke::to_block(pose(0.12, {0.25, -0.08, 0.32}));  // the odometry prior
+  const ke::PoseResult r = ke::optimize_pose(cam, obs, block.data());
+  const ke::Pose got = ke::from_block(block.data());
+  EXPECT_LT((got.t - truth.t).norm(), 1e-6);
+  EXPECT_TRUE(r.outlier[7]);
+  EXPECT_EQ(r.inliers, 59);
+}
+
+TEST(EvalLocalBa, TheSecondStageReportsTheChiSquareOutlier) {
+  ke::Camera cam;
+  cam.baseline = 0.1;
+  std::vector<ke::Pose> truth{pose(0, {0, 0, 0}), pose(0.05, {0.3, 0, 0}), pose(0.1, {0.6, 0.05, 0})};
+  std::vector<std::array<double, 6>> blocks;
+  for (const ke::Pose& t : truth) blocks.push_back(ke::to_block(t));
+  blocks[2][3] += 0.02;  // a perturbed free pose
+  ke::BaInput in;
+  for (auto& b : blocks) in.poses.push_back(b.data());
+  in.pose_fixed = {true, true, false};
+  std::vector<std::array<double, 3>> pts;
+  for (int i = 0; i < 40; ++i) pts.push_back({-1.0 + 0.05 * i, -0.5 + 0.025 * (i % 9) * 4, 3.0 + 0.1 * (i % 4)});
+  for (auto& p : pts) in.points.push_back(p.data());
+  for (int k = 0; k < 3; ++k)
+    for (int j = 0; j < 40; ++j) {
+      const Eigen::Vector3d pc = truth[k].inverse() * Eigen::Vector3d(pts[j][0], pts[j][1], pts[j][2]);
+      const double u = cam.fx * pc.x() / pc.z() + cam.cx, v = cam.fy * pc.y() / pc.z() + cam.cy;
+      in.observations.push_back(ke::BaObservation{k, j, u, v, u - cam.fx * cam.baseline / pc.z()});
+    }
+  in.observations[2 * 40 + 5].v += 25;  // one wrong match in the free keyframe
+  const ke::BaResult r = ke::solve_local_ba(cam, in, 5, 10);
+  for (std::size_t i = 0; i < r.outlier.size(); ++i) EXPECT_EQ(r.outlier[i], i == 2 * 40 + 5) << i;
+  EXPECT_LT((ke::from_block(blocks[2].data()).t - truth[2].t).norm(), 1e-4);
+}
+
+ke::RunRecord rec(double ate, std::uint64_t mps, std::uint64_t obs, std::uint64_t seed) {
+  ke::RunRecord r;
+  r.ate_m = ate;
+  r.mps = mps;
+  r.kfs = 10;
+  r.observations = obs;
+  r.ba_s = 1;
+  r.seed = seed;
+  return r;
+}
+
+TEST(EvalContract, SummarizeGivesMeanSdSeedCountsAndRatios) {
+  ke::Comparison c;
+  c.info.input = "x";
+  c.info.kind = "trajectory";
+  c.info.error_floor_m = 0.3;
+  c.M = 42;
+  c.original = {rec(1.0, 100, 400, 1), rec(2.0, 100, 400, 2), rec(3.0, 100, 400, 3)};
+  c.ours = {rec(0.5, 30, 100, 1), rec(2.5, 30, 100, 2), rec(3.5, 36, 100, 3)};
+  c.random = {rec(1.0, 30, 100, 1), rec(2.0, 30, 100, 2), rec(4.0, 30, 100, 3)};
+  const ke::ContractRun r = ke::summarize(c);
+  EXPECT_EQ(r.seeds, 3);
+  EXPECT_DOUBLE_EQ(r.ate_ours.mean, 6.5 / 3);
+  EXPECT_NEAR(r.ate_original.sd, 1.0, 1e-12);
+  EXPECT_EQ(r.better_seeds, 1);
+  EXPECT_EQ(r.worse_seeds, 2);
+  EXPECT_EQ(r.below_random_seeds, 2);
+  EXPECT_NEAR(r.mp_percent.mean, 32.0, 1e-12);
+  EXPECT_DOUBLE_EQ(r.sqrt_obs_ratio, 2.0);
+  EXPECT_DOUBLE_EQ(r.sqrt_obs_ratio_random, 2.0);
+  EXPECT_TRUE(std::isnan(r.sqrt_obs_ratio_anms));
+  EXPECT_NEAR(r.ate_ratio, (6.5 / 3) / 2.0, 1e-12);
+  const double an = 6.5 / 3;
+  EXPECT_NEAR(r.ate_ratio_floored, std::sqrt(an * an + 0.09) / std::sqrt(4.0 + 0.09), 1e-12);
+  EXPECT_EQ(r.ate_anms.n, 0);  // not run: no figure
+  const std::string j = ke::contract_json({r}, "");
+  EXPECT_EQ(j.rfind("{\"runs\":[{", 0), 0u);
+  for (const char* k : {"input", "kind", "seeds", "M", "mp_percent", "kf_percent", "ba_time_percent", "ate_original_m",
+                        "ate_ours_m", "ate_ours_sd_m", "ate_random_m", "ate_longest_track_m", "ate_anms_m",
+                        "better_seeds", "worse_seeds", "sqrt_obs_ratio"})
+    EXPECT_NE(j.find(std::string("\"") + k + "\":"), std::string::npos) << k;
+  EXPECT_NE(j.find("\"ate_anms_m\":null"), std::string::npos);
+}
+
+}  // namespace
