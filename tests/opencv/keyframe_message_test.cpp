@@ -23,9 +23,18 @@ TEST(OpencvKeyframeMessage, CarriesPoseAndObservationsAndRoundTrips) {
   KeyframeRecord record;
   ASSERT_EQ(adapter.convert(42, pose, kps, ids, &unmapped, &record), Status::kOk);
 
+  // Every field is written, the optional arrays and publisher_id included
+  // (a message left uninitialised here once encoded garbage counts).
   keepless::keyframe_t msg;
-  to_keyframe_message(record, 9, 1000, 640, 480, false, &msg);
+  msg.num_depths = -7;
+  msg.num_intrinsics = 99;
+  msg.num_unmapped = 1 << 30;
+  to_keyframe_message(record, 9, 1000, 640, 480, false, &msg, 77);
   EXPECT_EQ(msg.keyframe_id, 42);
+  EXPECT_EQ(msg.num_depths, 0);
+  EXPECT_EQ(msg.num_intrinsics, 0);
+  EXPECT_EQ(msg.num_unmapped, 0);
+  EXPECT_EQ(msg.publisher_id, 77);
   EXPECT_EQ(msg.num_observations, 2);
   EXPECT_EQ(msg.point_id, (std::vector<std::int64_t>{5, std::int64_t{1} << 40}));
   EXPECT_FLOAT_EQ(msg.u[0], 10.5f);
@@ -41,6 +50,7 @@ TEST(OpencvKeyframeMessage, CarriesPoseAndObservationsAndRoundTrips) {
   EXPECT_EQ(back.point_id, msg.point_id);
   EXPECT_EQ(back.u, msg.u);
   EXPECT_EQ(back.image_width, 640);
+  EXPECT_EQ(back.publisher_id, 77);
 
   to_keyframe_message(record, 10, 2000, 640, 480, true, &msg);
   ASSERT_EQ(msg.num_observations, 3);

@@ -12,11 +12,13 @@ namespace keepless::opencv {
 
 // Fills `out` (its vectors reused) from `record`. with_unmapped: also send
 // the unmapped keypoints (their reserved ids), so the node's N(p, f) counts
-// them as the window's did. No status: the record was validated
-// when it was made.
+// them as the window's did. The optional arrays carry the observations'
+// depths when any is known and the keyframe's intrinsics when set (the
+// information cost model); publisher_id names this process to the node's
+// stream-order policy. No status: the record was validated when it was made.
 inline void to_keyframe_message(const KeyframeRecord& record, std::int64_t sequence, std::int64_t utime,
                                 std::int32_t image_width, std::int32_t image_height, bool with_unmapped,
-                                keepless::keyframe_t* out) {
+                                keepless::keyframe_t* out, std::int64_t publisher_id = 0) {
   const std::uint32_t n =
       with_unmapped ? static_cast<std::uint32_t>(record.observations.size()) : record.mapped;
   out->sequence = sequence;
@@ -36,6 +38,19 @@ inline void to_keyframe_message(const KeyframeRecord& record, std::int64_t seque
     out->u[i] = static_cast<float>(o.u);
     out->v[i] = static_cast<float>(o.v);
   }
+  bool any_depth = false;
+  for (std::uint32_t i = 0; i < n; ++i) any_depth = any_depth || record.observations[i].depth > 0;
+  out->num_depths = any_depth ? static_cast<std::int32_t>(n) : 0;
+  out->depth.resize(static_cast<std::size_t>(out->num_depths));
+  for (std::size_t i = 0; i < out->depth.size(); ++i) out->depth[i] = static_cast<float>(record.observations[i].depth);
+  const core::Keyframe& k = record.keyframe;
+  out->num_intrinsics = k.fx > 0 ? 4 : 0;
+  out->intrinsics.clear();
+  if (k.fx > 0) out->intrinsics = {k.fx, k.fy, k.cx, k.cy};
+  out->num_unmapped = 0;  // unmapped keypoints travel as reserved-id observations (with_unmapped)
+  out->unmapped_u.clear();
+  out->unmapped_v.clear();
+  out->publisher_id = publisher_id;
 }
 
 }  // namespace keepless::opencv
