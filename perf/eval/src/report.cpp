@@ -14,7 +14,7 @@ namespace {
 
 constexpr const char* kCsvHeader =
     "input,name,group,kind,alignment,variant,seed,M,target_fraction,compared_M,mps,kfs,observations,ba_s,total_s,"
-    "ate_m,ate_r_deg,C,F,S";
+    "ate_m,ate_r_deg,C,F,S,frames,frames_tracked";
 
 std::string f(double v, int prec) {
   if (!std::isfinite(v)) return "–";
@@ -369,7 +369,7 @@ bool write_outputs(const EvalSummary& s, const std::string& out_dir, std::string
             << json_number(c.target_fraction, 3) << "," << c.M << "," << r.mps << "," << r.kfs << "," << r.observations
             << "," << f(r.ba_s, 4) << "," << f(r.total_s, 4) << "," << json_number(r.ate_m, 9) << ","
             << json_number(r.ate_r_deg, 6) << "," << json_number(r.C, 4) << "," << json_number(r.F, 4) << ","
-            << json_number(r.S, 4) << "\n";
+            << json_number(r.S, 4) << "," << r.frames << "," << r.frames_tracked << "\n";
   bool ok = write("runs.csv", csv.str());
   std::string meta = s.command + "\n" + s.mode + "\n" + s.settings + "\n" + json_number(s.elapsed_s, 1) + "\n";
   for (const std::string& i : s.settings_inputs) meta += i + "\n";
@@ -480,6 +480,8 @@ bool read_outputs(const std::string& out_dir, EvalSummary* s, std::string* error
     r.C = num("C");
     r.F = num("F");
     r.S = num("S");
+    r.frames = col("frames") < 0 ? 0 : static_cast<int>(num("frames"));  // absent in older files
+    r.frames_tracked = col("frames_tracked") < 0 ? 0 : static_cast<int>(num("frames_tracked"));
     // One comparison per input and operating point (compared_M tells --M points apart).
     const std::string key = str("input") + "|" + str("target_fraction") + "|" + str("compared_M");
     auto it = std::find(keys.begin(), keys.end(), key);
