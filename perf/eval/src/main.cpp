@@ -20,13 +20,13 @@
 
 #include "bal_eval.hpp"
 #include "kitti_images.hpp"
-#include "vo_eval.hpp"
 #include "prng.hpp"
 #include "report.hpp"
 #include "run_record.hpp"
 #include "scenario.hpp"
 #include "slam_sim.hpp"
 #include "trajectory_io.hpp"
+#include "vo_eval.hpp"
 
 namespace ke = keepless::eval;
 
@@ -71,7 +71,7 @@ struct Args {
   std::vector<TrajectoryArg> trajectories;
   std::string images, calib, poses;  // --image-tracks
   std::vector<keepless::eval::vo::VoInput> vo;  // --images, --rgbd
-  std::string frames;
+  int frames_first = 0, frames_last = -2;  // --frames A:B; -2: not given (-1: to the end)
   std::vector<std::string> bal;
   std::vector<OperatingPoint> ops;
   int seeds = -1;
@@ -138,7 +138,13 @@ Args parse(int argc, char** argv) {
       const bool vo = !tracks_last && !a.vo.empty() && !a.vo.back().rgbd;
       if (!tracks_last && !vo) fail(f + " must follow its --images or --image-tracks");
       (f == "--calib" ? (vo ? a.vo.back().calib : a.calib) : (vo ? a.vo.back().poses : a.poses)) = val();
-    } else if (f == "--frames") a.frames = val();
+    } else if (f == "--frames") {
+      const std::string v = val();
+      const auto colon = v.find(':');
+      if (colon == std::string::npos) fail("--frames: expected A:B, got '" + v + "'");
+      a.frames_first = static_cast<int>(parse_int(f, v.substr(0, colon), 0, 10000000));
+      a.frames_last = static_cast<int>(parse_int(f, v.substr(colon + 1), a.frames_first, 10000000));
+    }
     else if (f == "--bal") a.bal.push_back(val());
     else if (f == "--M") {
       by_M = true;
@@ -463,13 +469,8 @@ int main(int argc, char** argv) {
 
   if (!a.vo.empty()) {  // the real VO, closed loop on real images
     keepless::eval::vo::VoEvalOptions vo;
-    const std::string fr = a.frames.empty() && a.quick ? "0:59" : a.frames;
-    const auto colon = fr.find(':');
-    if (!fr.empty() && colon == std::string::npos) fail("--frames: expected A:B, got '" + fr + "'");
-    if (!fr.empty()) {
-      vo.first = static_cast<int>(parse_int("--frames", fr.substr(0, colon), 0, 10000000));
-      vo.last = static_cast<int>(parse_int("--frames", fr.substr(colon + 1), vo.first, 10000000));
-    }
+    vo.first = a.frames_first;
+    vo.last = a.frames_last != -2 ? a.frames_last : (a.quick ? 59 : -1);
     vo.seeds = summary.seeds;
     for (const OperatingPoint& op : a.ops) vo.ops.emplace_back(op.fraction, op.M);
     vo.baselines = a.baselines;
