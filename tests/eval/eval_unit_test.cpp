@@ -170,4 +170,28 @@ TEST(EvalContract, SummarizeGivesMeanSdSeedCountsAndRatios) {
   EXPECT_NE(j.find("\"ate_anms_m\":null"), std::string::npos);
 }
 
+// The real VO's runs carry frames and frames tracked per variant; the other
+// kinds' objects do not grow those keys.
+TEST(EvalContract, RealVoRunsReportFramesTracked) {
+  ke::Comparison c;
+  c.info.input = "seq";
+  c.info.kind = "rgbd";
+  c.original = {rec(1.0, 100, 400, 1), rec(1.0, 100, 400, 2)};
+  c.ours = {rec(1.0, 30, 100, 1), rec(1.0, 30, 100, 2)};
+  EXPECT_EQ(ke::contract_json({ke::summarize(c)}, "").find("\"frames"), std::string::npos);
+  for (auto* v : {&c.original, &c.ours})
+    for (ke::RunRecord& r : *v) r.frames = 60, r.frames_tracked = 60;
+  c.ours[1].frames_tracked = 50;
+  const ke::ContractRun r = ke::summarize(c);
+  EXPECT_EQ(r.frames, 60);
+  EXPECT_DOUBLE_EQ(r.frames_tracked.mean, 55.0);
+  EXPECT_DOUBLE_EQ(r.frames_tracked_original.mean, 60.0);
+  EXPECT_EQ(r.frames_tracked_random.n, 0);
+  const std::string j = ke::contract_json({r}, "");
+  EXPECT_NE(j.find("\"frames\":60,"), std::string::npos) << j;
+  EXPECT_NE(j.find("\"frames_tracked\":55.00"), std::string::npos) << j;
+  EXPECT_NE(j.find("\"frames_tracked_original\":60.00"), std::string::npos) << j;
+  EXPECT_NE(j.find("\"frames_tracked_random\":null"), std::string::npos) << j;
+}
+
 }  // namespace

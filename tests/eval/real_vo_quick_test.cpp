@@ -1,5 +1,5 @@
-// Runs keepless_vo_eval --quick on 7-Scenes redkitchen (60 real RGB-D
-// frames) and checks that the VO is sound and its report complete: the
+// Runs keepless_eval --quick --rgbd on 7-Scenes redkitchen (frames 0:59, real
+// RGB-D) and checks that the VO is sound and its report complete: the
 // original run tracks >= 95 % of the frames with RMS ATE below 5 cm (the
 // full 600-frame target; measured on this slice: well under 1 cm), every
 // JSON key of the contract is present, the SVGs are written. The comparison
@@ -35,16 +35,16 @@ double number_after(const std::string& json, const std::string& key, bool* prese
 }
 
 TEST(RealVoQuick, SevenScenesSliceIsTrackedAccuratelyAndReportedInFull) {
-  const std::string bin = KEEPLESS_VO_EVAL_BIN;
+  const std::string bin = KEEPLESS_EVAL_BIN;
   const std::string data = std::string(KEEPLESS_EVAL_DATA) + "/7scenes_redkitchen_first600";
   ASSERT_TRUE(std::filesystem::exists(bin))
-      << bin << " is missing: build target keepless_vo_eval (perf/eval/vo; needs Ceres, OpenCV, keepless::opencv)";
+      << bin << " is missing: build target keepless_eval (perf/eval; its VO needs Ceres, OpenCV, keepless::opencv)";
   if (!std::filesystem::exists(data + "/frame-000059.color.jpg")) {
     GTEST_SKIP() << "no 7-Scenes data at " << data << " (see /work/shared/data/SOURCES.md)";
   }
   const std::string out = ::testing::TempDir() + "/real_vo_quick";
   std::filesystem::remove_all(out);
-  const std::string cmd = "'" + bin + "' --rgbd '" + data + "' --quick --out '" + out + "' 2>&1";
+  const std::string cmd = "'" + bin + "' --rgbd '" + data + "' --quick --frames 0:59 --out '" + out + "' 2>&1";
   std::unique_ptr<FILE, int (*)(FILE*)> pipe(popen(cmd.c_str(), "r"), pclose);
   ASSERT_NE(pipe, nullptr);
   std::string all, last;
@@ -67,6 +67,7 @@ TEST(RealVoQuick, SevenScenesSliceIsTrackedAccuratelyAndReportedInFull) {
     EXPECT_TRUE(present) << "JSON key " << key << " missing: " << last;
   }
   EXPECT_NE(last.find("\"kind\":\"rgbd\""), std::string::npos);
+  EXPECT_NE(last.find("\"alignment\":\"se3\""), std::string::npos);
   bool present = false;
   const double frames = number_after(last, "frames", &present);
   ASSERT_EQ(frames, 60.0);

@@ -26,6 +26,7 @@
 #include "scenario.hpp"
 #include "slam_sim.hpp"
 #include "trajectory_io.hpp"
+#include "vo_eval.hpp"
 
 namespace ke = keepless::eval;
 
@@ -33,7 +34,8 @@ namespace {
 
 const char* kUsage =
     "usage: keepless_eval [--quick] [--data-root DIR] [--trajectory FILE [--format tum|euroc|kitti]]...\n"
-    "                     [--images DIR --calib FILE --poses FILE] [--bal FILE]...\n"
+    "                     [--image-tracks DIR --calib FILE --poses FILE] [--bal FILE]...\n"
+    "                     [--images DIR --calib FILE --poses FILE]... [--rgbd DIR]... [--frames A:B]\n"
     "                     [--kept-fraction 0.3,0.4 | --M 100,200] [--seeds N] [--seed FIRST]\n"
     "                     [--error-floor none|GROUP=METRES,...] [--out DIR] [--max-keyframes N] [--keypoints N]\n"
     "                     [--window N] [--ba-iterations N] [--image-frames N] [--noise-free] [--no-baselines]\n"
@@ -41,6 +43,9 @@ const char* kUsage =
     "       keepless_eval --report DIR [--report DIR]... [--error-floor ...] [--out DIR2]\n"
     "  --data-root DIR     add the standard inputs under DIR (../shared/data layout; --quick: a small subset)\n"
     "  --format            applies to the --trajectory just before it; without it the format is guessed\n"
+    "  --images, --rgbd    the real VO (perf/eval/vo) on a KITTI-layout (--calib, --poses follow it) or 7-Scenes\n"
+    "                      RGB-D sequence, frames A..B inclusive (--frames; default all, --quick 0:59)\n"
+    "  --image-tracks      the synthetic back end on ORB tracks of KITTI-layout images (issue 6)\n"
     "  --kept-fraction F   per input, the M (found on the first seed) at which keepless keeps F of the original's\n"
     "                      map points (default 0.3); --M gives M directly instead\n"
     "  --seeds N           seeds FIRST .. FIRST+N-1 (default 5, --quick 2); tables show mean +- sd over them\n"
@@ -64,7 +69,9 @@ struct Args {
   bool quick = false;
   std::string data_root;
   std::vector<TrajectoryArg> trajectories;
-  std::string images, calib, poses;
+  std::string images, calib, poses;  // --image-tracks
+  std::vector<keepless::eval::vo::VoInput> vo;  // --images, --rgbd
+  int frames_first = 0, frames_last = -2;  // --frames A:B; -2: not given (-1: to the end)
   std::vector<std::string> bal;
   std::vector<OperatingPoint> ops;
   int seeds = -1;
@@ -105,7 +112,7 @@ std::vector<std::string> split(const std::string& s, char sep) {
 
 Args parse(int argc, char** argv) {
   Args a;
-  bool by_M = false, by_fraction = false;
+  bool by_M = false, by_fraction = false, tracks_last = false;
   for (int i = 1; i < argc; ++i) {
     const std::string f = argv[i];
     auto val = [&]() -> std::string {
@@ -121,9 +128,23 @@ Args parse(int argc, char** argv) {
       if (!ke::parse_format(v, &tf)) fail("--format: expected tum, euroc or kitti, got '" + v + "'");
       if (a.trajectories.empty() || !a.trajectories.back().format.empty()) fail("--format must follow its --trajectory");
       a.trajectories.back().format = v;
-    } else if (f == "--images") a.images = val();
-    else if (f == "--calib") a.calib = val();
-    else if (f == "--poses") a.poses = val();
+    } else if (f == "--images" || f == "--rgbd") {
+      a.vo.push_back({f == "--rgbd", val(), "", ""});
+      tracks_last = false;
+    } else if (f == "--image-tracks") {
+      a.images = val();
+      tracks_last = true;
+    } else if (f == "--calib" || f == "--poses") {  // for the --images or --image-tracks before it
+      const bool vo = !tracks_last && !a.vo.empty() && !a.vo.back().rgbd;
+      if (!tracks_last && !vo) fail(f + " must follow its --images or --image-tracks");
+      (f == "--calib" ? (vo ? a.vo.back().calib : a.calib) : (vo ? a.vo.back().poses : a.poses)) = val();
+    } else if (f == "--frames") {
+      const std::string v = val();
+      const auto colon = v.find(':');
+      if (colon == std::string::npos) fail("--frames: expected A:B, got '" + v + "'");
+      a.frames_first = static_cast<int>(parse_int(f, v.substr(0, colon), 0, 10000000));
+      a.frames_last = static_cast<int>(parse_int(f, v.substr(colon + 1), a.frames_first, 10000000));
+    }
     else if (f == "--bal") a.bal.push_back(val());
     else if (f == "--M") {
       by_M = true;
@@ -159,7 +180,9 @@ Args parse(int argc, char** argv) {
     } else fail("unknown flag '" + f + "'\n" + kUsage);
   }
   if (by_M && by_fraction) fail("--M and --kept-fraction exclude each other");
-  if (!a.images.empty() && (a.calib.empty() || a.poses.empty())) fail("--images needs --calib and --poses");
+  if (!a.images.empty() && (a.calib.empty() || a.poses.empty())) fail("--image-tracks needs --calib and --poses");
+  for (const auto& v : a.vo)
+    if (!v.rgbd && (v.calib.empty() || v.poses.empty())) fail("--images " + v.dir + " needs --calib and --poses");
   if (a.ops.empty()) a.ops.push_back({0.3, 0});
   if (a.seeds < 0) a.seeds = a.quick ? 2 : 5;
   return a;
@@ -371,8 +394,8 @@ int main(int argc, char** argv) {
   Args a = parse(argc, argv);
   if (!a.data_root.empty()) add_data_root(&a);
   if (!a.report.empty()) return report_again(a);
-  if (a.trajectories.empty() && a.images.empty() && a.bal.empty())
-    fail(std::string("no input: give --data-root, --trajectory, --images or --bal\n") + kUsage);
+  if (a.trajectories.empty() && a.images.empty() && a.vo.empty() && a.bal.empty())
+    fail(std::string("no input: give --data-root, --trajectory, --images, --rgbd, --image-tracks or --bal\n") + kUsage);
 
   ke::EvalSummary summary;
   summary.mode = a.quick ? "quick" : "full";
@@ -426,7 +449,7 @@ int main(int argc, char** argv) {
     if (a.noise_free) io.odom_noise_t = io.odom_noise_r_deg = 0;
     ke::Scenario base;
     std::string err;
-    std::cerr << "keepless_eval: images " << a.images << "\n";
+    std::cerr << "keepless_eval: image tracks " << a.images << "\n";
     io.seed = ke::input_seed(a.first_seed, "images");
     if (!ke::make_image_scenario(a.images, a.calib, a.poses, io, &base, &err)) fail(err);
     ke::InputInfo info;
@@ -442,6 +465,19 @@ int main(int argc, char** argv) {
                return sc;
              },
              info, a, sim, &summary);
+  }
+
+  if (!a.vo.empty()) {  // the real VO, closed loop on real images
+    keepless::eval::vo::VoEvalOptions vo;
+    vo.first = a.frames_first;
+    vo.last = a.frames_last != -2 ? a.frames_last : (a.quick ? 59 : -1);
+    vo.seeds = summary.seeds;
+    for (const OperatingPoint& op : a.ops) vo.ops.emplace_back(op.fraction, op.M);
+    vo.baselines = a.baselines;
+    vo.out = a.out;
+    std::string err;
+    for (const auto& in : a.vo)
+      if (!keepless::eval::vo::evaluate_real_vo(in, vo, &summary.comparisons, &err)) fail(err);
   }
 
   for (const std::string& b : a.bal)

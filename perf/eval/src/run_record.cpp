@@ -105,6 +105,13 @@ ContractRun summarize(const Comparison& c) {
   r.sqrt_obs_ratio_anms = sqrt_obs(c.anms);
   const double f2 = c.info.error_floor_m * c.info.error_floor_m;
   if (c.info.error_floor_m > 0) r.ate_ratio_floored = std::sqrt(an * an + f2) / std::sqrt(ao * ao + f2);
+  r.frames = g.empty() ? 0 : g.front().frames;
+  auto tracked = [](const RunRecord& a) { return double(a.frames_tracked); };
+  r.frames_tracked = stat_over(c.ours, tracked);
+  r.frames_tracked_original = stat_over(g, tracked);
+  r.frames_tracked_random = stat_over(c.random, tracked);
+  r.frames_tracked_longest_track = stat_over(c.longest_track, tracked);
+  r.frames_tracked_anms = stat_over(c.anms, tracked);
   return r;
 }
 
@@ -164,6 +171,14 @@ std::string run_json(const ContractRun& r) {
   field(o, "sqrt_obs_ratio_anms", json_number(r.sqrt_obs_ratio_anms, 4));
   field(o, "error_floor_m", json_number(r.info.error_floor_m, 4));
   field(o, "ate_ratio_floored", json_number(r.ate_ratio_floored, 4));
+  if (r.frames > 0) {
+    field(o, "frames", std::to_string(r.frames));
+    field(o, "frames_tracked", json_number(r.frames_tracked.mean, 2));
+    field(o, "frames_tracked_original", json_number(r.frames_tracked_original.mean, 2));
+    field(o, "frames_tracked_random", json_number(r.frames_tracked_random.mean, 2));
+    field(o, "frames_tracked_longest_track", json_number(r.frames_tracked_longest_track.mean, 2));
+    field(o, "frames_tracked_anms", json_number(r.frames_tracked_anms.mean, 2));
+  }
   o << "}";
   return o.str();
 }

@@ -10,6 +10,7 @@
 //              "ba_time_percent", "ate_original_m", "ate_ours_m", "ate_ours_sd_m",
 //              "ate_random_m", "ate_longest_track_m", "ate_anms_m", "better_seeds",
 //              "worse_seeds", "sqrt_obs_ratio", ...}, ...], ...}
+// plus, for the real VO (kind images / rgbd), "frames" and "frames_tracked[_VARIANT]".
 
 #include <cmath>
 #include <cstdint>
@@ -29,6 +30,7 @@ struct RunRecord {
   double ba_s = 0, total_s = 0;
   double ate_m = NAN, ate_r_deg = NAN;
   double C = NAN, F = NAN, S = NAN;  // section IV-F: observations per point, keyframe span, grid occupancy %
+  int frames = 0, frames_tracked = 0;  // real VO (kind images / rgbd): frames given and tracked; 0 elsewhere
 };
 
 struct InputInfo {
@@ -75,6 +77,10 @@ struct ContractRun {
   double sqrt_obs_ratio = NAN;   // sqrt(mean observations original / ours)
   double sqrt_obs_ratio_random = NAN, sqrt_obs_ratio_longest_track = NAN, sqrt_obs_ratio_anms = NAN;
   double ate_ratio_floored = NAN;  // with error_floor_m added in quadrature to both
+  // Real VO only (frames > 0): frames given, mean frames tracked per variant.
+  int frames = 0;
+  Stat frames_tracked, frames_tracked_original, frames_tracked_random, frames_tracked_longest_track,
+      frames_tracked_anms;
 };
 
 ContractRun summarize(const Comparison& c);

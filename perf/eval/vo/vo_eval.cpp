@@ -1,0 +1,123 @@
+#include "vo_eval.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+
+#include "real_vo.hpp"
+#include "vo_report.hpp"
+
+namespace keepless::eval::vo {
+namespace {
+
+// --kept-fraction: the M of this ladder whose mean kept fraction of the new
+// keyframes' evaluated points, on the first seed's original windows, is nearest.
+const std::vector<std::int64_t> kLadder = {5, 10, 20, 30, 50, 75, 100, 150, 200, 300};
+
+RunRecord record_of(const RealRunResult& r, const char* variant, std::uint64_t seed, std::int64_t M) {
+  RunRecord x;
+  x.variant = variant;
+  x.seed = seed;
+  x.M = M;
+  x.mps = static_cast<std::uint64_t>(r.map_points);
+  x.kfs = static_cast<std::uint64_t>(r.keyframes);
+  x.observations = static_cast<std::uint64_t>(r.observations);
+  x.ba_s = r.local_ba_seconds;
+  x.total_s = r.total_seconds;
+  x.ate_m = r.ate_m;
+  x.ate_r_deg = r.ate_r_deg;
+  x.frames = r.frames;
+  x.frames_tracked = r.frames_tracked;
+  return x;
+}
+
+void log_run(const RealSequence& s, const RunRecord& r, const RealRunResult& x) {
+  std::fprintf(stderr,
+               "  %s seed %llu %s M=%lld: tracked %d/%d (losses %d) mps %d kfs %d (made %d) culled %lld "
+               "(windows refused %d) ate %.4f m, local BA %.2f s (%d), total %.1f s\n",
+               s.name.c_str(), static_cast<unsigned long long>(r.seed), r.variant.c_str(),
+               static_cast<long long>(r.M), x.frames_tracked, x.frames, x.tracking_losses, x.map_points, x.keyframes,
+               x.keyframes_created, static_cast<long long>(x.points_culled_by_selector), x.window_rejections, x.ate_m,
+               x.local_ba_seconds, x.local_bas, x.total_seconds);
+}
+
+}  // namespace
+
+bool evaluate_real_vo(const VoInput& in, const VoEvalOptions& o, std::vector<Comparison>* out, std::string* error) {
+  RealSequence seq;
+  const bool loaded = in.rgbd ? load_rgbd_sequence(in.dir, o.first, o.last, &seq, error)
+                              : load_kitti_sequence(in.dir, in.calib, in.poses, o.first, o.last, &seq, error);
+  if (!loaded) return false;
+  std::fprintf(stderr, "keepless_eval: %s %s: %zu frames, path %.2f m, %dx%d, fx %.1f\n", in.rgbd ? "rgbd" : "images",
+               seq.name.c_str(), seq.image_files.size(), seq.path_length(), seq.camera.width, seq.camera.height,
+               seq.camera.fx);
+  const std::size_t first = out->size();
+  for (const auto& [fraction, M] : o.ops) {
+    Comparison c;
+    c.info.input = in.dir;
+    c.info.name = seq.name;
+    c.info.kind = seq.rgbd ? "rgbd" : "images";
+    c.info.group = "vo_" + c.info.kind;
+    c.info.sim3 = !seq.rgbd;  // monocular: scale is not observable
+    c.target_fraction = fraction;
+    c.M = M;
+    out->push_back(c);
+  }
+  RealRunResult first_original, first_ours;  // the first seed at the first operating point, for the SVGs
+  for (std::size_t si = 0; si < o.seeds.size(); ++si) {
+    RealVoOptions vo;
+    vo.seed = o.seeds[si];
+    vo.selector = Selector::kOriginal;
+    if (si == 0) vo.calibrate_M = kLadder;
+    const RealRunResult original = run_real_vo(seq, vo);
+    if (!original.error.empty()) {
+      *error = original.error;
+      return false;
+    }
+    vo.calibrate_M.clear();
+    for (std::size_t p = 0; p < o.ops.size(); ++p) {
+      Comparison& c = (*out)[first + p];
+      if (si == 0 && std::isfinite(c.target_fraction)) {
+        std::size_t best = 0;
+        for (std::size_t m = 0; m < kLadder.size(); ++m)
+          if (std::abs(original.calibration_kept_fraction[m] - c.target_fraction) <
+              std::abs(original.calibration_kept_fraction[best] - c.target_fraction))
+            best = m;
+        c.M = kLadder[best];
+        std::fprintf(stderr, "  %s: kept fraction %.2f -> M %lld (keeps %.3f of the evaluated points)\n",
+                     seq.name.c_str(), c.target_fraction, static_cast<long long>(c.M),
+                     original.calibration_kept_fraction[best]);
+      }
+      c.original.push_back(record_of(original, "original", vo.seed, 0));
+      if (p == 0) log_run(seq, c.original.back(), original);
+      vo.params.pair_capacity = c.M;
+      const std::pair<Selector, std::vector<RunRecord>*> runs[] = {
+          {Selector::kKeepless, &c.ours}, {Selector::kRandom, &c.random},
+          {Selector::kLongestTrack, &c.longest_track}, {Selector::kAnms, &c.anms}};
+      for (const auto& [selector, into] : runs) {
+        if (selector != Selector::kKeepless && !o.baselines) continue;
+        vo.selector = selector;
+        const RealRunResult r = run_real_vo(seq, vo);
+        into->push_back(record_of(r, selector == Selector::kKeepless ? "ours" : to_string(selector), vo.seed, c.M));
+        log_run(seq, into->back(), r);
+        if (si == 0 && p == 0 && selector == Selector::kKeepless) first_ours = r;
+      }
+    }
+    if (si == 0) first_original = original;
+  }
+  if (!o.out.empty() && !o.ops.empty() && !o.seeds.empty()) {
+    std::filesystem::create_directories(o.out);
+    const std::string base = o.out + "/" + seq.name;
+    const std::string M = std::to_string((*out)[first].M);
+    if (!write_trajectory_svg(base + "_trajectory.svg", seq.name + ", seed " + std::to_string(o.seeds[0]) + ", M " + M,
+                              first_original, first_ours) ||
+        !write_keypoints_svg(base + "_keypoints.svg", seq.name + " keepless M " + M, first_ours, seq.camera.width,
+                             seq.camera.height)) {
+      *error = "cannot write " + base + "_*.svg";
+      return false;
+    }
+  }
+  return true;
+}
+
+}  // namespace keepless::eval::vo

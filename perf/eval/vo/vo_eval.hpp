@@ -1,0 +1,34 @@
+#pragma once
+// keepless_eval's real-VO inputs (--images with --calib/--poses, --rgbd):
+// per seed the original, then per operating point keepless and the
+// equal-count baselines, each run a RunRecord in issue 11's Comparison, so
+// the same summarize / tables / JSON serve every kind of input.
+
+#include <cstdint>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "run_record.hpp"
+
+namespace keepless::eval::vo {
+
+struct VoInput {
+  bool rgbd = false;
+  std::string dir, calib, poses;  // calib, poses: KITTI layout only
+};
+
+struct VoEvalOptions {
+  int first = 0, last = -1;                         // --frames A:B, inclusive (last < 0: to the end)
+  std::vector<std::uint64_t> seeds;                 // RANSAC order and the random baseline's priorities
+  std::vector<std::pair<double, std::int64_t>> ops;  // (kept fraction, NaN for a given M; M)
+  bool baselines = true;
+  std::string out;  // non-empty: NAME_trajectory.svg and NAME_keypoints.svg there
+};
+
+// Appends one Comparison per operating point; false with `error` on
+// unreadable input.
+[[nodiscard]] bool evaluate_real_vo(const VoInput& input, const VoEvalOptions& options,
+                                    std::vector<Comparison>* out, std::string* error);
+
+}  // namespace keepless::eval::vo
