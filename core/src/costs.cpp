@@ -1,8 +1,29 @@
 #include "keepless/core/costs.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 namespace keepless::core {
+
+namespace {
+
+double distance(const double a[3], const double b[3]) {
+  const double dx = a[0] - b[0];
+  const double dy = a[1] - b[1];
+  const double dz = a[2] - b[2];
+  return std::sqrt(dx * dx + dy * dy + dz * dz);
+}
+
+// A keypoint's grid cell along one axis, clamped to [-2, cells + 1] so that
+// it fits an int (outside the grid either way).
+std::int32_t grid_cell(double x, double per_pixel, std::int32_t cells) {
+  const double c = std::round(x * per_pixel);
+  if (!(c >= -2.0)) return -2;  // NaN cannot occur: inputs are finite
+  if (c > cells + 1.0) return cells + 1;
+  return static_cast<std::int32_t>(c);
+}
+
+}  // namespace
 
 void connectivity_costs(std::uint32_t m, std::int64_t* table) {
   if (m < 2) return;
@@ -41,11 +62,147 @@ std::int64_t spatial_cost(std::uint64_t a, std::uint64_t b) {
 }
 
 std::int64_t baseline_cost(const double centre_j[3], const double centre_k[3]) {
-  const double dx = centre_j[0] - centre_k[0];
-  const double dy = centre_j[1] - centre_k[1];
-  const double dz = centre_j[2] - centre_k[2];
-  const double d = std::sqrt(dx * dx + dy * dy + dz * dz);
+  const double d = distance(centre_j, centre_k);
   return static_cast<std::int64_t>(std::ceil(10.0 / (0.1 * d + 1.0)));
+}
+
+
+std::int64_t authors_spatial_cost(std::uint64_t a, std::uint64_t b) {
+  // Counts are keypoints of one frame (< 2^32), so a*b fits 64 bits.
+  const std::uint64_t n = a * b;
+  const std::int64_t bin = n < 100 ? 0 : n < 500 ? 1 : n < 1200 ? 2 : 3;
+  return 2 * bin;
+}
+
+std::int64_t authors_baseline_cost(const double centre_j[3], const double centre_k[3]) {
+  const double d = distance(centre_j, centre_k);
+  for (std::int64_t step = 1; step <= 10; ++step) {
+    if (d < 10.0 * static_cast<double>(step)) return 10 * (11 - step);
+  }
+  return 0;
+}
+
+void grid_neighbours(const Keyframe& kf, const Observation* observations, std::uint32_t count,
+                     std::int32_t width, std::int32_t height, std::uint32_t* cells,
+                     std::uint32_t* out) {
+  const double per_u = static_cast<double>(kGridColumns) / width;
+  const double per_v = static_cast<double>(kGridRows) / height;
+  std::fill(cells, cells + kGridColumns * kGridRows, 0u);
+  const auto add = [&](double u, double v) {
+    const std::int32_t cu = grid_cell(u, per_u, kGridColumns);
+    const std::int32_t cv = grid_cell(v, per_v, kGridRows);
+    if (cu >= 0 && cu < kGridColumns && cv >= 0 && cv < kGridRows) ++cells[cv * kGridColumns + cu];
+  };
+  for (std::uint32_t i = 0; i < count; ++i) add(observations[i].u, observations[i].v);
+  for (std::uint32_t i = 0; i < kf.unmapped_count; ++i) add(kf.unmapped[i].u, kf.unmapped[i].v);
+  for (std::uint32_t i = 0; i < count; ++i) {
+    const std::int32_t cu = grid_cell(observations[i].u, per_u, kGridColumns);
+    const std::int32_t cv = grid_cell(observations[i].v, per_v, kGridRows);
+    std::uint32_t n = 0;
+    for (std::int32_t y = std::max(0, cv - 1); y <= std::min(kGridRows - 1, cv + 1); ++y) {
+      for (std::int32_t x = std::max(0, cu - 1); x <= std::min(kGridColumns - 1, cu + 1); ++x) {
+        n += cells[y * kGridColumns + x];
+      }
+    }
+    out[i] = n;
+  }
+}
+
+namespace {
+
+// The two rows of an observation's reprojection Jacobian with respect to a
+// perturbation (translation, rotation) of the camera pose, for the point
+// at depth z along the ray through (u, v). Their sign convention does not
+// matter: leverages are invariant to any reparametrisation of the pose.
+void jacobian_rows(const Keyframe& kf, const Observation& o, double ju[6], double jv[6]) {
+  const double a = (o.u - kf.cx) / kf.fx;  // x / z
+  const double b = (o.v - kf.cy) / kf.fy;  // y / z
+  const double r = 1.0 / o.depth;
+  ju[0] = kf.fx * r;
+  ju[1] = 0.0;
+  ju[2] = -kf.fx * a * r;
+  ju[3] = -kf.fx * a * b;
+  ju[4] = kf.fx * (1.0 + a * a);
+  ju[5] = -kf.fx * b;
+  jv[0] = 0.0;
+  jv[1] = kf.fy * r;
+  jv[2] = -kf.fy * b * r;
+  jv[3] = -kf.fy * (1.0 + b * b);
+  jv[4] = kf.fy * a * b;
+  jv[5] = kf.fy * a;
+}
+
+// Solves L y = j for the lower-triangular Cholesky factor L (row-major
+// 6x6), given the reciprocals of its diagonal.
+void forward(const double l[36], const double inverse_diagonal[6], const double j[6], double y[6]) {
+  for (int r = 0; r < 6; ++r) {
+    double x = j[r];
+    for (int c = 0; c < r; ++c) x -= l[6 * r + c] * y[c];
+    y[r] = x * inverse_diagonal[r];
+  }
+}
+
+}  // namespace
+
+void information_levels(const Keyframe& kf, const Observation* observations, std::uint32_t count,
+                        std::uint32_t* out) {
+  std::fill(out, out + count, kNeutralInformationLevel);
+  if (!(kf.fx > 0.0) || !(kf.fy > 0.0)) return;
+  const auto usable = [](const Observation& o) { return o.depth > 0.0; };
+  // The keyframe's information (lower triangle), summed in observation order.
+  double info[36] = {};
+  std::uint32_t used = 0;
+  for (std::uint32_t i = 0; i < count; ++i) {
+    if (!usable(observations[i])) continue;
+    double ju[6], jv[6];
+    jacobian_rows(kf, observations[i], ju, jv);
+    for (int r = 0; r < 6; ++r) {
+      for (int c = 0; c <= r; ++c) info[6 * r + c] += ju[r] * ju[c] + jv[r] * jv[c];
+    }
+    ++used;
+  }
+  // With 3 observations (6 equations, 6 unknowns) every leverage is exactly
+  // 1 (r = 1, a level boundary): the pose is not over-determined, so there
+  // is nothing to rank.
+  if (used < 4) return;
+  // Cholesky; a pivot below 1e-9 of the largest diagonal entry (or not
+  // finite) makes the keyframe degenerate: every observation stays neutral.
+  double largest = 0.0;
+  for (int r = 0; r < 6; ++r) largest = std::max(largest, info[6 * r + r]);
+  if (!std::isfinite(largest) || !(largest > 0.0)) return;
+  double l[36] = {};
+  for (int r = 0; r < 6; ++r) {
+    for (int c = 0; c <= r; ++c) {
+      double x = info[6 * r + c];
+      for (int k = 0; k < c; ++k) x -= l[6 * r + k] * l[6 * c + k];
+      if (r == c) {
+        if (!(x > 1e-9 * largest)) return;
+        l[6 * r + r] = std::sqrt(x);
+      } else {
+        l[6 * r + c] = x / l[6 * c + c];
+      }
+    }
+  }
+  double inverse_diagonal[6];
+  for (int r = 0; r < 6; ++r) inverse_diagonal[r] = 1.0 / l[6 * r + r];
+  // Leverage t = |L^-1 ju|^2 + |L^-1 jv|^2; its mean over the used
+  // observations is 6 / used, so r = t * used / 6 has mean 1. Level
+  // 2 - floor(log2 r), clamped to [0, 4]: frexp gives floor(log2 r) exactly.
+  for (std::uint32_t i = 0; i < count; ++i) {
+    if (!usable(observations[i])) continue;
+    double ju[6], jv[6], yu[6], yv[6];
+    jacobian_rows(kf, observations[i], ju, jv);
+    forward(l, inverse_diagonal, ju, yu);
+    forward(l, inverse_diagonal, jv, yv);
+    double t = 0.0;
+    for (int r = 0; r < 6; ++r) t += yu[r] * yu[r] + yv[r] * yv[r];
+    const double ratio = t * static_cast<double>(used) / 6.0;
+    if (!(ratio > 0.0) || !std::isfinite(ratio)) continue;
+    int exponent = 0;
+    (void)std::frexp(ratio, &exponent);  // ratio = m * 2^exponent, m in [0.5, 1)
+    const int level = 2 - (exponent - 1);
+    out[i] = static_cast<std::uint32_t>(std::min(4, std::max(0, level)));
+  }
 }
 
 bool in_box(double du, double dv, std::int32_t box_width, std::int32_t box_height) {

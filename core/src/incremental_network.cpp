@@ -4,7 +4,7 @@
 #include <cstring>
 #include <vector>
 
-#include "box_neighbours.hpp"
+#include "cost_model.hpp"
 #include "id_table.hpp"
 #include "keepless/core/costs.hpp"
 #include "keepless/core/network.hpp"
@@ -66,6 +66,9 @@ struct IncrementalNetwork::Impl {
   struct Frame {
     KeyframeId id = 0;
     double centre[3] = {0, 0, 0};
+    double intrinsics[4] = {0, 0, 0, 0};  // fx, fy, cx, cy
+    std::uint32_t unmapped = 0;           // its unmapped keypoints (not kept: see same_content)
+    std::uint32_t window_slot = 0;        // in the window of the last update
     std::uint64_t stamp = 0;  // Window::keyframe_stamp when last matched or added
     std::uint32_t begin = 0, count = 0;
     bool live = false;
@@ -120,8 +123,8 @@ struct IncrementalNetwork::Impl {
   std::vector<Observation> pool;          // keyframes' observations, [2 * max_observations]
   std::vector<std::uint32_t> pool_point;  // point slot of each
   std::uint32_t pool_top = 0;
-  BoxCounter box;
-  std::vector<std::uint32_t> counts;  // N of the keyframe being added
+  ObservationScorer scorer;
+  std::vector<std::uint32_t> counts;  // N (or information level) of the keyframe being added
 
   IdTable slot_of;  // point id -> slot
   std::vector<Point> points;
@@ -204,7 +207,7 @@ struct IncrementalNetwork::Impl {
   explicit Impl(const Capacities& c)
       : caps(c),
         room(IncrementalNetwork::solver_capacity(c)),
-        box(c.max_observations),
+        scorer(c.max_observations),
         slot_of(c.max_points) {
     frame_slots = std::max<std::uint32_t>(2, 2 * c.max_keyframes);
     const std::size_t s = frame_slots;
@@ -249,9 +252,13 @@ struct IncrementalNetwork::Impl {
     free_nodes.resize(static_cast<std::size_t>(std::max(room.max_nodes, 0)));
     cm.resize(kmax);
     spatial_memo.resize(std::size_t{kSpatialMemo} * kSpatialMemo);
+  }
+
+  // The point -> pair costs of small scores under `params` (all < 256).
+  void memoise_arc_costs() {
     for (std::uint32_t a = 0; a < kSpatialMemo; ++a) {
       for (std::uint32_t b = 0; b < kSpatialMemo; ++b) {
-        spatial_memo[a * kSpatialMemo + b] = static_cast<std::uint8_t>(spatial_cost(a, b));
+        spatial_memo[a * kSpatialMemo + b] = static_cast<std::uint8_t>(pair_arc_cost(params, a, b));
       }
     }
   }
@@ -259,7 +266,7 @@ struct IncrementalNetwork::Impl {
   std::size_t bytes() const {
     const auto b = [](const auto& v) { return v.capacity() * sizeof(v[0]); };
     return sizeof(Impl) + b(frames) + b(frame_of) + b(matched) + b(by_begin) + b(pool) +
-           b(pool_point) + box.memory_bytes() + b(counts) + slot_of.memory_bytes() + b(points) +
+           b(pool_point) + scorer.memory_bytes() + b(counts) + slot_of.memory_bytes() + b(points) +
            b(views) + b(source_of) + b(source_views) + b(source_bits) + b(free_points) +
            b(views_count) + b(touched) + b(is_touched) + b(doomed) + b(is_removed) + b(added) +
            b(add_head) + b(merge) + b(arena) + b(pair_node) + b(pair_sink) + b(pair_arcs) +
@@ -270,13 +277,11 @@ struct IncrementalNetwork::Impl {
   // --- costs --------------------------------------------------------------
 
   std::int64_t spatial(std::uint32_t a, std::uint32_t b) const {
-    if (!(params.cost_terms & kSpatialCost)) return 0;
     if (a < kSpatialMemo && b < kSpatialMemo) return spatial_memo[a * kSpatialMemo + b];
-    return spatial_cost(a, b);
+    return pair_arc_cost(params, a, b);
   }
   std::int64_t baseline(std::uint32_t fa, std::uint32_t fb) const {
-    return (params.cost_terms & kBaselineCost) ? baseline_cost(frames[fa].centre, frames[fb].centre)
-                                               : 0;
+    return pair_sink_cost(params, frames[fa].centre, frames[fb].centre);
   }
 
   // --- blocks ---------------------------------------------------------------
@@ -549,9 +554,14 @@ struct IncrementalNetwork::Impl {
     return pool_top + std::uint64_t{count} <= pool.size() ? pool_top : kNone;
   }
 
+  // Unmapped keypoints are not kept here, so a keyframe with any is the
+  // same only by its stamp (a different one is re-added: correct, slower).
   bool same_content(const Frame& f, const Keyframe& kf, const Observation* obs,
                     std::uint32_t count) const {
-    return f.count == count && std::memcmp(f.centre, kf.centre, sizeof(f.centre)) == 0 &&
+    const double intrinsics[4] = {kf.fx, kf.fy, kf.cx, kf.cy};
+    return f.count == count && f.unmapped == 0 && kf.unmapped_count == 0 &&
+           std::memcmp(f.centre, kf.centre, sizeof(f.centre)) == 0 &&
+           std::memcmp(f.intrinsics, intrinsics, sizeof(intrinsics)) == 0 &&
            (count == 0 ||
             std::memcmp(pool.data() + f.begin, obs, count * sizeof(Observation)) == 0);
   }
@@ -670,15 +680,19 @@ Status IncrementalNetwork::Impl::add_frames(const Window& window) {
     const std::uint32_t begin = pool_room(count);
     if (begin == kNone) return Status::kCapacityExceeded;
     Frame& fr = frames[f];
-    fr.id = window.keyframe(s).id;
-    std::memcpy(fr.centre, window.keyframe(s).centre, sizeof(fr.centre));
+    const Keyframe& kf = window.keyframe(s);
+    fr.id = kf.id;
+    std::memcpy(fr.centre, kf.centre, sizeof(fr.centre));
+    const double intrinsics[4] = {kf.fx, kf.fy, kf.cx, kf.cy};
+    std::memcpy(fr.intrinsics, intrinsics, sizeof(intrinsics));
+    fr.unmapped = kf.unmapped_count;
     fr.stamp = window.keyframe_stamp(s);
     fr.begin = begin;
     fr.count = count;
     fr.live = true;
     pool_top = begin + count;
     if (count > 0) std::memcpy(pool.data() + fr.begin, obs, count * sizeof(Observation));
-    box.count(obs, count, params.box_width, params.box_height, counts.data());
+    scorer.score(kf, obs, count, params, counts.data());
     std::uint32_t* slots = pool_point.data() + fr.begin;
     for (std::uint32_t i = 0; i < count; ++i) {
       if (i + kAhead < count) slot_of.prefetch(obs[i + kAhead].point);
@@ -931,22 +945,24 @@ void IncrementalNetwork::Impl::rank() {
 
 Status IncrementalNetwork::Impl::update(const Window& window, const Params& p,
                                         solver::MinCostFlow& solver) {
-  if (p.box_width < 0 || p.box_height < 0 || p.pair_capacity < 0) return Status::kInvalidArgument;
+  if (p.box_width < 0 || p.box_height < 0 || p.pair_capacity < 0 ||
+      (p.cost_model == CostModel::kAuthors && (p.image_width <= 0 || p.image_height <= 0))) {
+    return Status::kInvalidArgument;
+  }
   if (window.keyframe_count() > caps.max_keyframes ||
       window.total_observations() > caps.max_observations ||
       window.distinct_points() > caps.max_points) {
     return Status::kCapacityExceeded;
   }
   changes = Changes{};
-  const bool same_params = built && p.pair_capacity == params.pair_capacity &&
-                           p.box_width == params.box_width && p.box_height == params.box_height &&
-                           p.cost_terms == params.cost_terms;
+  const bool same_params = built && same_network(p, params);
   if (!same_params) {
     reset_state();
     const std::int32_t nodes = std::min(solver.capacity_limits().max_nodes, room.max_nodes);
     if (nodes < 2) return Status::kCapacityExceeded;
     if (Status s = from_solver(solver.reset(nodes)); s != Status::kOk) return fail(s);
     params = p;
+    memoise_arc_costs();
     built = true;
     changes.rebuilt = true;
   }
@@ -960,6 +976,9 @@ Status IncrementalNetwork::Impl::update(const Window& window, const Params& p,
   if (Status s = relist(); s != Status::kOk) return fail(s);
   if (Status s = connect(solver); s != Status::kOk) return fail(s);
   if (touched_count > 0 || changes.rebuilt) rank();
+  for (std::uint32_t s = 0; s < window.keyframe_count(); ++s) {
+    frames[static_cast<std::uint32_t>(frame_of[s])].window_slot = s;
+  }
 
   for (std::uint32_t t = 0; t < touched_count; ++t) is_touched[touched[t]] = 0;
   for (std::uint32_t t = 0; t < doomed_count; ++t) is_removed[doomed[t]] = 0;
@@ -1000,6 +1019,21 @@ solver::ArcId IncrementalNetwork::point_source_arc(std::uint32_t i) const {
 }
 const solver::ArcId* IncrementalNetwork::canonical_order() const {
   return impl_->order.data() + impl_->order_begin;
+}
+void IncrementalNetwork::point_slots(std::uint32_t* at, std::uint32_t* slots) const {
+  const Impl& n = *impl_;
+  const std::uint32_t* rank_slot = n.ranks[n.cur].slot.data() + n.rank_begin;
+  const std::uint32_t count = n.rank_end - n.rank_begin;
+  std::uint32_t w = 0;
+  for (std::uint32_t i = 0; i < count; ++i) {
+    if (i + kAhead < count) prefetch(&n.points[rank_slot[i + kAhead]]);
+    if (i + kAhead / 2 < count) prefetch(n.arena.data() + n.points[rank_slot[i + kAhead / 2]].block);
+    const Impl::Point& pt = n.points[rank_slot[i]];
+    const std::uint32_t* e = n.arena.data() + pt.block + 2;
+    at[i] = w;
+    for (std::uint32_t x = 0; x < pt.listed; ++x) slots[w++] = n.frames[e[2 * x]].window_slot;
+  }
+  at[count] = w;
 }
 std::uint32_t IncrementalNetwork::evaluated_count() const { return impl_->evaluated; }
 std::uint32_t IncrementalNetwork::pair_count() const { return impl_->live_pairs; }

@@ -5,7 +5,7 @@
 #include <limits>
 #include <vector>
 
-#include "box_neighbours.hpp"
+#include "cost_model.hpp"
 #include "keepless/core/costs.hpp"
 #include "solver_status.hpp"
 
@@ -30,7 +30,7 @@ struct PaperNetwork::Impl {
   Capacities caps;
   // Scratch over observations.
   std::vector<Record> records;
-  BoxCounter box;  // N(p, f), one keyframe at a time
+  ObservationScorer scorer;  // N(p, f) (or the information level), one keyframe at a time
   std::vector<std::uint32_t> neighbours;  // N(p, f) by flattened index
   std::vector<std::uint32_t> slot_begin;  // [max_keyframes + 1]
   // Points, ascending id.
@@ -52,7 +52,7 @@ struct PaperNetwork::Impl {
   std::uint32_t points = 0, evaluated = 0, pairs = 0, arcs = 0, m = 0;
   solver::NodeId sink = 1;
 
-  explicit Impl(const Capacities& c) : caps(c), box(c.max_observations) {
+  explicit Impl(const Capacities& c) : caps(c), scorer(c.max_observations) {
     const std::size_t k = c.max_keyframes;
     const std::size_t q = k * (k - (k > 0 ? 1 : 0)) / 2;
     records.resize(c.max_observations);
@@ -98,7 +98,9 @@ Status PaperNetwork::build(const Window& window, const Params& params,
                            solver::MinCostFlow& solver) {
   Impl& n = *impl_;
   n.clear();
-  if (params.box_width < 0 || params.box_height < 0 || params.pair_capacity < 0) {
+  if (params.box_width < 0 || params.box_height < 0 || params.pair_capacity < 0 ||
+      (params.cost_model == CostModel::kAuthors &&
+       (params.image_width <= 0 || params.image_height <= 0))) {
     return Status::kInvalidArgument;
   }
   const std::uint32_t k = window.keyframe_count();
@@ -159,9 +161,8 @@ Status PaperNetwork::build(const Window& window, const Params& params,
       q = static_cast<std::int32_t>(pairs);
       n.pair_j[pairs] = j;
       n.pair_k[pairs] = kk;
-      n.pair_cb[pairs] = (params.cost_terms & kBaselineCost)
-                             ? baseline_cost(window.keyframe(j).centre, window.keyframe(kk).centre)
-                             : 0;
+      n.pair_cb[pairs] =
+          pair_sink_cost(params, window.keyframe(j).centre, window.keyframe(kk).centre);
       ++pairs;
     }
   }
@@ -174,10 +175,10 @@ Status PaperNetwork::build(const Window& window, const Params& params,
     return Status::kCapacityExceeded;
   }
 
-  // N(p, f) for every keypoint, one keyframe at a time.
+  // N(p, f) (or the information level) for every keypoint, one keyframe at a time.
   for (std::uint32_t s = 0; s < k; ++s) {
-    n.box.count(window.observations(s), window.observation_count(s), params.box_width,
-                params.box_height, n.neighbours.data() + n.slot_begin[s]);
+    n.scorer.score(window.keyframe(s), window.observations(s), window.observation_count(s),
+                   params, n.neighbours.data() + n.slot_begin[s]);
   }
   connectivity_costs(m, n.cm.data());
   if (!(params.cost_terms & kConnectivityCost)) std::fill(n.cm.begin(), n.cm.begin() + m + 1, 0);
@@ -209,9 +210,8 @@ Status PaperNetwork::build(const Window& window, const Params& params,
             n.pair_of[std::size_t{rec[x].slot} * k + rec[y].slot]);
         n.arc_point[a] = i;
         n.arc_pair[a] = q;
-        n.arc_cs[a] = (params.cost_terms & kSpatialCost)
-                          ? spatial_cost(n.neighbours[rec[x].index], n.neighbours[rec[y].index])
-                          : 0;
+        n.arc_cs[a] =
+            pair_arc_cost(params, n.neighbours[rec[x].index], n.neighbours[rec[y].index]);
         const solver::Status s = solver.add_arc(node(1 + n.point_arc[i]),
                                                 node(1 + std::uint64_t{evaluated} + q), 1,
                                                 n.arc_cs[a]);
@@ -239,6 +239,15 @@ std::uint32_t PaperNetwork::point_count() const { return impl_->points; }
 PointId PaperNetwork::point_id(std::uint32_t i) const { return impl_->point_id[i]; }
 std::uint32_t PaperNetwork::point_views(std::uint32_t i) const { return impl_->point_views[i]; }
 std::int32_t PaperNetwork::point_source_arc(std::uint32_t i) const { return impl_->point_arc[i]; }
+void PaperNetwork::point_slots(std::uint32_t* at, std::uint32_t* slots) const {
+  const Impl& n = *impl_;
+  std::uint32_t r = 0;  // records are sorted by (point, slot): in point order already
+  for (std::uint32_t i = 0; i < n.points; ++i) {
+    at[i] = r;
+    for (std::uint32_t x = 0; x < n.point_views[i]; ++x, ++r) slots[r] = n.records[r].slot;
+  }
+  at[n.points] = r;
+}
 std::uint32_t PaperNetwork::evaluated_count() const { return impl_->evaluated; }
 std::uint32_t PaperNetwork::pair_count() const { return impl_->pairs; }
 std::uint32_t PaperNetwork::pair_arc_count() const { return impl_->arcs; }
@@ -261,7 +270,7 @@ solver::NodeId PaperNetwork::sink() const { return impl_->sink; }
 std::size_t PaperNetwork::memory_bytes() const {
   const Impl& n = *impl_;
   const auto bytes = [](const auto& v) { return v.capacity() * sizeof(v[0]); };
-  return sizeof(PaperNetwork) + sizeof(Impl) + bytes(n.records) + n.box.memory_bytes() +
+  return sizeof(PaperNetwork) + sizeof(Impl) + bytes(n.records) + n.scorer.memory_bytes() +
          bytes(n.neighbours) + bytes(n.slot_begin) + bytes(n.point_id) + bytes(n.point_views) +
          bytes(n.point_first) + bytes(n.point_arc) + bytes(n.pair_of) + bytes(n.pair_j) +
          bytes(n.pair_k) + bytes(n.pair_sink) + bytes(n.pair_cb) + bytes(n.arc_point) +

@@ -49,6 +49,17 @@ struct Sparsifier::Impl {
   // says nothing of what a whole one needs.
   RecentDuration network_time, solve_time, decide_time;
   std::vector<PointDecision> decisions;  // [max_points]
+  // The policies' scratch. Scope kNewest: which decisions the newest
+  // keyframe observes. The floor: each point's window slots (flattened, see
+  // PaperNetwork::point_slots); per window slot its evaluated points not
+  // culled and its culled ones (indices into decisions, grouped by slot).
+  std::vector<std::uint8_t> in_scope;      // [max_points]
+  std::vector<std::uint32_t> slots_at;     // [max_points + 1]
+  std::vector<std::uint32_t> slots;        // [max_observations]
+  std::vector<std::uint32_t> covered;      // [max_keyframes]
+  std::vector<std::uint32_t> culled_at;    // [max_keyframes + 1]
+  std::vector<std::uint32_t> culled_list;  // [max_observations]
+  std::vector<std::uint32_t> candidates;   // [max_observations]
   std::uint32_t count = 0;
   Summary summary;
   const solver::Clock* clock = nullptr;
@@ -67,6 +78,16 @@ struct Sparsifier::Impl {
                    : PaperNetwork::solver_capacity(c)),
         pairwise(st == Start::kClosedForm ? solver.capacity_limits() : solver::Capacity{}) {
     decisions.resize(c.max_points);
+    // The policies' scratch only where they are on (Params are fixed).
+    if (p.scope == Scope::kNewest) in_scope.resize(c.max_points);
+    if (p.coverage_floor > 0) {
+      slots_at.resize(std::size_t{c.max_points} + 1);
+      slots.resize(c.max_observations);
+      covered.resize(c.max_keyframes);
+      culled_at.resize(std::size_t{c.max_keyframes} + 1);
+      culled_list.resize(c.max_observations);
+      candidates.resize(c.max_observations);
+    }
   }
 
   // Start::kClosedForm: the solver certifies the closed-form optimum. Should
@@ -123,6 +144,98 @@ struct Sparsifier::Impl {
     sum.max_flow = solver.flow_value();
     sum.total_cost = solver.total_cost();
   }
+
+  // The decision policies, on the verdicts of the exact optimum (see
+  // Params::scope and Params::coverage_floor).
+  template <typename Net>
+  void apply_policies(const Window& window, const Net& net, bool finished) {
+    const std::uint32_t k = window.keyframe_count();
+    if (params.scope == Scope::kNewest && k > 0) restrict_to_newest(window, k - 1);
+    if (params.coverage_floor > 0 && finished) {
+      net.point_slots(slots_at.data(), slots.data());
+      apply_floor(k);
+    }
+  }
+
+  // The newest keyframe's points are found by id among the decisions
+  // (ascending id): its observations, not every point's keyframes, are read.
+  void restrict_to_newest(const Window& window, std::uint32_t newest) {
+    std::uint8_t* seen = in_scope.data();
+    std::fill(seen, seen + count, std::uint8_t{0});
+    const Observation* obs = window.observations(newest);
+    const PointDecision* first = decisions.data();
+    for (std::uint32_t o = 0; o < window.observation_count(newest); ++o) {
+      const PointDecision* at = std::lower_bound(
+          first, first + count, obs[o].point,
+          [](const PointDecision& d, PointId id) { return d.point < id; });
+      seen[at - first] = 1;  // every window point has a decision
+    }
+    for (std::uint32_t i = 0; i < count; ++i) {
+      PointDecision& d = decisions[i];
+      if (d.verdict == Verdict::kSkip || seen[i]) continue;
+      --(d.verdict == Verdict::kKeep ? summary.kept : summary.culled);
+      ++summary.skipped;
+      ++summary.out_of_scope;
+      d = PointDecision{d.point, Verdict::kSkip, 0, 0};
+    }
+  }
+
+  // Keyframes in slot order (oldest first): one below the floor promotes its
+  // culled points back to keep, those whose flow is the largest fraction
+  // of their capacity first (nearest to being kept), ties to the smaller
+  // point id, until it holds or none is left. A promotion only raises
+  // counts, so every earlier keyframe still holds when the pass ends.
+  void apply_floor(std::uint32_t k) {
+    std::fill(covered.begin(), covered.begin() + k, 0u);
+    std::fill(culled_at.begin(), culled_at.begin() + k + 1, 0u);
+    const auto for_slots = [this](std::uint32_t i, auto&& f) {
+      for (std::uint32_t x = slots_at[i]; x < slots_at[i + 1]; ++x) f(slots[x]);
+    };
+    // Evaluated: seen by >= 2 keyframes (a scope's skips included).
+    const auto evaluated = [this](std::uint32_t i) { return slots_at[i + 1] - slots_at[i] >= 2; };
+    for (std::uint32_t i = 0; i < count; ++i) {
+      if (!evaluated(i)) continue;
+      if (decisions[i].verdict == Verdict::kCull) {
+        for_slots(i, [&](std::uint32_t s) { ++culled_at[s + 1]; });
+      } else {
+        for_slots(i, [&](std::uint32_t s) { ++covered[s]; });
+      }
+    }
+    for (std::uint32_t s = 0; s < k; ++s) culled_at[s + 1] += culled_at[s];
+    for (std::uint32_t i = 0; i < count; ++i) {
+      if (!evaluated(i) || decisions[i].verdict != Verdict::kCull) continue;
+      for_slots(i, [&](std::uint32_t s) { culled_list[culled_at[s]++] = i; });
+    }
+    for (std::uint32_t s = k; s > 0; --s) culled_at[s] = culled_at[s - 1];
+    culled_at[0] = 0;
+
+    const std::uint32_t floor = params.coverage_floor;
+    const auto nearer = [this](std::uint32_t a, std::uint32_t b) {
+      const PointDecision& x = decisions[a];
+      const PointDecision& y = decisions[b];
+      const std::int64_t l = x.flow * y.capacity, r = y.flow * x.capacity;
+      return l != r ? l > r : a < b;
+    };
+    for (std::uint32_t s = 0; s < k; ++s) {
+      if (covered[s] >= floor) continue;
+      ++summary.floor_keyframes;
+      std::uint32_t n = 0;
+      for (std::uint32_t c = culled_at[s]; c < culled_at[s + 1]; ++c) {
+        if (decisions[culled_list[c]].verdict == Verdict::kCull) candidates[n++] = culled_list[c];
+      }
+      const std::uint32_t take = std::min(floor - covered[s], n);
+      std::uint32_t* first = candidates.data();
+      std::partial_sort(first, first + take, first + n, nearer);
+      for (std::uint32_t c = 0; c < take; ++c) {
+        decisions[first[c]].verdict = Verdict::kKeep;
+        for_slots(first[c], [&](std::uint32_t t) { ++covered[t]; });
+      }
+      summary.kept += take;
+      summary.culled -= take;
+      summary.floor_promoted += take;
+      summary.floor_short += covered[s] < floor ? 1 : 0;
+    }
+  }
 };
 
 Sparsifier::Sparsifier(const Capacities& capacities, const Params& params, SolveMode mode,
@@ -134,7 +247,14 @@ Status Sparsifier::validate(const Params& p) {
   if (p.pair_capacity < 1) return Status::kInvalidArgument;
   if (!std::isfinite(p.theta) || p.theta < 0.0 || p.theta > 1.0) return Status::kInvalidArgument;
   if (p.box_width < 0 || p.box_height < 0) return Status::kInvalidArgument;
-  return Status::kOk;
+  if (p.scope != Scope::kWindow && p.scope != Scope::kNewest) return Status::kInvalidArgument;
+  switch (p.cost_model) {
+    case CostModel::kPaper:
+    case CostModel::kInformation: return Status::kOk;
+    case CostModel::kAuthors:
+      return p.image_width > 0 && p.image_height > 0 ? Status::kOk : Status::kInvalidArgument;
+  }
+  return Status::kInvalidArgument;
 }
 
 Status Sparsifier::run(const Window& window, const solver::Budget& budget) {
@@ -157,6 +277,7 @@ Status Sparsifier::run(const Window& window, const solver::Budget& budget) {
   if (result != Status::kOk && result != Status::kBudgetExhausted) return result;
   s.summary.keyframes = window.keyframe_count();
   s.decide_all(s.network, result == Status::kOk);
+  s.apply_policies(window, s.network, result == Status::kOk);
   s.times = StageTimes{t1 - t0, t2 - t1, s.now() - t2};
   return result;
 }
@@ -245,6 +366,7 @@ Status Sparsifier::update(const Window& window, const solver::Budget& budget) {
   const std::uint64_t d0 = deadline_clock != nullptr ? deadline_clock->now_ns() : 0;
   s.summary.keyframes = window.keyframe_count();
   s.decide_all(net, result == Status::kOk);
+  s.apply_policies(window, net, result == Status::kOk);
   if (deadline_clock != nullptr) s.decide_time.add(deadline_clock->now_ns() - d0);
   s.times = StageTimes{t1 - t0, t2 - t1, s.now() - t2};
   return result;
@@ -271,7 +393,11 @@ std::size_t Sparsifier::memory_bytes() const {
   return sizeof(Sparsifier) + sizeof(Impl) - sizeof(PaperNetwork) + s.network.memory_bytes() +
          (s.incremental ? s.incremental->memory_bytes() : 0) + s.solver.memory_bytes() +
          s.pairwise.memory_bytes() +
-         s.decisions.capacity() * sizeof(PointDecision);
+         s.decisions.capacity() * sizeof(PointDecision) +
+         s.in_scope.capacity() +
+         (s.slots_at.capacity() + s.slots.capacity() + s.covered.capacity() +
+          s.culled_at.capacity() + s.culled_list.capacity() + s.candidates.capacity()) *
+             sizeof(std::uint32_t);
 }
 
 }  // namespace keepless::core

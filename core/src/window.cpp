@@ -33,9 +33,11 @@ struct Window::Impl {
   std::vector<std::uint32_t> obs_count;  // [max_keyframes]
   std::vector<Observation> pool;         // [max_observations], contiguous in slot order
   std::vector<PointId> scratch;          // [max_observations], duplicate check
+  std::vector<Keypoint> unmapped;        // [max_unmapped_keypoints], contiguous in slot order
   IdTable views;                         // distinct point -> keyframes observing it
   std::uint32_t count = 0;               // keyframes
   std::uint32_t total = 0;               // observations
+  std::uint32_t unmapped_total = 0;      // unmapped keypoints
 
   explicit Impl(const Capacities& c) : caps(c), views(c.max_points) {
     keyframes.resize(c.max_keyframes);
@@ -44,6 +46,16 @@ struct Window::Impl {
     obs_count.resize(c.max_keyframes);
     pool.resize(c.max_observations);
     scratch.resize(c.max_observations);
+    unmapped.resize(c.max_unmapped_keypoints);
+  }
+
+  // Keyframes point at their unmapped keypoints in `unmapped`, in slot order.
+  void relink_unmapped() {
+    std::uint32_t at = 0;
+    for (std::uint32_t s = 0; s < count; ++s) {
+      keyframes[s].unmapped = keyframes[s].unmapped_count > 0 ? unmapped.data() + at : nullptr;
+      at += keyframes[s].unmapped_count;
+    }
   }
 
   bool contains(PointId point) const { return views.find(point) != nullptr; }
@@ -80,11 +92,22 @@ Status Window::add(const Keyframe& keyframe, const Observation* observations, st
   if (w.count >= w.caps.max_keyframes) return Status::kCapacityExceeded;
   if (count > w.caps.max_observations - w.total) return Status::kCapacityExceeded;
   if (count > 0 && observations == nullptr) return Status::kInvalidArgument;
-  if (!finite(keyframe.centre, 3) || !finite(keyframe.orientation, 4)) {
+  if (keyframe.unmapped_count > w.caps.max_unmapped_keypoints - w.unmapped_total) {
+    return Status::kCapacityExceeded;
+  }
+  if (keyframe.unmapped_count > 0 && keyframe.unmapped == nullptr) return Status::kInvalidArgument;
+  const double intrinsics[4] = {keyframe.fx, keyframe.fy, keyframe.cx, keyframe.cy};
+  if (!finite(keyframe.centre, 3) || !finite(keyframe.orientation, 4) || !finite(intrinsics, 4)) {
     return Status::kInvalidArgument;
   }
   for (std::uint32_t i = 0; i < count; ++i) {
-    if (!std::isfinite(observations[i].u) || !std::isfinite(observations[i].v)) {
+    if (!std::isfinite(observations[i].u) || !std::isfinite(observations[i].v) ||
+        !std::isfinite(observations[i].depth)) {
+      return Status::kInvalidArgument;
+    }
+  }
+  for (std::uint32_t i = 0; i < keyframe.unmapped_count; ++i) {
+    if (!std::isfinite(keyframe.unmapped[i].u) || !std::isfinite(keyframe.unmapped[i].v)) {
       return Status::kInvalidArgument;
     }
   }
@@ -108,6 +131,14 @@ Status Window::add(const Keyframe& keyframe, const Observation* observations, st
   if (count > 0) std::memcpy(w.pool.data() + w.total, observations, count * sizeof(Observation));
   for (std::uint32_t i = 0; i < count; ++i) w.add_view(observations[i].point);
   w.total += count;
+  if (keyframe.unmapped_count > 0) {
+    std::memcpy(w.unmapped.data() + w.unmapped_total, keyframe.unmapped,
+                keyframe.unmapped_count * sizeof(Keypoint));
+    w.keyframes[slot].unmapped = w.unmapped.data() + w.unmapped_total;
+    w.unmapped_total += keyframe.unmapped_count;
+  } else {
+    w.keyframes[slot].unmapped = nullptr;
+  }
   ++w.count;
   return Status::kOk;
 }
@@ -125,6 +156,13 @@ Status Window::remove_keyframe(KeyframeId id) {
   if (tail > 0) {
     std::memmove(w.pool.data() + begin, w.pool.data() + begin + n, tail * sizeof(Observation));
   }
+  const std::uint32_t dropped = w.keyframes[slot].unmapped_count;
+  if (dropped > 0) {
+    const auto from = static_cast<std::size_t>(w.keyframes[slot].unmapped - w.unmapped.data());
+    std::memmove(w.unmapped.data() + from, w.unmapped.data() + from + dropped,
+                 (w.unmapped_total - from - dropped) * sizeof(Keypoint));
+    w.unmapped_total -= dropped;
+  }
   for (std::uint32_t s = slot; s + 1 < w.count; ++s) {
     w.keyframes[s] = w.keyframes[s + 1];
     w.stamps[s] = w.stamps[s + 1];
@@ -133,6 +171,7 @@ Status Window::remove_keyframe(KeyframeId id) {
   }
   w.total -= n;
   --w.count;
+  if (dropped > 0) w.relink_unmapped();
   return Status::kOk;
 }
 
@@ -141,6 +180,7 @@ void Window::clear() {
   w.views.clear();
   w.count = 0;
   w.total = 0;
+  w.unmapped_total = 0;
 }
 
 std::uint32_t Window::keyframe_count() const { return impl_->count; }
@@ -150,6 +190,7 @@ const Observation* Window::observations(std::uint32_t slot) const {
 }
 std::uint32_t Window::observation_count(std::uint32_t slot) const { return impl_->obs_count[slot]; }
 std::uint32_t Window::total_observations() const { return impl_->total; }
+std::uint32_t Window::total_unmapped() const { return impl_->unmapped_total; }
 std::uint32_t Window::distinct_points() const { return impl_->views.size(); }
 std::uint64_t Window::keyframe_stamp(std::uint32_t slot) const { return impl_->stamps[slot]; }
 
@@ -168,6 +209,7 @@ std::size_t Window::memory_bytes() const {
          w.stamps.capacity() * sizeof(std::uint64_t) +
          (w.obs_begin.capacity() + w.obs_count.capacity()) * sizeof(std::uint32_t) +
          w.pool.capacity() * sizeof(Observation) + w.scratch.capacity() * sizeof(PointId) +
+         w.unmapped.capacity() * sizeof(Keypoint) +
          w.views.memory_bytes();
 }
 

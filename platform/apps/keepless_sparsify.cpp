@@ -1,8 +1,9 @@
 // keepless_sparsify: decides one window (or a whole map) offline.
 //
 //   keepless_sparsify --window FILE [--M 100] [--theta 0.5] [--box 64x48] [--decisions OUT]
-//                     [--max-keyframes N] [--max-points N] [--max-observations N]
-//                     [--max-pair-arcs N]
+//                     [--scope window|newest] [--floor L] [--cost paper|authors|information]
+//                     [--image 640x480] [--max-keyframes N] [--max-points N]
+//                     [--max-observations N] [--max-pair-arcs N]
 //
 // The whole file is parsed and checked against the hard limits first, then a
 // Window and Sparsifier sized exactly to its needs decide it in one run.
@@ -42,7 +43,8 @@ constexpr int kExitInternal = 1;
 
 constexpr const char* kUsage =
     "usage: keepless_sparsify --window FILE [--M 100] [--theta 0.5] [--box 64x48] "
-    "[--decisions OUT] [--max-keyframes 10000] [--max-points 2000000] "
+    "[--decisions OUT] [--scope window|newest] [--floor 0] [--cost paper|authors|information] "
+    "[--image 640x480] [--max-keyframes 10000] [--max-points 2000000] "
     "[--max-observations 10000000] [--max-pair-arcs 50000000]";
 
 struct Options {
@@ -101,6 +103,25 @@ int parse_args(int argc, char** argv, Options* opt, bool* help) {
       if (!core::parse_box(value, &w, &h)) return usage_error(bad + " (WxH, e.g. 64x48)");
       opt->params.box_width = w;
       opt->params.box_height = h;
+    } else if (flag == "--scope") {
+      if (!core::parse_scope(value, &opt->params.scope)) return usage_error(bad + " (window or newest)");
+    } else if (flag == "--floor") {
+      std::uint64_t floor = 0;
+      if (!core::parse_uint64(value, &floor) || floor > std::numeric_limits<std::uint32_t>::max()) {
+        return usage_error(bad + " (an integer >= 0)");
+      }
+      opt->params.coverage_floor = static_cast<std::uint32_t>(floor);
+    } else if (flag == "--cost") {
+      if (!core::parse_cost_model(value, &opt->params.cost_model)) {
+        return usage_error(bad + " (paper, authors or information)");
+      }
+    } else if (flag == "--image") {
+      int w = 0, h = 0;
+      if (!core::parse_box(value, &w, &h) || w < 1 || h < 1) {
+        return usage_error(bad + " (WxH pixels, e.g. 640x480)");
+      }
+      opt->params.image_width = w;
+      opt->params.image_height = h;
     } else if (flag == "--max-keyframes") {
       if (!parse_limit(value, &opt->limits.max_keyframes)) return usage_error(bad);
     } else if (flag == "--max-points") {
@@ -209,10 +230,14 @@ int run(const Options& opt) {
       "\"skipped\":%u,\"pairs\":%u,\"arcs\":%u,\"max_flow\":%" PRId64 ",\"total_cost\":%" PRId64
       ",\"M\":%" PRId64
       ",\"theta\":%s,\"box_width\":%d,\"box_height\":%d,"
-      "\"parse_ms\":%.3f,\"build_ms\":%.3f,\"solve_ms\":%.3f,\"memory_bytes\":%zu}\n",
+      "\"parse_ms\":%.3f,\"build_ms\":%.3f,\"solve_ms\":%.3f,\"memory_bytes\":%zu,"
+      "\"scope\":\"%s\",\"floor\":%u,\"cost\":\"%s\",\"out_of_scope\":%u,"
+      "\"floor_keyframes\":%u,\"floor_promoted\":%u,\"floor_short\":%u}\n",
       sum.keyframes, sum.points, sum.evaluated, sum.kept, sum.culled, sum.skipped, sum.pairs,
       sum.arcs, sum.max_flow, sum.total_cost, opt.params.pair_capacity, theta, opt.params.box_width,
-      opt.params.box_height, parse_ms, build_ms, solve_ms, memory);
+      opt.params.box_height, parse_ms, build_ms, solve_ms, memory, core::to_string(opt.params.scope),
+      opt.params.coverage_floor, core::to_string(opt.params.cost_model), sum.out_of_scope,
+      sum.floor_keyframes, sum.floor_promoted, sum.floor_short);
   return std::fflush(stdout) == 0 ? 0 : kExitInternal;
 }
 

@@ -79,8 +79,26 @@ RejectReason check_keyframe_bytes(const void* data, std::size_t size, const Mess
   const std::int32_t n = read_be32(p + wire::kKeyframeCountOffset);
   if (n < 0) return RejectReason::kInvalidField;
   if (static_cast<std::uint32_t>(n) > limits.max_observations) return RejectReason::kOversizeCount;
-  const std::size_t need = wire::kKeyframeHeaderBytes + wire::kKeyframeBytesPerObservation * static_cast<std::size_t>(n);
-  if (size != need) return RejectReason::kTruncated;
+  std::size_t at = wire::kKeyframeHeaderBytes + wire::kKeyframeBytesPerObservation * static_cast<std::size_t>(n);
+  // The optional arrays: each count read only once the bytes before it are known to be there.
+  const auto count = [&](std::int32_t* c) {
+    if (size < at + 4) return false;
+    *c = read_be32(p + at);
+    at += 4;
+    return true;
+  };
+  std::int32_t depths = 0, intrinsics = 0, unmapped = 0;
+  if (!count(&depths)) return RejectReason::kTruncated;
+  if (depths != 0 && depths != n) return RejectReason::kInvalidField;
+  at += 4 * static_cast<std::size_t>(depths);
+  if (!count(&intrinsics)) return RejectReason::kTruncated;
+  if (intrinsics != 0 && intrinsics != 4) return RejectReason::kInvalidField;
+  at += 8 * static_cast<std::size_t>(intrinsics);
+  if (!count(&unmapped)) return RejectReason::kTruncated;
+  if (unmapped < 0) return RejectReason::kInvalidField;
+  if (static_cast<std::uint32_t>(unmapped) > limits.max_unmapped) return RejectReason::kOversizeCount;
+  at += 8 * static_cast<std::size_t>(unmapped);
+  if (size != at) return RejectReason::kTruncated;
   return RejectReason::kNone;
 }
 
@@ -123,6 +141,23 @@ RejectReason check_keyframe(const keepless::keyframe_t& msg, const core::Window&
   }
   for (std::size_t i = 0; i < n; ++i) {
     if (!std::isfinite(msg.u[i]) || !std::isfinite(msg.v[i])) return RejectReason::kNonFinite;
+  }
+  const auto depths = static_cast<std::size_t>(msg.num_depths);
+  const auto unmapped = static_cast<std::size_t>(msg.num_unmapped);
+  if ((msg.num_depths != 0 && depths != n) || msg.depth.size() != depths ||
+      (msg.num_intrinsics != 0 && msg.num_intrinsics != 4) ||
+      msg.intrinsics.size() != static_cast<std::size_t>(msg.num_intrinsics) || msg.num_unmapped < 0 ||
+      msg.unmapped_u.size() != unmapped || msg.unmapped_v.size() != unmapped) {
+    return RejectReason::kInvalidField;
+  }
+  for (float d : msg.depth) {
+    if (!std::isfinite(d)) return RejectReason::kNonFinite;
+  }
+  for (double k : msg.intrinsics) {
+    if (!finite(k)) return RejectReason::kNonFinite;
+  }
+  for (std::size_t i = 0; i < unmapped; ++i) {
+    if (!std::isfinite(msg.unmapped_u[i]) || !std::isfinite(msg.unmapped_v[i])) return RejectReason::kNonFinite;
   }
   if (msg.image_width <= 0 || msg.image_height <= 0) return RejectReason::kInvalidField;
   // Float-derived quaternions are off by ~1e-7; anything far from unit is a bug upstream.

@@ -50,12 +50,18 @@ struct Node::Impl {
         sparsifier(capacities, c.params, core::SolveMode::kIncremental) {
     limits.max_observations = c.max_observations;
     limits.max_event_ids = c.max_event_ids;
+    limits.max_unmapped = c.max_unmapped;
     budget.work_units = c.budget_work_units;
 
     // Reserved once: decode() then only resizes within capacity.
     kf.point_id.reserve(c.max_observations);
     kf.u.reserve(c.max_observations);
     kf.v.reserve(c.max_observations);
+    kf.depth.reserve(c.max_observations);
+    kf.intrinsics.reserve(4);
+    kf.unmapped_u.reserve(c.max_unmapped);
+    kf.unmapped_v.reserve(c.max_unmapped);
+    unmapped.resize(c.max_unmapped);
     event.deleted_point_id.reserve(c.max_event_ids);
     event.merged_from_id.reserve(c.max_event_ids);
     event.merged_into_id.reserve(c.max_event_ids);
@@ -113,6 +119,10 @@ struct Node::Impl {
     kf.point_id.clear();
     kf.u.clear();
     kf.v.clear();
+    kf.depth.clear();
+    kf.intrinsics.clear();
+    kf.unmapped_u.clear();
+    kf.unmapped_v.clear();
     if (r == RejectReason::kNone && kf.decode(data, 0, static_cast<int>(size)) < 0) r = RejectReason::kTruncated;
     if (r != RejectReason::kNone) {
       // Ids unreadable: no decision can name the request.
@@ -128,11 +138,24 @@ struct Node::Impl {
         observations[i].point = static_cast<core::PointId>(kf.point_id[i]);
         observations[i].u = static_cast<double>(kf.u[i]);
         observations[i].v = static_cast<double>(kf.v[i]);
+        observations[i].depth = kf.num_depths != 0 ? static_cast<double>(kf.depth[i]) : 0.0;
       }
       core::Keyframe keyframe;
       keyframe.id = static_cast<core::KeyframeId>(kf.keyframe_id);
       std::copy(kf.centre, kf.centre + 3, keyframe.centre);
       std::copy(kf.orientation, kf.orientation + 4, keyframe.orientation);
+      if (kf.num_intrinsics == 4) {
+        keyframe.fx = kf.intrinsics[0];
+        keyframe.fy = kf.intrinsics[1];
+        keyframe.cx = kf.intrinsics[2];
+        keyframe.cy = kf.intrinsics[3];
+      }
+      const auto m = static_cast<std::uint32_t>(kf.num_unmapped);
+      for (std::uint32_t i = 0; i < m; ++i) {
+        unmapped[i] = {static_cast<double>(kf.unmapped_u[i]), static_cast<double>(kf.unmapped_v[i])};
+      }
+      keyframe.unmapped = unmapped.data();
+      keyframe.unmapped_count = m;
       const core::Status s = sliding.push(keyframe, observations.data(), n);
       if (s != core::Status::kOk) r = reason_of(s);
     }
@@ -268,7 +291,8 @@ struct Node::Impl {
   std::size_t memory_bytes() const {
     return sliding.memory_bytes() + sparsifier.memory_bytes() + out.size() + small.size() +
            observations.size() * sizeof(core::Observation) + id_scratch.size() * sizeof(std::uint64_t) +
-           (kf.point_id.capacity() * 16) +
+           (kf.point_id.capacity() * 16) + kf.depth.capacity() * 4 + kf.intrinsics.capacity() * 8 +
+           kf.unmapped_u.capacity() * 8 + unmapped.size() * sizeof(core::Keypoint) +
            (event.deleted_point_id.capacity() + event.merged_from_id.capacity() +
             event.merged_into_id.capacity() + event.removed_keyframe_id.capacity()) * 8 +
            (decision.window_keyframe_id.capacity() + decision.culled_point_id.capacity()) * 8;
@@ -298,6 +322,7 @@ struct Node::Impl {
   keepless::decision_timing_t timing{};
   keepless::status_t status{};
   std::vector<core::Observation> observations;
+  std::vector<core::Keypoint> unmapped;  // [max_unmapped]
   std::vector<std::uint64_t> id_scratch;
   std::vector<std::uint8_t> out;
   std::array<std::uint8_t, 1024> small{};

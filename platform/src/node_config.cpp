@@ -55,11 +55,18 @@ std::string node_usage() {
          "  --window K                keyframes in the sliding window (default 20)\n"
          "  --max-observations N      observations per keyframe_t accepted (default 2000)\n"
          "  --max-event-ids N         ids per list of a map_event_t accepted (default 1024)\n"
+         "  --max-unmapped N          unmapped keypoints per keyframe_t accepted (default 0; --cost authors\n"
+         "                            counts them)\n"
          "  --max-pair-arcs N         solver pair-arc capacity (default 0: worst case K*N*(K-1)/2;\n"
          "                            less saves memory, a window beyond it is answered 'capacity exceeded')\n"
          "  --M N                     pair -> sink capacity (default 100)\n"
          "  --theta X                 keep iff flow > X * n(n-1)/2 (default 0.5)\n"
          "  --box WxH                 spatial-diversity box in pixels (default 64x48)\n"
+         "  --scope window|newest     decide every window point, or only the newest keyframe's (default window)\n"
+         "  --floor L                 every keyframe keeps >= L of its evaluated points (default 0: off)\n"
+         "  --cost paper|authors|information\n"
+         "                            point -> pair costs (default paper; README, Decision policies)\n"
+         "  --image WxH               the image the authors' 64x48 grid covers (default 640x480)\n"
          "  --budget-work N           solver work units per decision (default unlimited)\n"
          "  --latency-target-ms X     solve deadline from keyframe arrival (default 5; 0 = none)\n"
          "  --cpus LIST               pin to these CPUs, e.g. 0,1 or 2-3 (reported if refused)\n"
@@ -125,6 +132,9 @@ ParseResult parse_node_arguments(int argc, const char* const* argv, NodeConfig& 
     } else if (flag == "--max-event-ids") {
       if (!parse_u64(value, 1, 1u << 20, n)) return bad("expected an integer in 1..1048576");
       config.max_event_ids = static_cast<std::uint32_t>(n);
+    } else if (flag == "--max-unmapped") {
+      if (!parse_u64(value, 0, 1u << 20, n)) return bad("expected an integer in 0..1048576");
+      config.max_unmapped = static_cast<std::uint32_t>(n);
     } else if (flag == "--max-pair-arcs") {
       if (!parse_u64(value, 0, 1u << 28, n)) return bad("expected an integer in 0..2^28");
       config.max_pair_arcs = static_cast<std::uint32_t>(n);
@@ -138,6 +148,20 @@ ParseResult parse_node_arguments(int argc, const char* const* argv, NodeConfig& 
     } else if (flag == "--box") {
       if (!parse_box(value, config.params.box_width, config.params.box_height)) {
         return bad("expected WxH, e.g. 64x48");
+      }
+    } else if (flag == "--scope") {
+      if (!core::parse_scope(value.c_str(), &config.params.scope)) return bad("expected window or newest");
+    } else if (flag == "--floor") {
+      if (!parse_u64(value, 0, std::numeric_limits<std::uint32_t>::max(), n)) return bad("expected an integer >= 0");
+      config.params.coverage_floor = static_cast<std::uint32_t>(n);
+    } else if (flag == "--cost") {
+      if (!core::parse_cost_model(value.c_str(), &config.params.cost_model)) {
+        return bad("expected paper, authors or information");
+      }
+    } else if (flag == "--image") {
+      if (!parse_box(value, config.params.image_width, config.params.image_height) ||
+          config.params.image_width < 1 || config.params.image_height < 1) {
+        return bad("expected WxH pixels, e.g. 640x480");
       }
     } else if (flag == "--budget-work") {
       if (!parse_u64(value, 1, std::numeric_limits<std::uint64_t>::max(), n)) return bad("expected an integer >= 1");
@@ -183,6 +207,7 @@ core::Capacities window_capacities(const NodeConfig& config) {
   c.max_observations = static_cast<std::uint32_t>(obs);
   c.max_points = static_cast<std::uint32_t>(obs);
   // Sum over points of n(n-1)/2 with sum n <= obs and n <= K.
+  c.max_unmapped_keypoints = static_cast<std::uint32_t>(k * config.max_unmapped);
   c.max_pair_arcs = config.max_pair_arcs != 0 ? config.max_pair_arcs
                                                : static_cast<std::uint32_t>(obs * (k - 1) / 2);
   return c;

@@ -24,6 +24,7 @@
 #include "keepless/core/config.hpp"
 #include "keepless/core/decision.hpp"
 #include "keepless/core/window_file.hpp"
+#include "reference_policies.hpp"
 #include "reference_sparsifier.hpp"
 
 extern char** environ;
@@ -281,6 +282,11 @@ TEST_F(SparsifyCliTest, FlagErrorsPrintOneUsageLine) {
       {"--window", window, "--max-observations", "many"},
       {"--window", window, "--max-pair-arcs", ""},
       {"--window", "", "--decisions", out},
+      {"--window", window, "--scope", "all"},
+      {"--window", window, "--floor", "-1"},
+      {"--window", window, "--floor", "4294967296"},
+      {"--window", window, "--cost", "Paper"},
+      {"--window", window, "--image", "0x480"},
   };
   for (const auto& args : cases) {
     std::string shown;
@@ -412,7 +418,7 @@ void expect_matches_reference(const Result& r, const std::string& window, const 
       f.observations.push_back({o.point, o.u, o.v});
     frames.push_back(f);
   }
-  const test::RefResult ref = test::reference_sparsify(frames, params);
+  const test::RefResult ref = test::reference_decide(frames, params);
   std::string expected;
   std::int64_t kept = 0, culled = 0, skipped = 0;
   for (const test::RefPoint& p : ref.points) {
@@ -437,6 +443,15 @@ void expect_matches_reference(const Result& r, const std::string& window, const 
             static_cast<std::int64_t>(ref.evaluated) + ref.pair_arcs + ref.pairs);
   EXPECT_EQ(json_int(json, "max_flow"), ref.max_flow);
   EXPECT_EQ(json_int(json, "total_cost"), ref.total_cost);
+  EXPECT_EQ(json_int(json, "floor"), params.coverage_floor);
+  EXPECT_EQ(json_int(json, "out_of_scope"), ref.out_of_scope);
+  EXPECT_EQ(json_int(json, "floor_keyframes"), ref.floor_keyframes);
+  EXPECT_EQ(json_int(json, "floor_promoted"), ref.floor_promoted);
+  EXPECT_EQ(json_int(json, "floor_short"), ref.floor_short);
+  EXPECT_NE(json.find(std::string("\"scope\":\"") + core::to_string(params.scope) + "\""),
+            std::string::npos);
+  EXPECT_NE(json.find(std::string("\"cost\":\"") + core::to_string(params.cost_model) + "\""),
+            std::string::npos);
 }
 
 // A small window with clustered keypoints (non-zero c_s), repeated baselines
@@ -477,6 +492,30 @@ TEST_F(SparsifyCliTest, MatchesReferenceOnAClusteredWindow) {
     ASSERT_TRUE(core::parse_box(p.box, &params.box_width, &params.box_height));
     const Result r = sparsify(
         {"--window", window, "--M", p.m, "--theta", p.theta, "--box", p.box, "--decisions", out});
+    expect_matches_reference(r, window, out, params);
+  }
+}
+
+// --scope, --floor, --cost and --image reach the library: the decisions are
+// the reference's under the same policies.
+TEST_F(SparsifyCliTest, PoliciesMatchReference) {
+  const std::string window = write("clustered.txt", clustered_window());
+  const std::string out = path("decisions.txt");
+  struct P {
+    const char *scope, *floor, *cost;
+  };
+  for (const P& p : {P{"newest", "0", "paper"}, P{"window", "12", "authors"},
+                     P{"newest", "8", "information"}}) {
+    SCOPED_TRACE(std::string(p.scope) + " " + p.floor + " " + p.cost);
+    core::Params params;
+    params.pair_capacity = 2;
+    ASSERT_TRUE(core::parse_scope(p.scope, &params.scope));
+    params.coverage_floor = static_cast<std::uint32_t>(std::atoi(p.floor));
+    ASSERT_TRUE(core::parse_cost_model(p.cost, &params.cost_model));
+    params.image_width = 320;
+    params.image_height = 240;
+    const Result r = sparsify({"--window", window, "--M", "2", "--scope", p.scope, "--floor",
+                               p.floor, "--cost", p.cost, "--image", "320x240", "--decisions", out});
     expect_matches_reference(r, window, out, params);
   }
 }

@@ -130,19 +130,72 @@ inline RandomCase random_case(std::uint64_t seed, std::uint32_t max_keyframes = 
   return c;
 }
 
+// What the other cost models read, on a case: intrinsics (sometimes
+// missing), depths (some unknown), unmapped keypoints on the same lattice
+// (some off the image); and a random cost model, scope and floor.
+inline void random_policies(RandomCase& c, std::uint64_t seed) {
+  Rng rng(seed ^ 0x706f6c6963696573ULL);
+  for (auto& f : c.frames) {
+    if (rng.chance(90)) {
+      f.fx = 400.0 + static_cast<double>(rng.between(0, 400)) + 0.37;
+      f.fy = rng.chance(50) ? f.fx : f.fx * 1.01;
+      f.cx = 320.5 + static_cast<double>(rng.between(-30, 30)) / 3.0;
+      f.cy = 240.25 + static_cast<double>(rng.between(-30, 30)) / 7.0;
+    }
+    for (auto& o : f.observations) {
+      o.depth = rng.chance(85) ? 0.5 + static_cast<double>(rng.between(0, 2000)) / 97.0 : 0.0;
+    }
+    const auto unmapped = rng.between(0, 40);
+    for (std::int64_t i = 0; i < unmapped; ++i) {
+      f.unmapped.push_back({static_cast<double>(8 * rng.between(-5, 85)),
+                            static_cast<double>(6 * rng.between(-5, 85))});
+    }
+  }
+  const core::CostModel models[] = {core::CostModel::kPaper, core::CostModel::kAuthors,
+                                    core::CostModel::kInformation};
+  c.params.cost_model = models[seed % 3];
+  c.params.scope = rng.chance(50) ? core::Scope::kNewest : core::Scope::kWindow;
+  c.params.coverage_floor = rng.chance(25) ? 0 : static_cast<std::uint32_t>(rng.between(1, 12));
+  if (rng.chance(30)) {
+    c.params.image_width = 320;
+    c.params.image_height = 240;
+  }
+}
+
+inline core::Keyframe keyframe_of(const RefKeyframe& f, std::vector<core::Keypoint>& unmapped) {
+  core::Keyframe kf;
+  kf.id = f.id;
+  std::copy(f.centre, f.centre + 3, kf.centre);
+  kf.fx = f.fx;
+  kf.fy = f.fy;
+  kf.cx = f.cx;
+  kf.cy = f.cy;
+  unmapped.clear();
+  for (const auto& k : f.unmapped) unmapped.push_back({k.first, k.second});
+  kf.unmapped = unmapped.data();
+  kf.unmapped_count = static_cast<std::uint32_t>(unmapped.size());
+  return kf;
+}
+
+inline std::vector<core::Observation> observations_of(const RefKeyframe& f) {
+  std::vector<core::Observation> obs;
+  for (const auto& o : f.observations) obs.push_back({o.point, o.u, o.v, o.depth});
+  return obs;
+}
+
+// Adds one frame to a window.
+inline core::Status add_frame(core::Window& window, const RefKeyframe& f) {
+  std::vector<core::Keypoint> unmapped;
+  const core::Keyframe kf = keyframe_of(f, unmapped);
+  const std::vector<core::Observation> obs = observations_of(f);
+  return window.add_keyframe(kf, obs.data(), static_cast<std::uint32_t>(obs.size()));
+}
+
 // Loads frames into a window; false if the window refused one.
 inline bool load(core::Window& window, const std::vector<RefKeyframe>& frames) {
   window.clear();
   for (const auto& f : frames) {
-    core::Keyframe kf;
-    kf.id = f.id;
-    std::copy(f.centre, f.centre + 3, kf.centre);
-    std::vector<core::Observation> obs;
-    for (const auto& o : f.observations) obs.push_back({o.point, o.u, o.v});
-    if (window.add_keyframe(kf, obs.data(), static_cast<std::uint32_t>(obs.size())) !=
-        core::Status::kOk) {
-      return false;
-    }
+    if (add_frame(window, f) != core::Status::kOk) return false;
   }
   return true;
 }

@@ -11,6 +11,7 @@
 #include <tuple>
 #include <vector>
 
+#include "decision_checks.hpp"
 #include "flow_certificate.hpp"
 #include "keepless/core/closed_form.hpp"
 #include "keepless/core/sparsifier.hpp"
@@ -31,28 +32,18 @@ const Capacities kCaps{16, 2048, 8192, 32768};
                                   const test::RefResult& ref) {
   const Summary& sum = s.summary();
   const PaperNetwork& net = s.network();
-  if (s.decision_count() != ref.points.size()) {
-    return ::testing::AssertionFailure() << "decisions " << s.decision_count() << " vs reference "
-                                         << ref.points.size();
-  }
-  std::uint32_t kept = 0, culled = 0, skipped = 0;
+  std::uint32_t verdicts[3];
+  if (auto match = test::decisions_match(s, ref, verdicts); !match) return match;
+  const std::uint32_t kept = verdicts[0], culled = verdicts[1], skipped = verdicts[2];
   for (std::uint32_t i = 0; i < s.decision_count(); ++i) {
-    const PointDecision& d = s.decisions()[i];
-    const test::RefPoint& r = ref.points[i];
-    if (d.point != r.id || d.flow != r.flow || d.capacity != r.capacity || d.verdict != r.verdict ||
-        net.point_views(i) != r.views) {
-      return ::testing::AssertionFailure()
-             << "point " << d.point << " (ref " << r.id << "): flow " << d.flow << " vs " << r.flow
-             << ", capacity " << d.capacity << " vs " << r.capacity << ", verdict "
-             << to_string(d.verdict) << " vs " << to_string(r.verdict);
+    if (net.point_views(i) != ref.points[i].views) {
+      return ::testing::AssertionFailure() << "point " << ref.points[i].id << ": views "
+                                           << net.point_views(i) << " vs " << ref.points[i].views;
     }
-    if (closed.point_flow(i) != d.flow) {
-      return ::testing::AssertionFailure() << "point " << d.point << ": closed form flow "
-                                           << closed.point_flow(i) << " vs " << d.flow;
+    if (closed.point_flow(i) != s.decisions()[i].flow) {
+      return ::testing::AssertionFailure() << "point " << ref.points[i].id << ": closed form flow "
+                                           << closed.point_flow(i) << " vs " << s.decisions()[i].flow;
     }
-    kept += d.verdict == Verdict::kKeep;
-    culled += d.verdict == Verdict::kCull;
-    skipped += d.verdict == Verdict::kSkip;
   }
   // The solver's arc flows are the closed form's selection, arc by arc.
   for (std::uint32_t a = 0; a < net.pair_arc_count(); ++a) {

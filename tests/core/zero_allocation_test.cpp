@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <memory>
 #include <vector>
 
 #include "keepless/core/closed_form.hpp"
@@ -94,6 +95,76 @@ TEST(ZeroAllocation, DecisionPathAllocatesNothing) {
   EXPECT_EQ(statuses_ok, 2 * runs + 2 * windows.size() + removals);
   EXPECT_GT(runs, 100u);
   EXPECT_GT(kept, 0u);
+}
+
+// The same with every policy on: the newest keyframe's scope, a floor that
+// binds, and each cost model reading depths, intrinsics and unmapped
+// keypoints; from-scratch and incremental, both starts.
+TEST(ZeroAllocation, PoliciesAndCostModelsAllocateNothing) {
+  const Capacities caps{12, 2048, 8192, 32768, 2048};
+  struct Frame {
+    Keyframe keyframe;
+    std::vector<Observation> observations;
+    std::vector<Keypoint> unmapped;
+  };
+  std::vector<std::vector<Frame>> windows;
+  for (std::uint64_t seed = 1; seed <= 12; ++seed) {
+    auto c = test::random_case(seed, 12, 150);
+    test::random_policies(c, seed);
+    std::vector<Frame> frames(c.frames.size());
+    for (std::size_t i = 0; i < frames.size(); ++i) {
+      frames[i].keyframe = test::keyframe_of(c.frames[i], frames[i].unmapped);
+      frames[i].observations = test::observations_of(c.frames[i]);
+    }
+    windows.push_back(std::move(frames));
+  }
+  std::vector<std::unique_ptr<Sparsifier>> sparsifiers;
+  for (CostModel model : {CostModel::kPaper, CostModel::kAuthors, CostModel::kInformation}) {
+    Params p;
+    p.pair_capacity = 2;
+    p.scope = Scope::kNewest;
+    p.coverage_floor = 10;
+    p.cost_model = model;
+    for (Start start : {Start::kClosedForm, Start::kZeroFlow}) {
+      sparsifiers.push_back(std::make_unique<Sparsifier>(caps, p, SolveMode::kIncremental, start));
+    }
+  }
+  Window window(caps);
+  const auto run_all = [&](std::uint64_t* promoted) {
+    std::uint32_t ok = 0;
+    for (auto& s : sparsifiers) {
+      ok += s->run(window) == Status::kOk;
+      *promoted += s->summary().floor_promoted;
+      ok += s->update(window) == Status::kOk;
+    }
+    return ok;
+  };
+  std::uint64_t promoted = 0;
+  for (const auto& f : windows[0]) {
+    ASSERT_EQ(window.add_keyframe(f.keyframe, f.observations.data(),
+                                  static_cast<std::uint32_t>(f.observations.size())),
+              Status::kOk);
+  }
+  ASSERT_EQ(run_all(&promoted), 2 * sparsifiers.size());  // warm-up
+  window.clear();
+
+  std::uint64_t calls = 0, ok = 0;
+  promoted = 0;
+  test::AllocationCounter counter;
+  for (const auto& frames : windows) {
+    for (const auto& f : frames) {
+      if (window.keyframe_count() == 6) (void)window.remove_keyframe(window.keyframe(0).id);
+      (void)window.add_keyframe(f.keyframe, f.observations.data(),
+                                static_cast<std::uint32_t>(f.observations.size()));
+      ok += run_all(&promoted);
+      calls += 2 * sparsifiers.size();
+    }
+    window.clear();
+  }
+  EXPECT_EQ(counter.stop(), 0u);
+  EXPECT_EQ(ok, calls);
+  EXPECT_GT(calls, 200u);
+  EXPECT_GT(promoted, 0u);
 }
 
 }  // namespace

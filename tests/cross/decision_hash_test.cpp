@@ -31,6 +31,7 @@ namespace {
 // Recorded from the x86-64 release build; see the file comment.
 constexpr std::uint64_t kExpectedCostHash = 0x231e8d5f5870d2a7ULL;
 constexpr std::uint64_t kExpectedDecisionHash = 0x6da842663cdda28eULL;
+constexpr std::uint64_t kExpectedPolicyHash = 0x8092a28e8907ad34ULL;
 
 // splitmix64: a fixed, portable stream (std:: distributions are not
 // specified bit for bit across standard libraries).
@@ -249,13 +250,20 @@ GeneratedWindow generate_window(SplitMix64& rng, std::uint32_t index) {
   return w;
 }
 
-TEST(CrossArchitecture, SparsifierDecisionsMatchRecordedHash) {
-  constexpr std::uint32_t kWindows = 40;
+// Room for any generated window.
+Capacities generated_capacities() {
   Capacities capacities;
   capacities.max_keyframes = 16;
   capacities.max_points = 1024;
   capacities.max_observations = 4096;
   capacities.max_pair_arcs = 32768;
+  capacities.max_unmapped_keypoints = 4096;
+  return capacities;
+}
+
+TEST(CrossArchitecture, SparsifierDecisionsMatchRecordedHash) {
+  constexpr std::uint32_t kWindows = 40;
+  const Capacities capacities = generated_capacities();
 
   SplitMix64 rng(0x2024'0511'0000'0005ULL);
   Fnv1a64 hash;
@@ -313,6 +321,86 @@ TEST(CrossArchitecture, SparsifierDecisionsMatchRecordedHash) {
   EXPECT_EQ(hash.value(), kExpectedDecisionHash)
       << "decision hash " << hex(hash.value()) << " (expected " << hex(kExpectedDecisionHash)
       << "; kept " << kept << ", culled " << culled << ", skipped " << skipped << ")";
+}
+
+// The decision policies and cost models beside the paper's: the same kind of
+// windows, given intrinsics, depths (where the information levels' float
+// path can differ) and unmapped keypoints, decided under every cost model
+// with the newest keyframe's scope and a binding coverage floor.
+TEST(CrossArchitecture, PolicyDecisionsMatchRecordedHash) {
+  constexpr std::uint32_t kWindows = 24;
+  const Capacities capacities = generated_capacities();
+
+  SplitMix64 rng(0x706f6c6963790001ULL);
+  SplitMix64 extra(0x706f6c6963790002ULL);
+  Fnv1a64 hash;
+  Window window(capacities);
+  std::uint64_t culled = 0, promoted = 0, out_of_scope = 0, informative = 0;
+  std::vector<Keypoint> unmapped;
+  for (std::uint32_t index = 0; index < kWindows; ++index) {
+    GeneratedWindow g = generate_window(rng, index);
+    window.clear();
+    for (std::size_t f = 0; f < g.keyframes.size(); ++f) {
+      Keyframe kf = g.keyframes[f];
+      kf.fx = 500.0 + 100.0 * extra.fraction(20);
+      kf.fy = kf.fx * (1.0 + 0.01 * extra.fraction(10));
+      kf.cx = 320.0 + 10.0 * extra.fraction(20);
+      kf.cy = 240.0 + 10.0 * extra.fraction(20);
+      unmapped.resize(extra.below(200));
+      for (Keypoint& k : unmapped) k = {700.0 * extra.fraction(24) - 30.0, 520.0 * extra.fraction(24) - 20.0};
+      kf.unmapped = unmapped.data();
+      kf.unmapped_count = static_cast<std::uint32_t>(unmapped.size());
+      for (Observation& o : g.observations[f]) {
+        o.depth = extra.below(10) == 0 ? 0.0 : 0.3 + 30.0 * extra.fraction(30);
+      }
+      ASSERT_EQ(window.add_keyframe(kf, g.observations[f].data(),
+                                    static_cast<std::uint32_t>(g.observations[f].size())),
+                Status::kOk)
+          << "window " << index << " keyframe " << f;
+      // The float-fed scores themselves.
+      const auto count = static_cast<std::uint32_t>(g.observations[f].size());
+      std::vector<std::uint32_t> levels(count), neighbours(count),
+          cells(static_cast<std::size_t>(kGridColumns) * kGridRows);
+      information_levels(kf, g.observations[f].data(), count, levels.data());
+      grid_neighbours(kf, g.observations[f].data(), count, 640, 480, cells.data(),
+                      neighbours.data());
+      for (std::uint32_t i = 0; i < count; ++i) {
+        hash.add(levels[i], 1);
+        hash.add(neighbours[i], 4);
+        informative += levels[i] != kNeutralInformationLevel;
+      }
+    }
+    for (CostModel model : {CostModel::kPaper, CostModel::kAuthors, CostModel::kInformation}) {
+      Params p = g.params;
+      p.cost_model = model;
+      p.scope = index % 2 == 0 ? Scope::kNewest : Scope::kWindow;
+      p.coverage_floor = 5 + 3 * (index % 4);
+      Sparsifier sparsifier(capacities, p);
+      ASSERT_EQ(sparsifier.run(window), Status::kOk) << "window " << index;
+      const Summary& s = sparsifier.summary();
+      hash.add(index, 4);
+      hash.add(static_cast<std::uint64_t>(model), 1);
+      const PointDecision* d = sparsifier.decisions();
+      for (std::uint32_t i = 0; i < sparsifier.decision_count(); ++i) {
+        hash.add(d[i].point);
+        hash.add(static_cast<std::uint64_t>(d[i].verdict), 1);
+        hash.add_signed(d[i].flow);
+      }
+      hash.add_signed(s.max_flow);
+      hash.add_signed(s.total_cost);
+      hash.add(s.floor_promoted, 4);
+      culled += s.culled;
+      promoted += s.floor_promoted;
+      out_of_scope += s.out_of_scope;
+    }
+  }
+  EXPECT_GT(culled, 0u);
+  EXPECT_GT(promoted, 0u);
+  EXPECT_GT(out_of_scope, 0u);
+  EXPECT_GT(informative, 1000u);
+  EXPECT_EQ(hash.value(), kExpectedPolicyHash)
+      << "policy decision hash " << hex(hash.value()) << " (expected " << hex(kExpectedPolicyHash)
+      << ")";
 }
 
 }  // namespace

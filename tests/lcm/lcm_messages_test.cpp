@@ -30,7 +30,8 @@ TEST(LcmMessages, KeyframeRoundTrip) {
   m.orientation[3] = std::sqrt(0.5);
   m.u[1] = 12.5f;
   const auto bytes = kt::encode(m);
-  ASSERT_EQ(bytes.size(), wire::kKeyframeHeaderBytes + 3 * wire::kKeyframeBytesPerObservation);
+  ASSERT_EQ(bytes.size(), wire::kKeyframeHeaderBytes + 3 * wire::kKeyframeBytesPerObservation +
+                              wire::kKeyframeOptionalCountBytes);
 
   keepless::keyframe_t d{};
   ASSERT_EQ(d.decode(bytes.data(), 0, static_cast<int>(bytes.size())), static_cast<int>(bytes.size()));
@@ -52,9 +53,58 @@ TEST(LcmMessages, KeyframeCountAtFixedOffset) {
     std::vector<std::int64_t> ids;
     for (int i = 0; i < n; ++i) ids.push_back(i);
     const auto bytes = kt::encode(kt::make_keyframe(1, 1, ids));
-    ASSERT_EQ(bytes.size(), wire::kKeyframeHeaderBytes + wire::kKeyframeBytesPerObservation * n);
+    ASSERT_EQ(bytes.size(), wire::kKeyframeHeaderBytes + wire::kKeyframeBytesPerObservation * n +
+                                wire::kKeyframeOptionalCountBytes);
     EXPECT_EQ(be32_at(bytes, wire::kKeyframeCountOffset), n);
   }
+}
+
+// The optional arrays after the observations (depths, intrinsics, unmapped
+// keypoints): a round trip, and the pre-decode checks of their counts.
+TEST(LcmMessages, KeyframeOptionalFields) {
+  keepless::keyframe_t m = kt::make_keyframe(1, 1, {5, 6, 7});
+  m.num_depths = 3;
+  m.depth = {1.5f, 0.0f, 12.25f};
+  m.num_intrinsics = 4;
+  m.intrinsics = {525.0, 525.0, 319.5, 239.5};
+  m.num_unmapped = 2;
+  m.unmapped_u = {10.0f, 20.0f};
+  m.unmapped_v = {30.0f, 40.0f};
+  const auto bytes = kt::encode(m);
+  ASSERT_EQ(bytes.size(), wire::kKeyframeHeaderBytes + 3 * wire::kKeyframeBytesPerObservation +
+                              wire::kKeyframeOptionalCountBytes + 3 * 4 + 4 * 8 + 2 * 8);
+  keepless::keyframe_t d{};
+  ASSERT_EQ(d.decode(bytes.data(), 0, static_cast<int>(bytes.size())), static_cast<int>(bytes.size()));
+  EXPECT_EQ(d.depth, m.depth);
+  EXPECT_EQ(d.intrinsics, m.intrinsics);
+  EXPECT_EQ(d.unmapped_v, m.unmapped_v);
+
+  using keepless::platform::RejectReason;
+  keepless::platform::MessageLimits limits;
+  limits.max_unmapped = 2;
+  const auto check = [&](const std::vector<std::uint8_t>& b) {
+    return keepless::platform::check_keyframe_bytes(b.data(), b.size(), limits);
+  };
+  EXPECT_EQ(check(bytes), RejectReason::kNone);
+  auto shorter = bytes;
+  shorter.pop_back();
+  EXPECT_EQ(check(shorter), RejectReason::kTruncated);
+  limits.max_unmapped = 1;
+  EXPECT_EQ(check(bytes), RejectReason::kOversizeCount);
+  limits.max_unmapped = 2;
+  keepless::keyframe_t bad = m;
+  bad.num_depths = 2;  // neither 0 nor num_observations
+  bad.depth = {1.0f, 2.0f};
+  EXPECT_EQ(check(kt::encode(bad)), RejectReason::kInvalidField);
+  bad = m;
+  bad.num_intrinsics = 3;
+  bad.intrinsics = {1.0, 2.0, 3.0};
+  EXPECT_EQ(check(kt::encode(bad)), RejectReason::kInvalidField);
+  bad = m;
+  auto negative = kt::encode(bad);
+  // num_unmapped sits 4 + 16 bytes (its two floats each) before the end.
+  negative[negative.size() - 20] = 0xff;
+  EXPECT_EQ(check(negative), RejectReason::kInvalidField);
 }
 
 TEST(LcmMessages, InputsAtTheDefaultLimitsFitOneDatagram) {

@@ -116,3 +116,34 @@ TEST(LatencyHistogram, QuantilesWithinOneSixteenth) {
 }
 
 }  // namespace
+
+namespace {
+
+TEST(NodeConfig, ParsesThePolicyFlags) {
+  NodeConfig c;
+  std::string error;
+  ASSERT_EQ(parse({}, c, error), ParseResult::kOk);
+  EXPECT_EQ(c.params.scope, keepless::core::Scope::kWindow);  // the library's defaults
+  EXPECT_EQ(c.params.coverage_floor, 0u);
+  EXPECT_EQ(c.params.cost_model, keepless::core::CostModel::kPaper);
+  ASSERT_EQ(parse({"--scope", "newest", "--floor=30", "--cost", "information", "--image", "1241x376",
+                   "--max-unmapped", "1500", "--window", "10"},
+                  c, error),
+            ParseResult::kOk)
+      << error;
+  EXPECT_EQ(c.max_unmapped, 1500u);
+  EXPECT_EQ(keepless::platform::window_capacities(c).max_unmapped_keypoints, 15000u);
+  EXPECT_EQ(c.params.scope, keepless::core::Scope::kNewest);
+  EXPECT_EQ(c.params.coverage_floor, 30u);
+  EXPECT_EQ(c.params.cost_model, keepless::core::CostModel::kInformation);
+  EXPECT_EQ(c.params.image_width, 1241);
+  EXPECT_EQ(c.params.image_height, 376);
+  for (const std::vector<std::string>& bad :
+       {std::vector<std::string>{"--scope", "all"}, {"--floor", "-1"}, {"--floor", "4294967296"},
+        {"--cost", "Paper"}, {"--image", "0x480"}, {"--image", "640"}, {"--max-unmapped", "-1"}}) {
+    NodeConfig d;
+    EXPECT_EQ(parse(bad, d, error), ParseResult::kError) << bad[0] << " " << bad[1];
+  }
+}
+
+}  // namespace

@@ -492,4 +492,48 @@ TEST_F(NodeOnMemq, AStopForBudgetIsFlaggedAndCullsNothing) {
   EXPECT_EQ(node_->counters().budget_exhaustions, 3u);
 }
 
+// The optional keyframe_t arrays reach the cost models, and the policies
+// flags the library: the node decides what the library does on the same
+// keyframes (depths, intrinsics, unmapped keypoints), for each cost model.
+TEST_F(NodeOnMemq, PoliciesAndOptionalFieldsMatchTheLibrary) {
+  for (keepless::core::CostModel model :
+       {keepless::core::CostModel::kAuthors, keepless::core::CostModel::kInformation}) {
+    NodeConfig c = default_config();
+    c.max_unmapped = 20;
+    c.params.cost_model = model;
+    c.params.scope = keepless::core::Scope::kNewest;
+    c.params.coverage_floor = 6;
+    c.params.pair_capacity = 2;
+    make_node(c);
+    kt::ReferenceNode ref(keepless::platform::window_capacities(config_), config_.params, config_.window);
+    std::vector<kt::ReferenceDecision> expected;
+    for (int i = 0; i < 8; ++i) {
+      keepless::keyframe_t m = kt::make_keyframe(i + 1, 100 + i, kt::id_range(i * 8, 40));
+      m.num_depths = m.num_observations;
+      for (int j = 0; j < m.num_observations; ++j) m.depth.push_back(1.0f + static_cast<float>((j * 7 + i) % 13));
+      m.num_intrinsics = 4;
+      m.intrinsics = {500.0, 500.0, 320.0, 240.0};
+      m.num_unmapped = 3 * (i % 4);
+      for (int j = 0; j < m.num_unmapped; ++j) {
+        m.unmapped_u.push_back(static_cast<float>(40 * j + 25));
+        m.unmapped_v.push_back(static_cast<float>(30 * j + 15));
+      }
+      expected.push_back(ref.step(m));
+      send(m);
+    }
+    ASSERT_EQ(decisions_.size(), 8u);
+    EXPECT_EQ(node_->counters().messages_rejected, 0u);
+    for (int i = 0; i < 8; ++i) {
+      kt::expect_same(expected[i], decisions_[i], ("keyframe " + std::to_string(i)).c_str());
+    }
+    // More unmapped keypoints than --max-unmapped: refused before decoding.
+    keepless::keyframe_t big = kt::make_keyframe(50, 300, kt::id_range(0, 5));
+    big.num_unmapped = 21;
+    big.unmapped_u.assign(21, 1.0f);
+    big.unmapped_v.assign(21, 1.0f);
+    send(big);
+    EXPECT_EQ(rejected(RejectReason::kOversizeCount), 1u);
+  }
+}
+
 }  // namespace

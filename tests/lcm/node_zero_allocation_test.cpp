@@ -26,6 +26,7 @@ TEST(NodeZeroAllocation, SteadyStateReceivePathAllocatesNothing) {
   c.max_observations = 128;
   c.max_event_ids = 32;
   c.params.pair_capacity = 8;
+  c.max_unmapped = 16;
   c.quiet = true;
   c.status_period_ms = 3600 * 1000;
   lcm::LCM bus(c.url);
@@ -37,7 +38,17 @@ TEST(NodeZeroAllocation, SteadyStateReceivePathAllocatesNothing) {
   std::vector<std::vector<std::uint8_t>> keyframes, events, bad;
   std::int64_t seq = 0;
   for (int i = 0; i < 40; ++i) {
-    keyframes.push_back(kt::encode(kt::make_keyframe(++seq, i, kt::id_range(i * 10, 100 + (i % 3) * 10))));
+    keepless::keyframe_t m = kt::make_keyframe(++seq, i, kt::id_range(i * 10, 100 + (i % 3) * 10));
+    if (i % 2 == 1) {  // the optional arrays decode into reserved vectors too
+      m.num_depths = m.num_observations;
+      m.depth.assign(static_cast<std::size_t>(m.num_observations), 2.5f);
+      m.num_intrinsics = 4;
+      m.intrinsics = {500.0, 500.0, 320.0, 240.0};
+      m.num_unmapped = 16;
+      m.unmapped_u.assign(16, 100.0f);
+      m.unmapped_v.assign(16, 200.0f);
+    }
+    keyframes.push_back(kt::encode(m));
     keepless::map_event_t e = kt::make_event(++seq);
     e.deleted_point_id = {i * 10 + 1, i * 10 + 2};
     e.merged_from_id = {i * 10 + 5};

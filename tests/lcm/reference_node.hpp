@@ -43,14 +43,27 @@ class ReferenceNode {
       o.point = static_cast<core::PointId>(m.point_id[i]);
       o.u = m.u[i];
       o.v = m.v[i];
+      if (m.num_depths != 0) o.depth = m.depth[static_cast<std::size_t>(i)];
       f.obs.push_back(o);
+    }
+    if (m.num_intrinsics == 4) {
+      f.kf.fx = m.intrinsics[0];
+      f.kf.fy = m.intrinsics[1];
+      f.kf.cx = m.intrinsics[2];
+      f.kf.cy = m.intrinsics[3];
+    }
+    for (int i = 0; i < m.num_unmapped; ++i) {
+      f.unmapped.push_back({m.unmapped_u[static_cast<std::size_t>(i)], m.unmapped_v[static_cast<std::size_t>(i)]});
     }
     if (frames_.size() == k_) frames_.pop_front();
     frames_.push_back(f);
 
     core::Window w(caps_);
     for (const Frame& fr : frames_) {
-      if (w.add_keyframe(fr.kf, fr.obs.data(), static_cast<std::uint32_t>(fr.obs.size())) != core::Status::kOk) {
+      core::Keyframe kf = fr.kf;
+      kf.unmapped = fr.unmapped.data();
+      kf.unmapped_count = static_cast<std::uint32_t>(fr.unmapped.size());
+      if (w.add_keyframe(kf, fr.obs.data(), static_cast<std::uint32_t>(fr.obs.size())) != core::Status::kOk) {
         ADD_FAILURE() << "reference window rejected keyframe " << fr.kf.id;
       }
     }
@@ -98,7 +111,7 @@ class ReferenceNode {
     std::deque<Frame> next;
     for (Frame& fr : frames_) {
       if (removed.count(static_cast<std::int64_t>(fr.kf.id)) > 0) continue;
-      Frame out{fr.kf, {}};
+      Frame out{fr.kf, {}, fr.unmapped};
       std::set<core::PointId> seen;
       for (core::Observation o : fr.obs) {
         const auto id = static_cast<std::int64_t>(o.point);
@@ -117,6 +130,7 @@ class ReferenceNode {
   struct Frame {
     core::Keyframe kf;
     std::vector<core::Observation> obs;
+    std::vector<core::Keypoint> unmapped;
   };
   core::Capacities caps_;
   core::Params params_;

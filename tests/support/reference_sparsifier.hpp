@@ -5,7 +5,12 @@
 // by its per-pair closed form: the source arcs never bind (capacity n(n-1)/2 =
 // the point's out-degree), so each pair (f_j, f_k) independently carries
 // min(M, shared points) units on its cheapest points by c_c + c_s, ties to the
-// smaller point id.
+// smaller point id. The cost models beside the paper's (core::CostModel) are
+// written here from their definitions too: the authors' grid N(p,f) by
+// comparing every keypoint's cell, their binned c_s and c_b by table, and
+// the information levels from the explicit 3D point, a 2x3 projection
+// Jacobian times [I | -[X]x], and the information matrix inverted by
+// Gauss-Jordan elimination.
 //
 // Slow (quadratic box counting) and allocating: use it on small windows only.
 
@@ -27,12 +32,15 @@ struct RefObservation {
   std::uint64_t point = 0;
   double u = 0;
   double v = 0;
+  double depth = 0;  // <= 0: unknown
 };
 
 struct RefKeyframe {
   std::uint64_t id = 0;
   double centre[3] = {0, 0, 0};
   std::vector<RefObservation> observations;
+  double fx = 0, fy = 0, cx = 0, cy = 0;  // fx = 0: unknown
+  std::vector<std::pair<double, double>> unmapped;  // (u, v)
 };
 
 struct RefPoint {
@@ -50,6 +58,11 @@ struct RefResult {
   std::uint32_t pair_arcs = 0;   // point -> pair arcs
   std::int64_t max_flow = 0;
   std::int64_t total_cost = 0;   // sum of c_c + c_s + c_b over the units carried
+  // The decision policies (reference_policies.hpp).
+  std::uint32_t out_of_scope = 0;
+  std::uint32_t floor_keyframes = 0;
+  std::uint32_t floor_promoted = 0;
+  std::uint32_t floor_short = 0;
 };
 
 // c_m(n): c_m(m) = 1, c_m(n) = ceil((n+1)/(n-1) * c_m(n+1)), recursively.
@@ -89,15 +102,181 @@ inline std::uint64_t ref_nearby(const RefKeyframe& frame, std::size_t self,
   return n;
 }
 
+// --- the authors' cost model (their MatchCuller and KeyFrame::GetNeighborInGrid)
+
+inline std::int64_t ref_authors_spatial_cost(std::uint64_t a, std::uint64_t b) {
+  const std::uint64_t bounds[] = {100, 500, 1200};
+  std::int64_t bin = 3;
+  for (int i = 2; i >= 0; --i) {
+    if (a * b < bounds[i]) bin = i;
+  }
+  return bin * 2;
+}
+
+inline std::int64_t ref_authors_baseline_cost(const double* a, const double* b) {
+  const double d = std::sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) +
+                             (a[2] - b[2]) * (a[2] - b[2]));
+  const std::int64_t table[] = {10, 9, 8, 7, 6, 5, 4, 3, 2, 1};
+  for (int i = 0; i < 10; ++i) {
+    if (d < 10.0 * (i + 1)) return table[i] * 10;
+  }
+  return 0;
+}
+
+// Keypoints (mapped and unmapped) in the 3x3 grid cells around observation
+// `self`'s cell: every keypoint's cell compared with it.
+inline std::uint64_t ref_grid_neighbours(const RefKeyframe& frame, std::size_t self,
+                                         const core::Params& params) {
+  const double per_u = 64.0 / params.image_width, per_v = 48.0 / params.image_height;
+  const double su = std::round(frame.observations[self].u * per_u);
+  const double sv = std::round(frame.observations[self].v * per_v);
+  std::uint64_t n = 0;
+  const auto consider = [&](double u, double v) {
+    const double cu = std::round(u * per_u), cv = std::round(v * per_v);
+    const bool in_grid = cu >= 0 && cu <= 63 && cv >= 0 && cv <= 47;
+    if (in_grid && std::fabs(cu - su) <= 1 && std::fabs(cv - sv) <= 1) ++n;
+  };
+  for (const auto& o : frame.observations) consider(o.u, o.v);
+  for (const auto& k : frame.unmapped) consider(k.first, k.second);
+  return n;
+}
+
+// --- the information cost model
+
+// 6x6 Gauss-Jordan inverse with partial pivoting; false if singular.
+inline bool ref_invert6(std::vector<std::vector<double>> a, std::vector<std::vector<double>>& inv) {
+  inv.assign(6, std::vector<double>(6, 0.0));
+  for (int i = 0; i < 6; ++i) inv[i][i] = 1.0;
+  for (int c = 0; c < 6; ++c) {
+    int pivot = c;
+    for (int r = c + 1; r < 6; ++r) {
+      if (std::fabs(a[r][c]) > std::fabs(a[pivot][c])) pivot = r;
+    }
+    if (a[pivot][c] == 0.0) return false;
+    std::swap(a[c], a[pivot]);
+    std::swap(inv[c], inv[pivot]);
+    const double p = a[c][c];
+    for (int k = 0; k < 6; ++k) {
+      a[c][k] /= p;
+      inv[c][k] /= p;
+    }
+    for (int r = 0; r < 6; ++r) {
+      if (r == c) continue;
+      const double f = a[r][c];
+      for (int k = 0; k < 6; ++k) {
+        a[r][k] -= f * a[c][k];
+        inv[r][k] -= f * inv[c][k];
+      }
+    }
+  }
+  return true;
+}
+
+// The 2x6 Jacobian of the pixel of point X (camera frame) with respect to a
+// pose perturbation X' = X + dt + dtheta x X: d(pixel)/dX * [I | -[X]x].
+inline std::vector<std::vector<double>> ref_jacobian(const RefKeyframe& f, const RefObservation& o) {
+  const double z = o.depth;
+  const double x = (o.u - f.cx) / f.fx * z, y = (o.v - f.cy) / f.fy * z;
+  const double p[2][3] = {{f.fx / z, 0, -f.fx * x / (z * z)}, {0, f.fy / z, -f.fy * y / (z * z)}};
+  const double m[3][6] = {{1, 0, 0, 0, z, -y}, {0, 1, 0, -z, 0, x}, {0, 0, 1, y, -x, 0}};
+  std::vector<std::vector<double>> j(2, std::vector<double>(6, 0.0));
+  for (int r = 0; r < 2; ++r) {
+    for (int c = 0; c < 6; ++c) {
+      for (int k = 0; k < 3; ++k) j[r][c] += p[r][k] * m[k][c];
+    }
+  }
+  return j;
+}
+
+// Every observation's level (core::CostModel::kInformation): 2 - floor(log2 r)
+// in [0, 4], r the leverage tr(J L^-1 J^T) times n / 6; 2 where unknown or
+// degenerate (fewer than 4 observations with a depth, or an LDL^T pivot
+// <= 1e-9 of L's largest diagonal entry).
+inline std::vector<std::uint64_t> ref_information_levels(const RefKeyframe& f) {
+  std::vector<std::uint64_t> levels(f.observations.size(), 2);
+  if (!(f.fx > 0) || !(f.fy > 0)) return levels;
+  std::vector<std::vector<double>> info(6, std::vector<double>(6, 0.0));
+  std::size_t used = 0;
+  for (const auto& o : f.observations) {
+    if (!(o.depth > 0)) continue;
+    const auto j = ref_jacobian(f, o);
+    for (int r = 0; r < 6; ++r) {
+      for (int c = 0; c < 6; ++c) info[r][c] += j[0][r] * j[0][c] + j[1][r] * j[1][c];
+    }
+    ++used;
+  }
+  if (used < 4) return levels;  // not over-determined: every leverage is 1
+  double largest = 0;
+  for (int r = 0; r < 6; ++r) largest = std::max(largest, info[r][r]);
+  auto d = info;  // elimination without pivoting: its pivots are LDL^T's D
+  for (int c = 0; c < 6; ++c) {
+    if (!(d[c][c] > 1e-9 * largest)) return levels;
+    for (int r = c + 1; r < 6; ++r) {
+      const double factor = d[r][c] / d[c][c];
+      for (int k = c; k < 6; ++k) d[r][k] -= factor * d[c][k];
+    }
+  }
+  std::vector<std::vector<double>> inv;
+  if (!ref_invert6(info, inv)) return levels;
+  for (std::size_t i = 0; i < f.observations.size(); ++i) {
+    if (!(f.observations[i].depth > 0)) continue;
+    const auto j = ref_jacobian(f, f.observations[i]);
+    double t = 0;
+    for (int row = 0; row < 2; ++row) {
+      for (int r = 0; r < 6; ++r) {
+        for (int c = 0; c < 6; ++c) t += j[row][r] * inv[r][c] * j[row][c];
+      }
+    }
+    const double ratio = t * static_cast<double>(used) / 6.0;
+    std::int64_t level = 2 - static_cast<std::int64_t>(std::floor(std::log2(ratio)));
+    levels[i] = static_cast<std::uint64_t>(std::min<std::int64_t>(4, std::max<std::int64_t>(0, level)));
+  }
+  return levels;
+}
+
+// The integer each observation's arc costs are a function of, per model.
+inline std::vector<std::uint64_t> ref_scores(const RefKeyframe& f, const core::Params& params) {
+  if (params.cost_model == core::CostModel::kInformation) return ref_information_levels(f);
+  std::vector<std::uint64_t> out;
+  for (std::size_t i = 0; i < f.observations.size(); ++i) {
+    out.push_back(params.cost_model == core::CostModel::kAuthors ? ref_grid_neighbours(f, i, params)
+                                                                 : ref_nearby(f, i, params));
+  }
+  return out;
+}
+
+inline std::int64_t ref_arc_cost(const core::Params& params, std::uint64_t a, std::uint64_t b) {
+  if (!(params.cost_terms & core::kSpatialCost)) return 0;
+  switch (params.cost_model) {
+    case core::CostModel::kAuthors: return ref_authors_spatial_cost(a, b);
+    case core::CostModel::kInformation: return static_cast<std::int64_t>(a + b);
+    default: return ref_spatial_cost(a, b);
+  }
+}
+
+inline std::int64_t ref_sink_cost(const core::Params& params, const double* a, const double* b) {
+  if (!(params.cost_terms & core::kBaselineCost)) return 0;
+  return params.cost_model == core::CostModel::kAuthors ? ref_authors_baseline_cost(a, b)
+                                                        : ref_baseline_cost(a, b);
+}
+
 inline std::vector<RefKeyframe> ref_frames_of(const core::Window& window) {
   std::vector<RefKeyframe> frames;
   for (std::uint32_t s = 0; s < window.keyframe_count(); ++s) {
     RefKeyframe f;
-    f.id = window.keyframe(s).id;
-    for (int i = 0; i < 3; ++i) f.centre[i] = window.keyframe(s).centre[i];
+    const core::Keyframe& kf = window.keyframe(s);
+    f.id = kf.id;
+    for (int i = 0; i < 3; ++i) f.centre[i] = kf.centre[i];
+    f.fx = kf.fx;
+    f.fy = kf.fy;
+    f.cx = kf.cx;
+    f.cy = kf.cy;
+    for (std::uint32_t i = 0; i < kf.unmapped_count; ++i) {
+      f.unmapped.push_back({kf.unmapped[i].u, kf.unmapped[i].v});
+    }
     for (std::uint32_t i = 0; i < window.observation_count(s); ++i) {
       const core::Observation& o = window.observations(s)[i];
-      f.observations.push_back({o.point, o.u, o.v});
+      f.observations.push_back({o.point, o.u, o.v, o.depth});
     }
     frames.push_back(f);
   }
@@ -116,6 +295,8 @@ inline RefResult reference_sparsify(const std::vector<RefKeyframe>& frames,
   }
   std::int64_t m = 0;
   for (const auto& entry : seen) m = std::max<std::int64_t>(m, entry.second.size());
+  std::vector<std::vector<std::uint64_t>> scores;
+  for (const auto& f : frames) scores.push_back(ref_scores(f, params));
 
   // Candidates of each pair (j, k): (c_c + c_s, point id).
   std::map<std::pair<std::size_t, std::size_t>, std::vector<std::pair<std::int64_t, std::uint64_t>>>
@@ -126,12 +307,13 @@ inline RefResult reference_sparsify(const std::vector<RefKeyframe>& frames,
     const std::int64_t n = static_cast<std::int64_t>(views.size());
     if (n < 2) continue;
     ++result.evaluated;
-    const std::int64_t cc = ref_connectivity_cost(n, m);
+    const std::int64_t cc =
+        (params.cost_terms & core::kConnectivityCost) ? ref_connectivity_cost(n, m) : 0;
     for (std::size_t x = 0; x < views.size(); ++x) {
       for (std::size_t y = x + 1; y < views.size(); ++y) {
-        const std::uint64_t nx = ref_nearby(frames[views[x].first], views[x].second, params);
-        const std::uint64_t ny = ref_nearby(frames[views[y].first], views[y].second, params);
-        candidates[{views[x].first, views[y].first}].push_back({cc + ref_spatial_cost(nx, ny),
+        const std::uint64_t nx = scores[views[x].first][views[x].second];
+        const std::uint64_t ny = scores[views[y].first][views[y].second];
+        candidates[{views[x].first, views[y].first}].push_back({cc + ref_arc_cost(params, nx, ny),
                                                                 entry.first});
         ++result.pair_arcs;
       }
@@ -142,8 +324,8 @@ inline RefResult reference_sparsify(const std::vector<RefKeyframe>& frames,
   for (auto& entry : candidates) {
     auto& list = entry.second;
     std::sort(list.begin(), list.end());  // by cost, then by point id
-    const std::int64_t cb = ref_baseline_cost(frames[entry.first.first].centre,
-                                              frames[entry.first.second].centre);
+    const std::int64_t cb =
+        ref_sink_cost(params, frames[entry.first.first].centre, frames[entry.first.second].centre);
     const std::int64_t take = std::min<std::int64_t>(params.pair_capacity, list.size());
     for (std::int64_t i = 0; i < take; ++i) {
       ++flow[list[i].second];

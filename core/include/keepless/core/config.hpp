@@ -15,12 +15,45 @@ struct Capacities {
   std::uint32_t max_points = 16384;        // distinct point ids in the window
   std::uint32_t max_observations = 40000;  // (keyframe, point) observations
   std::uint32_t max_pair_arcs = 131072;    // point -> keyframe-pair arcs
+  // Keyframe::unmapped keypoints held over the window (16 bytes each), for
+  // CostModel::kAuthors; 0: keyframes carrying any are refused.
+  std::uint32_t max_unmapped_keypoints = 0;
 };
 
 // Bits of Params::cost_terms.
 enum CostTerm : std::uint8_t { kConnectivityCost = 1, kSpatialCost = 2, kBaselineCost = 4 };
 
-// The paper's section III-B parameters.
+// Which points get a verdict. kWindow: every point seen by >= 2 window
+// keyframes. kNewest: only the points the newest keyframe observes (the
+// authors' ORB-SLAM2 integration, which decides the new keyframe's map
+// points before each local BA); the others are skipped. The network is the
+// whole window's either way (the newest keyframe's points compete for the
+// pairs' M with every window point), so the scope is a pass over the exact
+// optimum and run() and update() share it.
+enum class Scope : std::uint8_t { kWindow, kNewest };
+
+// How the point -> pair costs (and the pair -> sink costs) are computed.
+//   kPaper: section III-B as written (README, "The network").
+//   kAuthors: the authors' code: N(p,f) counts every keypoint of f, mapped
+//     or not (Keyframe::unmapped), in the 3x3 cells of ORB-SLAM2's 64x48
+//     grid over the image around p's cell, p included; c_s = 2 * bin(N_j *
+//     N_k) with bins < 100, < 500, < 1200, else (0..3); c_b = 10 * (10 -
+//     floor(d / 10)) for d < 100 m, else 0. Their keep threshold, flow >
+//     capacity / 2 in integers, is theta = 0.5 for integer flows.
+//   kInformation: c_s is replaced by what the point's observations add to
+//     the two poses' information: per observation the leverage tr(J L^-1 J^T)
+//     of its 2x6 reprojection Jacobian J against the keyframe's information
+//     L (the sum of J^T J over its observations with a depth), the first-order
+//     log-det loss of dropping it, relative to the keyframe's mean (6 / n),
+//     quantised to 0 (>= 4x the mean) .. 4 (< 0.5x); the arc costs the sum of
+//     its two observations' levels. Observations without a depth, keyframes
+//     without intrinsics, with fewer than 4 observations with a depth (every
+//     leverage is then exactly the mean) or with a singular L, cost the
+//     neutral level 2.
+// c_c, the cost terms' mask and theta apply to every model.
+enum class CostModel : std::uint8_t { kPaper, kAuthors, kInformation };
+
+// The paper's section III-B parameters, and the decision policies around them.
 struct Params {
   std::int64_t pair_capacity = 100;  // M
   double theta = 0.5;                // keep iff flow > theta * n(n-1)/2
@@ -29,6 +62,24 @@ struct Params {
   // Which costs the network uses (the paper's ablation); the default, all
   // three, is the paper's method. A term switched off costs 0 on its arcs.
   std::uint8_t cost_terms = kConnectivityCost | kSpatialCost | kBaselineCost;
+  Scope scope = Scope::kWindow;
+  // Coverage floor L: after the solve, every window keyframe keeps at least L
+  // of its evaluated points (those not culled: kept, or skipped by the scope),
+  // or all of them; culled points are promoted back (Sparsifier::run). 0: off.
+  std::uint32_t coverage_floor = 0;
+  CostModel cost_model = CostModel::kPaper;
+  // The image that CostModel::kAuthors lays its 64x48 grid over, pixels
+  // [0, width) x [0, height) (ORB-SLAM2's mnMinX.. mnMaxX, undistorted).
+  std::int32_t image_width = 640;
+  std::int32_t image_height = 480;
 };
+
+// The options' names as command lines spell them: "window", "newest";
+// "paper", "authors", "information". parse_* return false (and leave *out
+// alone) for any other text.
+const char* to_string(Scope scope);
+const char* to_string(CostModel model);
+bool parse_scope(const char* text, Scope* out);
+bool parse_cost_model(const char* text, CostModel* out);
 
 }  // namespace keepless::core

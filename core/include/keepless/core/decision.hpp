@@ -31,6 +31,15 @@ struct Summary {
   std::uint32_t arcs = 0;  // all network arcs
   std::int64_t max_flow = 0;
   std::int64_t total_cost = 0;
+  // Params::scope: evaluated points skipped because the newest keyframe does
+  // not observe them (counted in `skipped`).
+  std::uint32_t out_of_scope = 0;
+  // Params::coverage_floor: keyframes below the floor when their turn came
+  // (the floor bound), the culled points promoted back to keep, and the
+  // keyframes still below it with every evaluated point of theirs kept.
+  std::uint32_t floor_keyframes = 0;
+  std::uint32_t floor_promoted = 0;
+  std::uint32_t floor_short = 0;
 };
 
 }  // namespace keepless::core

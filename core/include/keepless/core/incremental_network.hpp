@@ -45,7 +45,8 @@ class IncrementalNetwork {
 
   // Brings the network held in `solver` (sized by solver_capacity) up to
   // date with `window`. The first update, the first after clear(), and any
-  // update with different network parameters (M, box, cost terms) reset the
+  // update with different network parameters (M, box, cost terms, cost
+  // model, image size; not the scope or the floor) reset the
   // solver and build from nothing. On an error the network is cleared, so
   // the next update rebuilds.
   [[nodiscard]] Status update(const Window& window, const Params& params,
@@ -74,6 +75,9 @@ class IncrementalNetwork {
   std::uint32_t point_views(std::uint32_t i) const;  // n
   // Source arc of an evaluated point (n >= 2); -1 for a skipped one.
   solver::ArcId point_source_arc(std::uint32_t i) const;
+  // Every point's window slots, flattened in point order as
+  // PaperNetwork::point_slots, each point's in no particular order.
+  void point_slots(std::uint32_t* at, std::uint32_t* slots) const;
 
   // Source arcs of the evaluated points, ascending point id.
   const solver::ArcId* canonical_order() const;

@@ -39,6 +39,10 @@ class PaperNetwork {
   std::uint32_t point_views(std::uint32_t i) const;  // n
   // Evaluated points (n >= 2) are network nodes; -1 for skipped points.
   std::int32_t point_source_arc(std::uint32_t i) const;
+  // Every point's window slots (the keyframes observing it), flattened in
+  // point order: point i's are slots[at[i] .. at[i + 1]), ascending. `at`
+  // holds point_count() + 1 entries, `slots` the window's observations.
+  void point_slots(std::uint32_t* at, std::uint32_t* slots) const;
   // Source arcs of the evaluated points, ascending point id (here simply
   // arcs 0 .. evaluated_count()-1), as IncrementalNetwork::canonical_order.
   const solver::ArcId* canonical_order() const;

@@ -10,6 +10,15 @@
 // the flow and potentials left behind (solve_warm) and restores the
 // tie-break (canonicalize)). Its decisions, flows and cost equal run()'s on
 // the same window.
+//
+// The decision policies act on the exact optimum's verdicts, the same way in
+// run() and update(): Params::scope = kNewest turns every evaluated point the
+// newest keyframe does not observe into a skip (flow and capacity reported
+// as 0, Summary::out_of_scope); Params::coverage_floor = L then promotes
+// culled points back to keep, keyframe by keyframe from the oldest, until
+// each keyframe has L evaluated points not culled or none of its evaluated
+// points is culled (Summary::floor_*). A promoted point keeps its flow, so
+// it is the only kept point whose flow is not above theta * capacity.
 
 #include <cstddef>
 #include <cstdint>
@@ -54,11 +63,13 @@ class Sparsifier {
   Sparsifier(const Sparsifier&) = delete;
   Sparsifier& operator=(const Sparsifier&) = delete;
 
-  // kInvalidArgument for bad Params (M < 1, theta outside [0,1], box < 0).
+  // kInvalidArgument for bad Params (M < 1, theta outside [0,1], box < 0,
+  // an unknown scope or cost model, kAuthors with an image side <= 0).
   [[nodiscard]] static Status validate(const Params& params);
 
-  // Decides every point of `window`. On kBudgetExhausted the decisions keep
-  // every evaluated point (nothing is culled on an unfinished solve).
+  // Decides every point of `window` (within Params::scope). On
+  // kBudgetExhausted the decisions keep every evaluated point (nothing is
+  // culled on an unfinished solve, so the floor has nothing to do).
   [[nodiscard]] Status run(const Window& window, const solver::Budget& budget = {});
 
   // The same decisions as run(window), incrementally: the network is edited

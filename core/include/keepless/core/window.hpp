@@ -11,16 +11,34 @@
 
 namespace keepless::core {
 
+// A detected keypoint, pixels.
+struct Keypoint {
+  double u = 0;
+  double v = 0;
+};
+
 struct Keyframe {
   KeyframeId id = 0;
   double centre[3] = {0, 0, 0};          // camera centre, metres
   double orientation[4] = {1, 0, 0, 0};  // unit quaternion w, x, y, z (carried, not used by costs)
+  // Optional, for the cost models that need them (Params::cost_model).
+  // Pinhole intrinsics, pixels (CostModel::kInformation); fx = 0: unknown.
+  double fx = 0, fy = 0, cx = 0, cy = 0;
+  // The keyframe's detected keypoints that observe no map point
+  // (CostModel::kAuthors counts them in N(p,f)). add_keyframe copies them
+  // into the window (Capacities::max_unmapped_keypoints over the window);
+  // a keyframe read back from a Window points at the window's copy.
+  const Keypoint* unmapped = nullptr;
+  std::uint32_t unmapped_count = 0;
 };
 
 struct Observation {
   PointId point = 0;
   double u = 0;  // keypoint, pixels
   double v = 0;
+  // Optional: the point's depth (z) in this camera, metres
+  // (CostModel::kInformation); <= 0: unknown.
+  double depth = 0;
 };
 
 class Window {
@@ -30,9 +48,10 @@ class Window {
   Window(const Window&) = delete;
   Window& operator=(const Window&) = delete;
 
-  // Adds a keyframe with all its observations, atomically: on any error
-  // (capacity, non-finite number, duplicate keyframe id, a point observed
-  // twice by this keyframe) the window is unchanged.
+  // Adds a keyframe with all its observations (and unmapped keypoints),
+  // atomically: on any error (capacity, non-finite number, duplicate
+  // keyframe id, a point observed twice by this keyframe) the window is
+  // unchanged.
   [[nodiscard]] Status add_keyframe(const Keyframe& keyframe, const Observation* observations,
                                     std::uint32_t count);
   // Adds keyframe `slot` of another window with its observations, as
@@ -55,6 +74,7 @@ class Window {
   // Different stamps say nothing (the same contents may be added twice).
   std::uint64_t keyframe_stamp(std::uint32_t slot) const;
   std::uint32_t total_observations() const;
+  std::uint32_t total_unmapped() const;  // unmapped keypoints over the window
   std::uint32_t distinct_points() const;
   // Slot of a keyframe id, or -1.
   std::int32_t find_keyframe(KeyframeId id) const;

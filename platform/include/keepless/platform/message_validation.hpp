@@ -36,6 +36,7 @@ const char* to_string(RejectReason r);
 
 struct MessageLimits {
   std::uint32_t max_observations = 2000;  // per keyframe_t
+  std::uint32_t max_unmapped = 0;         // unmapped keypoints per keyframe_t
   std::uint32_t max_event_ids = 1024;     // per list of a map_event_t
 };
 
@@ -45,6 +46,9 @@ constexpr std::size_t kFingerprintBytes = 8;
 constexpr std::size_t kKeyframeCountOffset = 96;  // int32 num_observations
 constexpr std::size_t kKeyframeHeaderBytes = 100;
 constexpr std::size_t kKeyframeBytesPerObservation = 16;  // int64 id + 2 float
+// After the observations: int32 num_depths, its floats, int32
+// num_intrinsics, its doubles, int32 num_unmapped, its 2 floats each.
+constexpr std::size_t kKeyframeOptionalCountBytes = 12;
 constexpr std::size_t kMapEventCountOffset = 25;          // 3 x int32: deleted, merged, removed
 constexpr std::size_t kMapEventHeaderBytes = 37;
 }  // namespace wire

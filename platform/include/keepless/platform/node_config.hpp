@@ -22,9 +22,10 @@ struct NodeConfig {
   std::uint32_t window = 20;               // K: keyframes in the window (ORB-SLAM2-sized local map)
   std::uint32_t max_observations = 2000;   // per keyframe_t; larger messages are refused unread
   std::uint32_t max_event_ids = 1024;      // per list of a map_event_t
+  std::uint32_t max_unmapped = 0;          // unmapped keypoints per keyframe_t (cost authors); more: refused
   std::uint32_t max_pair_arcs = 0;         // point -> pair arcs; 0: the worst case of K full keyframes
 
-  core::Params params;  // M, theta, box
+  core::Params params;  // M, theta, box, scope, floor, cost model
   std::uint64_t budget_work_units = std::numeric_limits<std::uint64_t>::max();
   // Deadline per decision, from the keyframe's arrival; 0: none. A deadline
   // that fires makes that decision depend on timing (it culls nothing), so
