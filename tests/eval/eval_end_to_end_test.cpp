@@ -303,9 +303,30 @@ TEST(KeeplessEval, AnInputGivesTheSameNumbersAloneOrInAnyOrder) {
   EXPECT_EQ(seen["MH01"][3], seen["MH01"][1]);
 }
 
+// A non-default policy and cost model run end to end with the baselines and
+// give the same contract (keys, not numbers).
+TEST(KeeplessEval, ANonDefaultPolicyGivesTheContract) {
+  require_binary();
+  const std::string tum = data("evo/freiburg1_xyz-groundtruth.txt");
+  SKIP_WITHOUT(tum);
+  const RunOutput r = run("--quick --no-ablation --seeds 1 --M 100 --max-keyframes 12 --scope newest --floor 30 "
+                          "--cost information --trajectory " + tum + " --format tum");
+  ASSERT_EQ(r.status, 0);
+  Json j;
+  ASSERT_TRUE(Parser(r.last_line).parse(&j));
+  ASSERT_EQ(j.at("runs").items.size(), 1u);
+  const Json& in = j.at("runs").items[0];
+  for (const char* k : {"mp_percent", "kf_percent", "ate_original_m", "ate_ours_m", "ate_anms_m", "ate_random_m",
+                        "ate_longest_track_m", "sqrt_obs_ratio"})
+    EXPECT_TRUE(std::isfinite(num(in, k))) << k;
+}
+
 TEST(KeeplessEval, RejectsBadFlagsWithStatus2) {
   require_binary();
   EXPECT_EQ(run("--no-such-flag").status, 2);
+  EXPECT_EQ(run("--scope oldest --bal /nonexistent").status, 2);
+  EXPECT_EQ(run("--cost cheap --bal /nonexistent").status, 2);
+  EXPECT_EQ(run("--floor -1 --bal /nonexistent").status, 2);
   EXPECT_EQ(run("--M abc --bal /nonexistent").status, 2);
   EXPECT_EQ(run("--kept-fraction 1.5 --bal /nonexistent").status, 2);
   EXPECT_EQ(run("--M 100 --kept-fraction 0.3 --bal /nonexistent").status, 2);

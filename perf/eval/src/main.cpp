@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "bal_eval.hpp"
+#include "keepless/core/config.hpp"
 #include "kitti_images.hpp"
 #include "prng.hpp"
 #include "report.hpp"
@@ -39,7 +40,8 @@ const char* kUsage =
     "                     [--kept-fraction 0.3,0.4 | --M 100,200] [--seeds N] [--seed FIRST]\n"
     "                     [--error-floor none|GROUP=METRES,...] [--out DIR] [--max-keyframes N] [--keypoints N]\n"
     "                     [--window N] [--ba-iterations N] [--image-frames N] [--noise-free] [--no-baselines]\n"
-    "                     [--no-ablation] [--ablation-all]\n"
+    "                     [--no-ablation] [--ablation-all] [--scope window|newest] [--floor L]\n"
+    "                     [--cost paper|authors|information]\n"
     "       keepless_eval --report DIR [--report DIR]... [--error-floor ...] [--out DIR2]\n"
     "  --data-root DIR     add the standard inputs under DIR (../shared/data layout; --quick: a small subset)\n"
     "  --format            applies to the --trajectory just before it; without it the format is guessed\n"
@@ -51,6 +53,8 @@ const char* kUsage =
     "  --seeds N           seeds FIRST .. FIRST+N-1 (default 5, --quick 2); tables show mean +- sd over them\n"
     "  --error-floor       ATE added in quadrature to both sides of a ratio, per group (default: the paper's\n"
     "                      published original ATE: tum=0.0183,euroc_mh=0.0658,euroc_v=0.0658,kitti=0.537)\n"
+    "  --scope, --floor, --cost  keepless's decision policy and cost model (core::Params scope, coverage_floor,\n"
+    "                      cost_model); the M search and the baselines' per-window counts use the same policy\n"
     "  --report DIR        regenerate the tables and the JSON line from DIR's runs.csv (an earlier --out; repeat\n"
     "                      to merge runs), without running anything\n";
 
@@ -81,6 +85,7 @@ struct Args {
   std::vector<std::string> report;
   int max_keyframes = -1, keypoints = -1, window = -1, ba_iterations = -1, image_frames = -1;
   bool noise_free = false, baselines = true, ablation = true, ablation_all = false;
+  keepless::core::Params policy;  // scope, coverage_floor, cost_model; the rest is set per variant
 };
 
 [[noreturn]] void fail(const std::string& msg) {
@@ -174,6 +179,15 @@ Args parse(int argc, char** argv) {
     else if (f == "--no-baselines") a.baselines = false;
     else if (f == "--no-ablation") a.ablation = false;
     else if (f == "--ablation-all") a.ablation_all = true;
+    else if (f == "--scope") {
+      const std::string v = val();
+      if (!keepless::core::parse_scope(v.c_str(), &a.policy.scope)) fail("--scope: expected window or newest, got '" + v + "'");
+    } else if (f == "--floor") a.policy.coverage_floor = static_cast<std::uint32_t>(parse_int(f, val(), 0, 100000));
+    else if (f == "--cost") {
+      const std::string v = val();
+      if (!keepless::core::parse_cost_model(v.c_str(), &a.policy.cost_model))
+        fail("--cost: expected paper, authors or information, got '" + v + "'");
+    }
     else if (f == "--help" || f == "-h") {
       std::cout << kUsage;
       std::exit(0);
@@ -263,10 +277,16 @@ ke::RunRecord record_of(const ke::RunResult& r, std::uint64_t seed) {
   return x;
 }
 
+// The policy (scope, floor, cost model) of the run; set once in main from the flags.
+keepless::core::Params g_policy;
+
 ke::VariantSpec variant(const std::string& name, ke::Selector sel, std::int64_t M, std::uint8_t costs = 7) {
   ke::VariantSpec v;
   v.name = name;
   v.selector = sel;
+  v.params.scope = g_policy.scope;
+  v.params.coverage_floor = g_policy.coverage_floor;
+  v.params.cost_model = g_policy.cost_model;
   v.params.pair_capacity = M;
   v.params.cost_terms = costs;
   return v;
@@ -392,6 +412,7 @@ int report_again(const Args& a) {
 int main(int argc, char** argv) {
   const auto t0 = std::chrono::steady_clock::now();
   Args a = parse(argc, argv);
+  g_policy = a.policy;
   if (!a.data_root.empty()) add_data_root(&a);
   if (!a.report.empty()) return report_again(a);
   if (a.trajectories.empty() && a.images.empty() && a.vo.empty() && a.bal.empty())

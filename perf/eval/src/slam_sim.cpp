@@ -102,6 +102,7 @@ class Engine {
     caps.max_keyframes = W;
     caps.max_observations = W * max_kp;
     caps.max_points = W * max_kp;
+    caps.max_unmapped_keypoints = W * max_kp;  // CostModel::kAuthors counts every detection
     caps.max_pair_arcs = static_cast<std::uint32_t>(
         std::min<std::uint64_t>(std::uint64_t(caps.max_points) * (W * (W - 1) / 2), 1u << 21));
     core::Params params = spec_.params;
@@ -109,6 +110,7 @@ class Engine {
     window_ = std::make_unique<core::Window>(caps);
     sparsifier_ = std::make_unique<core::Sparsifier>(caps, params);
     obs_buffer_.reserve(max_kp);
+    unmapped_buffer_.reserve(caps.max_unmapped_keypoints);
   }
 
   // Tracking: the odometry prior refined by motion-only BA against the local
@@ -314,16 +316,26 @@ class Engine {
   void select_points(const std::vector<int>& window, RunResult* r) {
     if (spec_.selector == Selector::kNone || window.size() < 2) return;
     window_->clear();
+    unmapped_buffer_.clear();  // one buffer for the window: the Window holds the pointers until clear()
     for (int f : window) {
       obs_buffer_.clear();
+      const Pose P = est(f), T_cw = P.inverse();
+      const std::size_t first_unmapped = unmapped_buffer_.size();
       const auto& ids = kf_kp_mp_[static_cast<std::size_t>(f)];
-      for (std::size_t i = 0; i < ids.size(); ++i)
-        if (ids[i] >= 0) {
-          const KeyPoint& p = kp(f, static_cast<int>(i));
-          obs_buffer_.push_back(core::Observation{static_cast<core::PointId>(ids[i]), p.u, p.v});
+      for (std::size_t i = 0; i < ids.size(); ++i) {
+        const KeyPoint& p = kp(f, static_cast<int>(i));
+        if (ids[i] < 0) {
+          unmapped_buffer_.push_back(core::Keypoint{p.u, p.v});  // the authors' N(p,f) counts these too
+          continue;
         }
-      const Pose P = est(f);
+        const MapPoint& m = mps_[static_cast<std::size_t>(ids[i])];
+        const double depth = (T_cw * Eigen::Vector3d(m.X[0], m.X[1], m.X[2])).z();  // the estimate, as a SLAM has it
+        obs_buffer_.push_back(core::Observation{static_cast<core::PointId>(ids[i]), p.u, p.v, depth});
+      }
       core::Keyframe kf;
+      kf.fx = s_.cam.fx; kf.fy = s_.cam.fy; kf.cx = s_.cam.cx; kf.cy = s_.cam.cy;
+      kf.unmapped = unmapped_buffer_.data() + first_unmapped;
+      kf.unmapped_count = static_cast<std::uint32_t>(unmapped_buffer_.size() - first_unmapped);
       kf.id = static_cast<core::KeyframeId>(f);
       kf.centre[0] = P.t.x(); kf.centre[1] = P.t.y(); kf.centre[2] = P.t.z();
       kf.orientation[0] = P.q.w(); kf.orientation[1] = P.q.x(); kf.orientation[2] = P.q.y(); kf.orientation[3] = P.q.z();
@@ -575,6 +587,7 @@ class Engine {
   std::unique_ptr<core::Window> window_;
   std::unique_ptr<core::Sparsifier> sparsifier_;
   std::vector<core::Observation> obs_buffer_;
+  std::vector<core::Keypoint> unmapped_buffer_;
 };
 
 }  // namespace
