@@ -25,29 +25,19 @@
 #include "keepless/core/config.hpp"
 #include "keepless/core/decision.hpp"
 #include "keepless/core/window_file.hpp"
+#include "child_run.hpp"
 #include "keepless/platform/window_file_io.hpp"
 #include "reference_policies.hpp"
 #include "reference_sparsifier.hpp"
 
-extern char** environ;
 
 namespace keepless {
 namespace {
 
 namespace fs = std::filesystem;
 
-struct Result {
-  int status = -1;  // exit status, -1 if killed by a signal
-  std::string out;
-  std::string err;
-};
-
-std::string read_all(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+using Result = test::ChildResult;
+using test::read_all;
 
 std::size_t count_lines(const std::string& s) {
   return static_cast<std::size_t>(std::count(s.begin(), s.end(), '\n'));
@@ -98,36 +88,7 @@ class SparsifyCliTest : public ::testing::Test {
   }
 
   Result run(const char* binary, const std::vector<std::string>& args) const {
-    const std::string out_path = path("stdout.txt"), err_path = path("stderr.txt");
-    posix_spawn_file_actions_t actions;
-    posix_spawn_file_actions_init(&actions);
-    posix_spawn_file_actions_addopen(&actions, 1, out_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC,
-                                     0644);
-    posix_spawn_file_actions_addopen(&actions, 2, err_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC,
-                                     0644);
-    std::vector<std::string> all;
-#ifdef KEEPLESS_TEST_LAUNCHER
-    // Cross build under qemu: the child is a target binary and needs the emulator.
-    std::istringstream launcher(KEEPLESS_TEST_LAUNCHER);
-    for (std::string word; launcher >> word;) all.push_back(word);
-#endif
-    all.push_back(binary);
-    all.insert(all.end(), args.begin(), args.end());
-    std::vector<char*> argv;
-    for (std::string& a : all) argv.push_back(a.data());
-    argv.push_back(nullptr);
-    pid_t pid = 0;
-    Result r;
-    const int spawned = posix_spawn(&pid, all[0].c_str(), &actions, nullptr, argv.data(), environ);
-    posix_spawn_file_actions_destroy(&actions);
-    EXPECT_EQ(spawned, 0) << "cannot run " << binary;
-    if (spawned != 0) return r;
-    int wstatus = 0;
-    EXPECT_EQ(waitpid(pid, &wstatus, 0), pid);
-    r.status = WIFEXITED(wstatus) ? WEXITSTATUS(wstatus) : -1;
-    r.out = read_all(out_path);
-    r.err = read_all(err_path);
-    return r;
+    return test::run_child(binary, args, path("stdout.txt"), path("stderr.txt"));
   }
 
   Result sparsify(const std::vector<std::string>& args) const {
