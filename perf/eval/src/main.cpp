@@ -277,16 +277,15 @@ ke::RunRecord record_of(const ke::RunResult& r, std::uint64_t seed) {
   return x;
 }
 
-// The policy (scope, floor, cost model) of the run; set once in main from the flags.
-keepless::core::Params g_policy;
-
-ke::VariantSpec variant(const std::string& name, ke::Selector sel, std::int64_t M, std::uint8_t costs = 7) {
+// `policy`: the flags' scope, floor and cost model, for every variant alike.
+ke::VariantSpec variant(const keepless::core::Params& policy, const std::string& name, ke::Selector sel, std::int64_t M,
+                        std::uint8_t costs = 7) {
   ke::VariantSpec v;
   v.name = name;
   v.selector = sel;
-  v.params.scope = g_policy.scope;
-  v.params.coverage_floor = g_policy.coverage_floor;
-  v.params.cost_model = g_policy.cost_model;
+  v.params.scope = policy.scope;
+  v.params.coverage_floor = policy.coverage_floor;
+  v.params.cost_model = policy.cost_model;
   v.params.pair_capacity = M;
   v.params.cost_terms = costs;
   return v;
@@ -306,12 +305,12 @@ ke::RunResult run(const ke::Scenario& sc, const ke::VariantSpec& spec, const ke:
 // scenario: bisection over M on the kept share, each step at the linear
 // interpolation of the bracket clamped to its middle half (the share can
 // jump steeply with M once the pair capacity stops binding).
-std::int64_t find_M(const ke::Scenario& sc, const ke::SimOptions& o, std::uint64_t seed, double original_mps,
-                    double fraction, int max_runs) {
+std::int64_t find_M(const ke::Scenario& sc, const keepless::core::Params& policy, const ke::SimOptions& o,
+                    std::uint64_t seed, double original_mps, double fraction, int max_runs) {
   std::vector<std::pair<std::int64_t, double>> tried;  // (M, share)
   std::int64_t M = 100;
   for (int i = 0; i < max_runs; ++i) {
-    const ke::RunResult r = run(sc, variant("search", ke::Selector::kKeepless, M), o, seed);
+    const ke::RunResult r = run(sc, variant(policy, "search", ke::Selector::kKeepless, M), o, seed);
     tried.emplace_back(M, original_mps > 0 ? r.mps / original_mps : 0);
     if (std::abs(tried.back().second - fraction) <= 0.015) break;
     std::optional<std::pair<std::int64_t, double>> lo, hi;
@@ -350,30 +349,30 @@ void evaluate(const std::function<ke::Scenario(std::uint64_t)>& make, const ke::
     const ke::Scenario sc = make(seed);
     ke::SimOptions so = o;
     so.snapshot_frame = static_cast<int>(sc.frames.size() / 2);
-    const ke::RunResult original = run(sc, variant("original", ke::Selector::kNone, 0), so, seed);
+    const ke::RunResult original = run(sc, variant(a.policy, "original", ke::Selector::kNone, 0), so, seed);
     for (std::size_t p = 0; p < a.ops.size(); ++p) {
       if (si == 0) {
         ke::Comparison c;
         c.info = info;
         c.target_fraction = a.ops[p].fraction;
-        c.M = std::isfinite(c.target_fraction) ? find_M(sc, so, seed, original.mps, c.target_fraction, a.quick ? 3 : 6)
+        c.M = std::isfinite(c.target_fraction) ? find_M(sc, a.policy, so, seed, original.mps, c.target_fraction, a.quick ? 3 : 6)
                                                : a.ops[p].M;
         summary->comparisons.push_back(c);
       }
       ke::Comparison& c = summary->comparisons[first + p];
       c.original.push_back(record_of(original, seed));
-      const ke::RunResult ours = run(sc, variant("ours", ke::Selector::kKeepless, c.M), so, seed);
+      const ke::RunResult ours = run(sc, variant(a.policy, "ours", ke::Selector::kKeepless, c.M), so, seed);
       c.ours.push_back(record_of(ours, seed));
       if (a.baselines) {
-        const ke::RunResult anms = run(sc, variant("anms", ke::Selector::kAnms, c.M), so, seed);
-        c.random.push_back(record_of(run(sc, variant("random", ke::Selector::kRandom, c.M), so, seed), seed));
-        c.longest_track.push_back(record_of(run(sc, variant("longest_track", ke::Selector::kLongestTrack, c.M), so, seed), seed));
+        const ke::RunResult anms = run(sc, variant(a.policy, "anms", ke::Selector::kAnms, c.M), so, seed);
+        c.random.push_back(record_of(run(sc, variant(a.policy, "random", ke::Selector::kRandom, c.M), so, seed), seed));
+        c.longest_track.push_back(record_of(run(sc, variant(a.policy, "longest_track", ke::Selector::kLongestTrack, c.M), so, seed), seed));
         c.anms.push_back(record_of(anms, seed));
         if (si == 0 && p == 0) summary->snapshots.push_back(ke::Snapshot{info.name, info.kind, sc.cam.width, sc.cam.height, c.M, ours.snapshot, anms.snapshot});
       }
       if (ablate && p == 0)
         for (const auto& [costs, terms] : kAblation)
-          c.ablation.push_back(record_of(run(sc, variant(costs, ke::Selector::kKeepless, c.M, terms), so, seed), seed));
+          c.ablation.push_back(record_of(run(sc, variant(a.policy, costs, ke::Selector::kKeepless, c.M, terms), so, seed), seed));
     }
   }
 }
@@ -412,7 +411,6 @@ int report_again(const Args& a) {
 int main(int argc, char** argv) {
   const auto t0 = std::chrono::steady_clock::now();
   Args a = parse(argc, argv);
-  g_policy = a.policy;
   if (!a.data_root.empty()) add_data_root(&a);
   if (!a.report.empty()) return report_again(a);
   if (a.trajectories.empty() && a.images.empty() && a.vo.empty() && a.bal.empty())
