@@ -274,6 +274,10 @@ ke::RunRecord record_of(const ke::RunResult& r, std::uint64_t seed) {
   x.C = r.C;
   x.F = r.F;
   x.S = r.S;
+  x.windows = r.windows;
+  x.floor_keyframes = r.floor_keyframes;
+  x.floor_promoted = r.floor_promoted;
+  x.floor_short = r.floor_short;
   return x;
 }
 
@@ -427,6 +431,11 @@ int main(int argc, char** argv) {
   sim.ba_robust_iterations = std::max(1, sim.ba_iterations / 2);
   summary.settings = "window " + std::to_string(sim.window) + ", local BA " + std::to_string(sim.ba_robust_iterations) +
                      " + " + std::to_string(sim.ba_iterations) + " iterations";
+  summary.scope = keepless::core::to_string(a.policy.scope);
+  summary.cost_model = keepless::core::to_string(a.policy.cost_model);
+  summary.coverage_floor = a.policy.coverage_floor;
+  summary.settings += "; keepless scope " + summary.scope + ", coverage floor " +
+                      std::to_string(summary.coverage_floor) + ", cost " + summary.cost_model;
 
   for (const auto& t : a.trajectories) {
     const std::string fmt = t.format.empty() ? guess_format(t.path) : t.format;

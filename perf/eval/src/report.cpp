@@ -14,7 +14,7 @@ namespace {
 
 constexpr const char* kCsvHeader =
     "input,name,group,kind,alignment,variant,seed,M,target_fraction,compared_M,mps,kfs,observations,ba_s,total_s,"
-    "ate_m,ate_r_deg,C,F,S,frames,frames_tracked";
+    "ate_m,ate_r_deg,C,F,S,frames,frames_tracked,windows,floor_keyframes,floor_promoted,floor_short";
 
 std::string f(double v, int prec) {
   if (!std::isfinite(v)) return "–";
@@ -273,6 +273,19 @@ std::string markdown_tables(const EvalSummary& s) {
         << f(r.frames_tracked.mean, 1) << " | " << f(r.frames_tracked_random.mean, 1) << " | "
         << f(r.frames_tracked_longest_track.mean, 1) << " | " << f(r.frames_tracked_anms.mean, 1) << " |\n";
     }
+    // The coverage floor: how often it bound on ours's windows (only when it ever did or was asked for).
+    bool floor_header = false;
+    for (const ContractRun& r : s.runs) {
+      if (op_label(r) != label || !(r.windows > 0)) continue;
+      if (s.coverage_floor == 0 && r.floor_keyframes.mean == 0 && r.floor_short.mean == 0) continue;
+      if (!floor_header)
+        o << "\n#### Coverage floor (" << label << "; ours, per run, mean over seeds)\n\n"
+             "| Input | selector windows | keyframes where the floor bound | points promoted | keyframes short |\n"
+             "|---|---:|---:|---:|---:|\n";
+      floor_header = true;
+      o << "| " << r.info.name << " | " << f(r.windows, 1) << " | " << pm(r.floor_keyframes, 1) << " | "
+        << pm(r.floor_promoted, 1) << " | " << pm(r.floor_short, 1) << " |\n";
+    }
     const std::vector<GroupRow> groups = group_rows(s.runs, label);
     if (!groups.empty()) {
       o << "\n#### Per trajectory group (" << label << "; as the paper's Table V, but each ATE as a ratio to the "
@@ -381,7 +394,8 @@ bool write_outputs(const EvalSummary& s, const std::string& out_dir, std::string
             << json_number(c.target_fraction, 3) << "," << c.M << "," << r.mps << "," << r.kfs << "," << r.observations
             << "," << f(r.ba_s, 4) << "," << f(r.total_s, 4) << "," << json_number(r.ate_m, 9) << ","
             << json_number(r.ate_r_deg, 6) << "," << json_number(r.C, 4) << "," << json_number(r.F, 4) << ","
-            << json_number(r.S, 4) << "," << r.frames << "," << r.frames_tracked << "\n";
+            << json_number(r.S, 4) << "," << r.frames << "," << r.frames_tracked << "," << r.windows << ","
+            << r.floor_keyframes << "," << r.floor_promoted << "," << r.floor_short << "\n";
   bool ok = write("runs.csv", csv.str());
   std::string meta = s.command + "\n" + s.mode + "\n" + s.settings + "\n" + json_number(s.elapsed_s, 1) + "\n";
   for (const std::string& i : s.settings_inputs) meta += i + "\n";
@@ -419,7 +433,11 @@ std::string json_summary(const EvalSummary& s) {
         << ",\"S\":" << json_number(stat_by(runs, [](const RunRecord& r) { return r.S; }).mean, 4) << "}";
       first = false;
     }
-  o << "],\"elapsed_s\":" << json_number(s.elapsed_s, 2);
+  o << "]";
+  if (!s.scope.empty())
+    o << ",\"policy\":{\"scope\":" << json_string(s.scope) << ",\"floor\":" << s.coverage_floor
+      << ",\"cost\":" << json_string(s.cost_model) << "}";
+  o << ",\"elapsed_s\":" << json_number(s.elapsed_s, 2);
   return contract_json(s.runs, o.str());
 }
 
@@ -494,6 +512,11 @@ bool read_outputs(const std::string& out_dir, EvalSummary* s, std::string* error
     r.S = num("S");
     r.frames = col("frames") < 0 ? 0 : static_cast<int>(num("frames"));  // absent in older files
     r.frames_tracked = col("frames_tracked") < 0 ? 0 : static_cast<int>(num("frames_tracked"));
+    auto count = [&](const char* name) { return col(name) < 0 ? 0 : static_cast<std::uint64_t>(num(name)); };
+    r.windows = count("windows");
+    r.floor_keyframes = count("floor_keyframes");
+    r.floor_promoted = count("floor_promoted");
+    r.floor_short = count("floor_short");
     // One comparison per input and operating point (compared_M tells --M points apart).
     const std::string key = str("input") + "|" + str("target_fraction") + "|" + str("compared_M");
     auto it = std::find(keys.begin(), keys.end(), key);

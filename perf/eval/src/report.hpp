@@ -34,6 +34,10 @@ struct EvalSummary {
   std::vector<ContractRun> runs;        // summarize(comparisons[i])
   std::vector<Snapshot> snapshots;
   double elapsed_s = 0;
+  // keepless's core::Params policy (the JSON's "policy"); empty scope when
+  // the summary was read back with --report (the command line then says it).
+  std::string scope, cost_model;
+  std::uint32_t coverage_floor = 0;
 };
 
 std::string markdown_tables(const EvalSummary& s);

@@ -112,6 +112,10 @@ ContractRun summarize(const Comparison& c) {
   r.frames_tracked_random = stat_over(c.random, tracked);
   r.frames_tracked_longest_track = stat_over(c.longest_track, tracked);
   r.frames_tracked_anms = stat_over(c.anms, tracked);
+  r.floor_keyframes = stat_over(c.ours, [](const RunRecord& a) { return double(a.floor_keyframes); });
+  r.floor_promoted = stat_over(c.ours, [](const RunRecord& a) { return double(a.floor_promoted); });
+  r.floor_short = stat_over(c.ours, [](const RunRecord& a) { return double(a.floor_short); });
+  r.windows = stat_over(c.ours, [](const RunRecord& a) { return double(a.windows); }).mean;
   return r;
 }
 
@@ -171,6 +175,10 @@ std::string run_json(const ContractRun& r) {
   field(o, "sqrt_obs_ratio_anms", json_number(r.sqrt_obs_ratio_anms, 4));
   field(o, "error_floor_m", json_number(r.info.error_floor_m, 4));
   field(o, "ate_ratio_floored", json_number(r.ate_ratio_floored, 4));
+  field(o, "windows", json_number(r.windows, 1));
+  field(o, "floor_keyframes", json_number(r.floor_keyframes.mean, 1));
+  field(o, "floor_promoted", json_number(r.floor_promoted.mean, 1));
+  field(o, "floor_short", json_number(r.floor_short.mean, 1));
   if (r.frames > 0) {
     field(o, "frames", std::to_string(r.frames));
     field(o, "frames_tracked", json_number(r.frames_tracked.mean, 2));

@@ -31,6 +31,10 @@ struct RunRecord {
   double ate_m = NAN, ate_r_deg = NAN;
   double C = NAN, F = NAN, S = NAN;  // section IV-F: observations per point, keyframe span, grid occupancy %
   int frames = 0, frames_tracked = 0;  // real VO (kind images / rgbd): frames given and tracked; 0 elsewhere
+  // The selector's windows and, summed over them, core::Summary's coverage
+  // floor counts: keyframes where the floor bound, points it promoted,
+  // keyframes below it with all their points kept.
+  std::uint64_t windows = 0, floor_keyframes = 0, floor_promoted = 0, floor_short = 0;
 };
 
 struct InputInfo {
@@ -77,6 +81,8 @@ struct ContractRun {
   double sqrt_obs_ratio = NAN;   // sqrt(mean observations original / ours)
   double sqrt_obs_ratio_random = NAN, sqrt_obs_ratio_longest_track = NAN, sqrt_obs_ratio_anms = NAN;
   double ate_ratio_floored = NAN;  // with error_floor_m added in quadrature to both
+  Stat floor_keyframes, floor_promoted, floor_short;  // ours, per run (summed over its windows)
+  double windows = NAN;                                // ours, mean selector windows per run
   // Real VO only (frames > 0): frames given, mean frames tracked per variant.
   int frames = 0;
   Stat frames_tracked, frames_tracked_original, frames_tracked_random, frames_tracked_longest_track,
