@@ -1,5 +1,6 @@
 // keepless::opencv: poses from cv::Mat / Eigen, keyframes into a window,
-// input validation, unmapped keypoints in N(p, f), decisions back to ids.
+// input validation, unmapped keypoints in N(p, f) (reserved ids and core's
+// native list), intrinsics and depths, decisions back to ids.
 
 #include <gtest/gtest.h>
 
@@ -166,21 +167,140 @@ TEST(OpencvKeyframes, CapacityRefusalIsReportedWithTheWindowsReason) {
   EXPECT_EQ(window.keyframe_count(), 1u);
 }
 
-// Fills a window of `keyframes` overlapping keyframes, with `clutter`
-// unmapped keypoints around each mapped one when asked.
-void fill(core::Window& window, KeyframeAdapter& adapter, int keyframes, bool clutter) {
+// Fills a window of `keyframes` overlapping keyframes, with `per` unmapped
+// keypoints around each mapped one when `clutter`, passed as `as`.
+void fill(core::Window& window, KeyframeAdapter& adapter, int keyframes, bool clutter,
+          UnmappedAs as = UnmappedAs::kReservedIds, int per = 3) {
   for (int k = 0; k < keyframes; ++k) {
     Frame f = frame(k, 12 * k, 40);
     std::vector<cv::KeyPoint> unmapped;
     if (clutter) {
       for (const cv::KeyPoint& kp : f.keypoints) {
-        for (int j = 0; j < 3; ++j) unmapped.emplace_back(kp.pt + cv::Point2f(2.f + j, 1.f), 31.f);
+        for (int j = 0; j < per; ++j) unmapped.emplace_back(kp.pt + cv::Point2f(2.f + 0.5f * j, 1.f), 31.f);
       }
     }
-    ASSERT_EQ(adapter.add_keyframe(window, 100 + k, centre_at(0.3 * k), f.keypoints, f.ids,
-                                   clutter ? &unmapped : nullptr),
-              Status::kOk);
+    KeyframeExtras extras;
+    extras.unmapped = clutter ? &unmapped : nullptr;
+    extras.unmapped_as = as;
+    ASSERT_EQ(adapter.add_keyframe(window, 100 + k, centre_at(0.3 * k), f.keypoints, f.ids, extras), Status::kOk);
   }
+}
+
+TEST(OpencvKeyframes, IntrinsicsAndDepthsReachTheWindow) {
+  const core::Capacities caps = small_capacities();
+  core::Window window(caps);
+  KeyframeAdapter adapter(caps);
+  Frame f = frame(0, 0, 30);
+  std::vector<double> depths(30);
+  for (std::size_t i = 0; i < depths.size(); ++i) depths[i] = 0.5 + 0.1 * double(i);
+  depths[4] = 0;   // unknown, as core reads it
+  depths[5] = -1;  // likewise
+  KeyframeExtras extras;
+  extras.intrinsics = {525.0, 524.5, 319.5, 239.5};
+  extras.depths = &depths;
+  ASSERT_EQ(adapter.add_keyframe(window, 3, centre_at(0), f.keypoints, f.ids, extras), Status::kOk);
+  const core::Keyframe& k = window.keyframe(0);
+  EXPECT_DOUBLE_EQ(k.fx, 525.0);
+  EXPECT_DOUBLE_EQ(k.fy, 524.5);
+  EXPECT_DOUBLE_EQ(k.cx, 319.5);
+  EXPECT_DOUBLE_EQ(k.cy, 239.5);
+  ASSERT_EQ(window.observation_count(0), 30u);
+  for (std::uint32_t i = 0; i < 30; ++i) {
+    EXPECT_EQ(window.observations(0)[i].point, f.ids[i]);
+    EXPECT_DOUBLE_EQ(window.observations(0)[i].depth, depths[i]);
+  }
+  // Without extras nothing is known: core's "unknown" values.
+  ASSERT_EQ(adapter.add_keyframe(window, 4, centre_at(1), f.keypoints, f.ids), Status::kOk);
+  EXPECT_EQ(window.keyframe(1).fx, 0.0);
+  EXPECT_EQ(window.observations(1)[0].depth, 0.0);
+}
+
+TEST(OpencvKeyframes, NonFiniteDepthsOrIntrinsicsAndShortDepthListsAreRefused) {
+  const core::Capacities caps = small_capacities();
+  core::Window window(caps);
+  KeyframeAdapter adapter(caps);
+  Frame f = frame(0, 0, 30);
+  std::vector<double> depths(30, 2.0);
+  KeyframeExtras extras;
+  extras.intrinsics = {500, 500, 320, 240};
+  extras.depths = &depths;
+  for (double bad : {std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::infinity(),
+                     -std::numeric_limits<double>::infinity()}) {
+    depths[7] = bad;
+    EXPECT_EQ(adapter.add_keyframe(window, 1, centre_at(0), f.keypoints, f.ids, extras), Status::kNonFinite);
+  }
+  depths[7] = 2.0;
+  KeyframeExtras bad_k = extras;
+  bad_k.intrinsics.cy = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_EQ(adapter.add_keyframe(window, 1, centre_at(0), f.keypoints, f.ids, bad_k), Status::kNonFinite);
+  std::vector<double> short_depths(29, 2.0);
+  KeyframeExtras bad_n = extras;
+  bad_n.depths = &short_depths;
+  EXPECT_EQ(adapter.add_keyframe(window, 1, centre_at(0), f.keypoints, f.ids, bad_n), Status::kSizeMismatch);
+  EXPECT_EQ(window.keyframe_count(), 0u);
+  ASSERT_EQ(adapter.add_keyframe(window, 1, centre_at(0), f.keypoints, f.ids, extras), Status::kOk);
+  EXPECT_EQ(window.keyframe_count(), 1u);
+}
+
+TEST(OpencvKeyframes, NativeUnmappedListCountsUnderAuthorsButNotInThePapersBox) {
+  // Dense enough clutter (12 around each point) to move the authors' binned c_s.
+  core::Capacities caps = small_capacities();
+  caps.max_points = 4096;
+  caps.max_unmapped_keypoints = 5 * 40 * 12;
+  core::Window plain(caps), reserved(caps), native(caps);
+  KeyframeAdapter a(caps), b(caps), c(caps);
+  fill(plain, a, 5, false);
+  fill(reserved, b, 5, true, UnmappedAs::kReservedIds, 12);
+  fill(native, c, 5, true, UnmappedAs::kKeypointList, 12);
+  EXPECT_EQ(native.total_unmapped(), 5u * 40u * 12u);
+  EXPECT_EQ(native.total_observations(), plain.total_observations());
+  EXPECT_EQ(native.distinct_points(), plain.distinct_points());
+  EXPECT_EQ(native.keyframe(2).unmapped_count, 480u);
+  EXPECT_EQ(reserved.total_unmapped(), 0u);
+  EXPECT_EQ(c.last().unmapped.size(), 480u);
+  EXPECT_EQ(c.last().mapped, static_cast<std::uint32_t>(c.last().observations.size()));
+
+  auto decide = [&](const core::Window& w, core::CostModel model, core::Summary* s,
+                    std::vector<core::PointId>* culled) {
+    core::Params params;
+    params.pair_capacity = 6;
+    params.cost_model = model;
+    core::Sparsifier sp(caps, params);
+    ASSERT_EQ(sp.run(w), core::Status::kOk);
+    *s = sp.summary();
+    culled_points(sp, culled);
+  };
+  core::Summary sp, sr, sn;
+  std::vector<core::PointId> cp, cr, cn;
+  // kAuthors: the grid counts the native list as it counts reserved-id observations.
+  decide(plain, core::CostModel::kAuthors, &sp, &cp);
+  decide(reserved, core::CostModel::kAuthors, &sr, &cr);
+  decide(native, core::CostModel::kAuthors, &sn, &cn);
+  EXPECT_GT(sn.total_cost, sp.total_cost);
+  EXPECT_EQ(sn.total_cost, sr.total_cost);
+  EXPECT_EQ(sn.max_flow, sp.max_flow);
+  EXPECT_EQ(cn, cr);
+  EXPECT_EQ(sn.evaluated, sp.evaluated);
+  // kPaper: the box counts observations only, so the native list changes nothing.
+  decide(plain, core::CostModel::kPaper, &sp, &cp);
+  decide(reserved, core::CostModel::kPaper, &sr, &cr);
+  decide(native, core::CostModel::kPaper, &sn, &cn);
+  EXPECT_EQ(sn.total_cost, sp.total_cost);
+  EXPECT_EQ(cn, cp);
+  EXPECT_GT(sr.total_cost, sp.total_cost);
+
+  // Beyond max_unmapped_keypoints the window refuses the keyframe, and says so.
+  core::Capacities none = small_capacities();  // max_unmapped_keypoints = 0
+  core::Window w(none);
+  KeyframeAdapter d(none);
+  Frame f = frame(0, 0, 10);
+  std::vector<cv::KeyPoint> extra = {cv::KeyPoint(cv::Point2f(5, 5), 31.f)};
+  KeyframeExtras extras;
+  extras.unmapped = &extra;
+  extras.unmapped_as = UnmappedAs::kKeypointList;
+  EXPECT_EQ(d.add_keyframe(w, 1, centre_at(0), f.keypoints, f.ids, extras), Status::kWindowRejected);
+  EXPECT_EQ(d.window_status(), core::Status::kCapacityExceeded);
+  EXPECT_EQ(w.keyframe_count(), 0u);
 }
 
 TEST(OpencvKeyframes, UnmappedKeypointsCountInTheSpatialCostButAreNeverDecided) {

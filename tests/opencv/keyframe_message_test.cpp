@@ -55,6 +55,27 @@ TEST(OpencvKeyframeMessage, CarriesPoseAndObservationsAndRoundTrips) {
   to_keyframe_message(record, 10, 2000, 640, 480, true, &msg);
   ASSERT_EQ(msg.num_observations, 3);
   EXPECT_NE(static_cast<std::uint64_t>(msg.point_id[2]) & kUnmappedBit, 0u);
+  EXPECT_EQ(msg.num_unmapped, 0);
+
+  // Core's native list travels as unmapped_u/v, with depths and intrinsics.
+  std::vector<double> depths = {1.5, 0};
+  KeyframeExtras extras;
+  extras.unmapped = &unmapped;
+  extras.unmapped_as = UnmappedAs::kKeypointList;
+  extras.intrinsics = {500, 501, 320, 240};
+  extras.depths = &depths;
+  ASSERT_EQ(adapter.convert(43, pose, kps, ids, extras, &record), Status::kOk);
+  to_keyframe_message(record, 11, 3000, 640, 480, true, &msg);
+  EXPECT_EQ(msg.num_observations, 2);
+  ASSERT_EQ(msg.num_unmapped, 1);
+  EXPECT_FLOAT_EQ(msg.unmapped_u[0], 11.f);
+  EXPECT_FLOAT_EQ(msg.unmapped_v[0], 21.f);
+  ASSERT_EQ(msg.num_depths, 2);
+  EXPECT_FLOAT_EQ(msg.depth[0], 1.5f);
+  ASSERT_EQ(msg.num_intrinsics, 4);
+  EXPECT_DOUBLE_EQ(msg.intrinsics[1], 501.0);
+  to_keyframe_message(record, 12, 4000, 640, 480, false, &msg);
+  EXPECT_EQ(msg.num_unmapped, 0);
 }
 
 }  // namespace

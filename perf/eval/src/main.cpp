@@ -502,6 +502,7 @@ int main(int argc, char** argv) {
     vo.seeds = summary.seeds;
     for (const OperatingPoint& op : a.ops) vo.ops.emplace_back(op.fraction, op.M);
     vo.baselines = a.baselines;
+    vo.policy = a.policy;
     vo.out = a.out;
     std::string err;
     for (const auto& in : a.vo)

@@ -46,7 +46,16 @@ core::Capacities window_capacities() {
   c.max_points = 1 << 16;
   c.max_observations = 1 << 16;
   c.max_pair_arcs = 1 << 20;
+  c.max_unmapped_keypoints = 1 << 16;  // every keypoint of the window may be unmapped, as for max_observations
   return c;
+}
+
+// The options' parameters with the authors' grid laid over this camera's image.
+core::Params vo_params(const core::Params& p, const PinholeCamera& cam) {
+  core::Params q = p;
+  q.image_width = cam.width;
+  q.image_height = cam.height;
+  return q;
 }
 
 // A seeded order for RANSAC's samples: OpenCV's RANSAC has its own fixed
@@ -107,11 +116,11 @@ class Vo {
       : seq_(s), opt_(o), cam_(s.camera),
         extractor_(o.features > 0 ? o.features : (s.rgbd ? 1000 : 2000), s.camera),
         rng_(mix(o.seed, 0x5eed)), adapter_(window_capacities()), window_(window_capacities()),
-        sparsifier_(window_capacities(), o.params) {
+        sparsifier_(window_capacities(), vo_params(o.params, s.camera)) {
     K_ << cam_.fx, 0, cam_.cx, 0, cam_.fy, cam_.cy, 0, 0, 1;
     cv::eigen2cv(K_, Kcv_);
     for (std::int64_t M : o.calibrate_M) {
-      core::Params p = o.params;
+      core::Params p = vo_params(o.params, s.camera);
       p.pair_capacity = M;
       calibration_.push_back(std::make_unique<core::Sparsifier>(window_capacities(), p));
     }
@@ -534,22 +543,35 @@ void Vo::select_points(int kf, const std::vector<int>& local) {
   window_.clear();
   std::vector<cv::KeyPoint> keypoints, unmapped;
   std::vector<core::PointId> ids;
+  std::vector<double> depths;
+  // The paper's box N(p, f) has counted the unmapped detections as
+  // reserved-id observations since the VO first ran; core's native list is
+  // what kAuthors' grid reads (and the box does not), so `paper` keeps the
+  // reserved ids and its decisions stay as they were.
+  opencv::KeyframeExtras extras;
+  extras.unmapped = &unmapped;
+  extras.unmapped_as = opt_.params.cost_model == core::CostModel::kPaper ? opencv::UnmappedAs::kReservedIds
+                                                                          : opencv::UnmappedAs::kKeypointList;
+  extras.intrinsics = {cam_.fx, cam_.fy, cam_.cx, cam_.cy};
+  extras.depths = &depths;
   for (int k : ordered) {
     const KeyFrame& f = map_.kfs[static_cast<std::size_t>(k)];
     keypoints.clear();
     unmapped.clear();
     ids.clear();
+    depths.clear();
     for (std::size_t i = 0; i < f.mp.size(); ++i) {
       if (f.mp[i] >= 0 && !map_.points[static_cast<std::size_t>(f.mp[i])].bad) {
         keypoints.push_back(f.f.keys[i]);
         ids.push_back(static_cast<core::PointId>(f.mp[i]));
+        depths.push_back((f.Tcw * map_.points[static_cast<std::size_t>(f.mp[i])].X).z());
       } else {
         unmapped.push_back(f.f.keys[i]);
       }
     }
     opencv::CameraPose pose;
     if (opencv::pose_from_tcw(f.Tcw, &pose) != opencv::Status::kOk ||
-        adapter_.add_keyframe(window_, static_cast<core::KeyframeId>(k), pose, keypoints, ids, &unmapped) !=
+        adapter_.add_keyframe(window_, static_cast<core::KeyframeId>(k), pose, keypoints, ids, extras) !=
             opencv::Status::kOk) {
       ++result_.window_rejections;
       result_.selector_seconds += seconds_since(start);
@@ -561,6 +583,10 @@ void Vo::select_points(int kf, const std::vector<int>& local) {
     result_.selector_seconds += seconds_since(start);
     return;
   }
+  const core::Summary& summary = sparsifier_.summary();
+  result_.floor_keyframes += summary.floor_keyframes;
+  result_.floor_promoted += summary.floor_promoted;
+  result_.floor_short += summary.floor_short;
   // The authors' integration: only the new keyframe's points are decided.
   const KeyFrame& f = map_.kfs[static_cast<std::size_t>(kf)];
   std::vector<Candidate> candidates;
@@ -966,6 +992,7 @@ RealRunResult Vo::run() {
   for (const MapPoint& m : map_.points) {
     if (!m.bad) result_.observations += static_cast<std::int64_t>(m.obs.size());
   }
+  result_.windows = windows_;
   result_.mean_kept_fraction = windows_ > 0 ? kept_fraction_sum_ / windows_ : 1.0;
   for (double s : calibration_sum_) result_.calibration_kept_fraction.push_back(windows_ > 0 ? s / windows_ : 1.0);
   std::vector<Pose> estimate, truth;

@@ -23,7 +23,9 @@ struct RealVoOptions {
   int features = 0;  // ORB features per frame; 0: ORB-SLAM2's 1000 (RGB-D) or 2000 (monocular KITTI)
   std::uint64_t seed = 1;  // RANSAC sampling order and the random baseline's priorities
   Selector selector = Selector::kOriginal;
-  core::Params params;               // keepless (M = params.pair_capacity)
+  // keepless (M = params.pair_capacity; scope, coverage_floor, cost_model as
+  // the eval's --scope/--floor/--cost). image_width/height are the camera's.
+  core::Params params;
   int max_local_keyframes = 20;      // local BA / keepless window: the new keyframe and its best covisibles
   std::vector<std::int64_t> calibrate_M;  // original runs: mean kept fraction per M, on every window
   bool verbose = false;
@@ -46,6 +48,10 @@ struct RealRunResult {
   std::int64_t points_culled_by_selector = 0;
   int local_bas = 0;
   int window_rejections = 0;  // windows the adapter or Sparsifier refused (nothing culled there)
+  int windows = 0;  // windows the selector decided
+  // core::Summary's coverage-floor counts of the selector's Sparsifier (the
+  // one that sets keepless's and the baselines' counts), summed over windows.
+  std::int64_t floor_keyframes = 0, floor_promoted = 0, floor_short = 0;
   double local_ba_seconds = 0, selector_seconds = 0, total_seconds = 0;
   double ate_m = 0, ate_r_deg = 0;  // RMS over tracked frames, SE(3) for RGB-D, Sim(3) monocular
   double mean_kept_fraction = 1;    // of the new keyframes' evaluated points (>= 2 views in the window), over windows

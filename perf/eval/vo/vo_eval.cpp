@@ -34,10 +34,13 @@ RunRecord record_of(const RealRunResult& r, const char* variant, std::uint64_t s
 void log_run(const RealSequence& s, const RunRecord& r, const RealRunResult& x) {
   std::fprintf(stderr,
                "  %s seed %llu %s M=%lld: tracked %d/%d (losses %d) mps %d kfs %d (made %d) culled %lld "
-               "(windows refused %d) ate %.4f m, local BA %.2f s (%d), total %.1f s\n",
+               "(windows %d, refused %d) kept %.1f%% floor kfs %lld promoted %lld short %lld, ate %.4f m, "
+               "local BA %.2f s (%d), total %.1f s\n",
                s.name.c_str(), static_cast<unsigned long long>(r.seed), r.variant.c_str(),
                static_cast<long long>(r.M), x.frames_tracked, x.frames, x.tracking_losses, x.map_points, x.keyframes,
-               x.keyframes_created, static_cast<long long>(x.points_culled_by_selector), x.window_rejections, x.ate_m,
+               x.keyframes_created, static_cast<long long>(x.points_culled_by_selector), x.windows, x.window_rejections,
+               100.0 * x.mean_kept_fraction, static_cast<long long>(x.floor_keyframes),
+               static_cast<long long>(x.floor_promoted), static_cast<long long>(x.floor_short), x.ate_m,
                x.local_ba_seconds, x.local_bas, x.total_seconds);
 }
 
@@ -66,6 +69,9 @@ bool evaluate_real_vo(const VoInput& in, const VoEvalOptions& o, std::vector<Com
   RealRunResult first_original, first_ours;  // the first seed at the first operating point, for the SVGs
   for (std::size_t si = 0; si < o.seeds.size(); ++si) {
     RealVoOptions vo;
+    vo.params.scope = o.policy.scope;
+    vo.params.coverage_floor = o.policy.coverage_floor;
+    vo.params.cost_model = o.policy.cost_model;
     vo.seed = o.seeds[si];
     vo.selector = Selector::kOriginal;
     if (si == 0) vo.calibrate_M = kLadder;

@@ -9,6 +9,7 @@
 #include <utility>
 #include <vector>
 
+#include "keepless/core/config.hpp"
 #include "run_record.hpp"
 
 namespace keepless::eval::vo {
@@ -23,6 +24,9 @@ struct VoEvalOptions {
   std::vector<std::uint64_t> seeds;                 // RANSAC order and the random baseline's priorities
   std::vector<std::pair<double, std::int64_t>> ops;  // (kept fraction, NaN for a given M; M)
   bool baselines = true;
+  // --scope, --floor, --cost: only scope, coverage_floor and cost_model are
+  // read, for keepless, the baselines' counts and the M calibration alike.
+  core::Params policy;
   std::string out;  // non-empty: NAME_trajectory.svg and NAME_keypoints.svg there
 };
 

@@ -73,22 +73,35 @@ Status pose_from_orientation(const Eigen::Quaterniond& q_wc, const Eigen::Vector
 
 KeyframeAdapter::KeyframeAdapter(const core::Capacities& capacities) {
   record_.observations.reserve(capacities.max_observations);
+  record_.unmapped.reserve(capacities.max_unmapped_keypoints);
   sorted_.reserve(capacities.max_observations);
 }
 
 Status KeyframeAdapter::convert(core::KeyframeId id, const CameraPose& pose,
                                 const std::vector<cv::KeyPoint>& keypoints,
-                                const std::vector<core::PointId>& point_ids,
-                                const std::vector<cv::KeyPoint>* unmapped, KeyframeRecord* out) {
+                                const std::vector<core::PointId>& point_ids, const KeyframeExtras& extras,
+                                KeyframeRecord* out) {
+  const std::vector<cv::KeyPoint>* unmapped = extras.unmapped;
+  const std::vector<double>* depths = extras.depths;
   if (keypoints.size() != point_ids.size()) return Status::kSizeMismatch;
+  if (depths != nullptr && depths->size() != point_ids.size()) return Status::kSizeMismatch;
   if (!pose.centre.allFinite() || !pose.orientation.coeffs().allFinite()) return Status::kNonFinite;
   if (std::abs(pose.orientation.norm() - 1.0) > kRotationTolerance) return Status::kNotRotation;
+  const Intrinsics& in = extras.intrinsics;
+  if (!std::isfinite(in.fx) || !std::isfinite(in.fy) || !std::isfinite(in.cx) || !std::isfinite(in.cy)) {
+    return Status::kNonFinite;
+  }
   for (const cv::KeyPoint& k : keypoints) {
     if (!finite(k)) return Status::kNonFinite;
   }
   if (unmapped != nullptr) {
     for (const cv::KeyPoint& k : *unmapped) {
       if (!finite(k)) return Status::kNonFinite;
+    }
+  }
+  if (depths != nullptr) {
+    for (double z : *depths) {
+      if (!std::isfinite(z)) return Status::kNonFinite;
     }
   }
   sorted_.assign(point_ids.begin(), point_ids.end());
@@ -103,26 +116,38 @@ Status KeyframeAdapter::convert(core::KeyframeId id, const CameraPose& pose,
   out->keyframe.orientation[1] = q.x();
   out->keyframe.orientation[2] = q.y();
   out->keyframe.orientation[3] = q.z();
+  out->keyframe.fx = in.fx;
+  out->keyframe.fy = in.fy;
+  out->keyframe.cx = in.cx;
+  out->keyframe.cy = in.cy;
   out->observations.clear();
   for (std::size_t i = 0; i < keypoints.size(); ++i) {
-    out->observations.push_back({point_ids[i], keypoints[i].pt.x, keypoints[i].pt.y});
+    out->observations.push_back(
+        {point_ids[i], keypoints[i].pt.x, keypoints[i].pt.y, depths != nullptr ? (*depths)[i] : 0.0});
   }
   out->mapped = static_cast<std::uint32_t>(keypoints.size());
+  out->unmapped.clear();
   if (unmapped != nullptr) {
     for (const cv::KeyPoint& k : *unmapped) {
-      out->observations.push_back({kUnmappedBit | next_unmapped_, k.pt.x, k.pt.y});
-      next_unmapped_ = (next_unmapped_ + 1) & ~kUnmappedBit;
+      if (extras.unmapped_as == UnmappedAs::kKeypointList) {
+        out->unmapped.push_back({k.pt.x, k.pt.y});
+      } else {
+        out->observations.push_back({kUnmappedBit | next_unmapped_, k.pt.x, k.pt.y});
+        next_unmapped_ = (next_unmapped_ + 1) & ~kUnmappedBit;
+      }
     }
   }
+  out->keyframe.unmapped = out->unmapped.empty() ? nullptr : out->unmapped.data();
+  out->keyframe.unmapped_count = static_cast<std::uint32_t>(out->unmapped.size());
   return Status::kOk;
 }
 
 Status KeyframeAdapter::add_keyframe(core::Window& window, core::KeyframeId id, const CameraPose& pose,
                                      const std::vector<cv::KeyPoint>& keypoints,
                                      const std::vector<core::PointId>& point_ids,
-                                     const std::vector<cv::KeyPoint>* unmapped) {
+                                     const KeyframeExtras& extras) {
   window_status_ = core::Status::kOk;
-  const Status converted = convert(id, pose, keypoints, point_ids, unmapped, &record_);
+  const Status converted = convert(id, pose, keypoints, point_ids, extras, &record_);
   if (converted != Status::kOk) return converted;
   window_status_ = window.add_keyframe(record_.keyframe, record_.observations.data(),
                                        static_cast<std::uint32_t>(record_.observations.size()));

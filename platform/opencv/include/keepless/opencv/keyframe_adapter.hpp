@@ -5,11 +5,17 @@
 // can fail returns a Status and leaves its outputs and the window unchanged.
 //
 // Unmapped keypoints: the authors' N(p, f) counts every detected keypoint
-// near a point, not only the mapped ones. Passing them adds each as a
-// one-view observation of a reserved id (top bit set, see kUnmappedBit):
-// one view means the Sparsifier skips it, but it counts in N(p, f). They use
-// window capacity (max_points, max_observations); the decision sets below
-// never contain them.
+// near a point, not only the mapped ones. Two ways in (UnmappedAs):
+// kReservedIds adds each as a one-view observation of a reserved id (top bit
+// set, see kUnmappedBit): one view means the Sparsifier skips it, but every
+// cost model that counts observations counts it (the paper's box N(p, f)
+// included); they use max_points and max_observations, and the decision sets
+// below never contain them. kKeypointList puts them in core's own
+// Keyframe::unmapped list (Capacities::max_unmapped_keypoints), which only
+// CostModel::kAuthors counts.
+//
+// Intrinsics and depths (KeyframeExtras) are what CostModel::kInformation
+// needs; the other models ignore them.
 
 #include <cstdint>
 #include <vector>
@@ -60,11 +66,31 @@ struct CameraPose {
 [[nodiscard]] Status pose_from_orientation(const Eigen::Quaterniond& q_wc, const Eigen::Vector3d& centre,
                                            CameraPose* out);
 
+// Pinhole intrinsics of the (undistorted) keypoints, pixels; fx = 0: unknown.
+struct Intrinsics {
+  double fx = 0, fy = 0, cx = 0, cy = 0;
+};
+
+enum class UnmappedAs : std::uint8_t { kReservedIds, kKeypointList };
+
+// What a keyframe may carry beside its mapped keypoints, all optional.
+struct KeyframeExtras {
+  const std::vector<cv::KeyPoint>* unmapped = nullptr;  // the keyframe's other detections
+  UnmappedAs unmapped_as = UnmappedAs::kReservedIds;
+  Intrinsics intrinsics;  // non-finite: kNonFinite
+  // Per mapped keypoint (in point_ids' order), the map point's depth z in
+  // this camera, metres, as the SLAM estimates it. As in core, <= 0 means
+  // unknown (the observation costs the neutral level); NaN or infinity is
+  // refused (kNonFinite), a length other than point_ids' is kSizeMismatch.
+  const std::vector<double>* depths = nullptr;
+};
+
 // A keyframe converted for the window: what add_keyframe and keyframe_t take.
 struct KeyframeRecord {
-  core::Keyframe keyframe;
-  std::vector<core::Observation> observations;  // mapped first, then unmapped
+  core::Keyframe keyframe;  // keyframe.unmapped points into `unmapped` (re-point it after a copy)
+  std::vector<core::Observation> observations;  // mapped first, then reserved-id unmapped
   std::uint32_t mapped = 0;                     // observations[0, mapped) are map points
+  std::vector<core::Keypoint> unmapped;         // UnmappedAs::kKeypointList
 };
 
 // Converts keyframes into a window. Its buffers are reserved once from the
@@ -73,23 +99,39 @@ class KeyframeAdapter {
  public:
   explicit KeyframeAdapter(const core::Capacities& capacities);
 
-  // keypoints[i] observes map point point_ids[i]; `unmapped` (may be null)
-  // are the keyframe's other detections. Validates, then fills `out`.
+  // keypoints[i] observes map point point_ids[i]. Validates, then fills `out`.
+  [[nodiscard]] Status convert(core::KeyframeId id, const CameraPose& pose,
+                               const std::vector<cv::KeyPoint>& keypoints,
+                               const std::vector<core::PointId>& point_ids, const KeyframeExtras& extras,
+                               KeyframeRecord* out);
+  // `unmapped` (may be null) as reserved ids, no intrinsics or depths.
   [[nodiscard]] Status convert(core::KeyframeId id, const CameraPose& pose,
                                const std::vector<cv::KeyPoint>& keypoints,
                                const std::vector<core::PointId>& point_ids,
-                               const std::vector<cv::KeyPoint>* unmapped, KeyframeRecord* out);
+                               const std::vector<cv::KeyPoint>* unmapped, KeyframeRecord* out) {
+    return convert(id, pose, keypoints, point_ids, as_reserved_ids(unmapped), out);
+  }
 
   // convert() then window.add_keyframe(); on kWindowRejected, window_status()
   // says why (e.g. kCapacityExceeded, kDuplicateKeyframe).
   [[nodiscard]] Status add_keyframe(core::Window& window, core::KeyframeId id, const CameraPose& pose,
                                     const std::vector<cv::KeyPoint>& keypoints,
+                                    const std::vector<core::PointId>& point_ids, const KeyframeExtras& extras);
+  [[nodiscard]] Status add_keyframe(core::Window& window, core::KeyframeId id, const CameraPose& pose,
+                                    const std::vector<cv::KeyPoint>& keypoints,
                                     const std::vector<core::PointId>& point_ids,
-                                    const std::vector<cv::KeyPoint>* unmapped = nullptr);
+                                    const std::vector<cv::KeyPoint>* unmapped = nullptr) {
+    return add_keyframe(window, id, pose, keypoints, point_ids, as_reserved_ids(unmapped));
+  }
   core::Status window_status() const { return window_status_; }
   const KeyframeRecord& last() const { return record_; }
 
  private:
+  static KeyframeExtras as_reserved_ids(const std::vector<cv::KeyPoint>* unmapped) {
+    KeyframeExtras e;
+    e.unmapped = unmapped;
+    return e;
+  }
   KeyframeRecord record_;
   std::vector<core::PointId> sorted_;    // duplicate check
   std::uint64_t next_unmapped_ = 0;      // unique reserved ids across keyframes

@@ -11,8 +11,9 @@
 namespace keepless::opencv {
 
 // Fills `out` (its vectors reused) from `record`. with_unmapped: also send
-// the unmapped keypoints (their reserved ids), so the node's N(p, f) counts
-// them as the window's did. The optional arrays carry the observations'
+// the unmapped keypoints as the record holds them (reserved-id observations,
+// or the keyframe's native list as unmapped_u/v), so the node's N(p, f)
+// counts them as the window's did. The optional arrays carry the observations'
 // depths when any is known and the keyframe's intrinsics when set (the
 // information cost model); publisher_id names this process to the node's
 // stream-order policy. No status: the record was validated when it was made.
@@ -47,9 +48,14 @@ inline void to_keyframe_message(const KeyframeRecord& record, std::int64_t seque
   out->num_intrinsics = k.fx > 0 ? 4 : 0;
   out->intrinsics.clear();
   if (k.fx > 0) out->intrinsics = {k.fx, k.fy, k.cx, k.cy};
-  out->num_unmapped = 0;  // unmapped keypoints travel as reserved-id observations (with_unmapped)
-  out->unmapped_u.clear();
-  out->unmapped_v.clear();
+  const std::size_t m = with_unmapped ? record.unmapped.size() : 0;
+  out->num_unmapped = static_cast<std::int32_t>(m);
+  out->unmapped_u.resize(m);
+  out->unmapped_v.resize(m);
+  for (std::size_t i = 0; i < m; ++i) {
+    out->unmapped_u[i] = static_cast<float>(record.unmapped[i].u);
+    out->unmapped_v[i] = static_cast<float>(record.unmapped[i].v);
+  }
   out->publisher_id = publisher_id;
 }
 
