@@ -28,6 +28,10 @@ RunRecord record_of(const RealRunResult& r, const char* variant, std::uint64_t s
   x.ate_r_deg = r.ate_r_deg;
   x.frames = r.frames;
   x.frames_tracked = r.frames_tracked;
+  x.windows = static_cast<std::uint64_t>(r.windows);
+  x.floor_keyframes = static_cast<std::uint64_t>(r.floor_keyframes);
+  x.floor_promoted = static_cast<std::uint64_t>(r.floor_promoted);
+  x.floor_short = static_cast<std::uint64_t>(r.floor_short);
   return x;
 }
 
