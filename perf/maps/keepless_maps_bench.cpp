@@ -2,6 +2,7 @@
 // reconstruction, checked by COLMAP's own bundle adjuster.
 //
 //   keepless_maps_bench [--data DIR] [--colmap BIN] [--M 30,100,200] [--K 20] [--seeds 5] [--work DIR]
+//                       [--cost paper|authors|information]
 //
 // On the shared fixture (DIR/colmap_kitti06_first51, 51 KITTI 06 images):
 // the full model is re-solved by `colmap bundle_adjuster` (fixed intrinsics,
@@ -52,6 +53,7 @@ struct Options {
   std::uint32_t K = 20;
   int seeds = 5;
   std::string work;
+  core::CostModel cost = core::CostModel::kPaper;  // keepless's rows (as keepless_sparsify --cost)
 };
 
 struct Ba {
@@ -180,6 +182,9 @@ struct Bench {
                                    const std::vector<std::vector<core::PointId>>& images) {
     core::Params params;
     params.pair_capacity = M;
+    params.cost_model = opt.cost;
+    params.image_width = static_cast<std::int32_t>(original.cameras.front().width);
+    params.image_height = static_cast<std::int32_t>(original.cameras.front().height);
     sp::ModeResult r;
     if (sp::decide(kfs.file, mode, params, opt.K, &r) != core::Status::kOk) die("decide failed");
     sp::apply_floor(images, sp::kDefaultFloor, &r.decisions);
@@ -223,6 +228,9 @@ int main(int argc, char** argv) {
     else if (f == "--K") opt.K = static_cast<std::uint32_t>(std::atoi(argv[i + 1]));
     else if (f == "--seeds") opt.seeds = std::atoi(argv[i + 1]);
     else if (f == "--work") opt.work = argv[i + 1];
+    else if (f == "--cost") {
+      if (!core::parse_cost_model(argv[i + 1], &opt.cost)) die("bad --cost (paper, authors or information)");
+    }
     else die("unknown flag " + f);
   }
   if (opt.work.empty()) {
@@ -246,7 +254,8 @@ int main(int argc, char** argv) {
               ate(b.full, b.gt), ate(b.original, b.gt), moved.max);
 
   // Keyframes (image-name order, metric) and each image's observations.
-  const io::Keyframes kfs = io::keyframes_from_colmap(b.original, io::KeyframeOrder::kName, b.sim);
+  const io::Keyframes kfs = io::keyframes_from_colmap(b.original, io::KeyframeOrder::kName, b.sim,
+                                                      opt.cost == core::CostModel::kAuthors);
   std::vector<std::vector<core::PointId>> images;
   {
     std::map<std::uint32_t, const io::ColmapImage*> by_id;
@@ -344,7 +353,8 @@ int main(int argc, char** argv) {
     add_row(b.score("colmap_filter_len" + std::to_string(best), M, culled));
   }
   json += "],\"full_ba_s\":" + std::to_string(full.seconds) + ",\"K\":" + std::to_string(opt.K) +
-          ",\"seeds\":" + std::to_string(opt.seeds) + ",\"floor\":" + std::to_string(sp::kDefaultFloor) + "}";
+          ",\"seeds\":" + std::to_string(opt.seeds) + ",\"floor\":" + std::to_string(sp::kDefaultFloor) +
+          ",\"cost\":\"" + core::to_string(opt.cost) + "\"}";
   std::printf("%s\n", json.c_str());
   return 0;
 }

@@ -142,6 +142,7 @@ int parse_args(int argc, char** argv, Options* opt, bool* help) {
       }
       opt->params.image_width = w;
       opt->params.image_height = h;
+      opt->model.image_given = true;
     } else if (flag == "--max-keyframes") {
       if (!parse_limit(value, &opt->limits.max_keyframes)) return usage_error(bad);
     } else if (flag == "--max-points") {

@@ -53,7 +53,8 @@ bool load(const ModelOptions& opt, Loaded* m, std::string* error) {
     case Input::kColmap: {
       if (!io::read_colmap_model(opt.path, &m->colmap, &m->format, error)) return false;
       const io::KeyframeOrder order = opt.order_given ? opt.order : io::KeyframeOrder::kName;
-      m->keyframes = io::keyframes_from_colmap(m->colmap, order, metric);
+      m->keyframes = io::keyframes_from_colmap(m->colmap, order, metric,
+                                               opt.params.cost_model == core::CostModel::kAuthors);
       std::unordered_map<std::uint32_t, const io::ColmapImage*> by_id;
       for (const io::ColmapImage& im : m->colmap.images) by_id[im.id] = &im;
       for (const core::Keyframe& kf : m->keyframes.file.keyframes) {
@@ -232,9 +233,22 @@ int run_model(const ModelOptions& opt) {
   const Mode mode = opt.mode_given ? opt.mode : (opt.input == Input::kWindow ? Mode::kWhole : Mode::kReplay);
   const std::uint32_t floor = opt.floor >= 0 ? static_cast<std::uint32_t>(opt.floor)
                                              : (opt.input == Input::kWindow ? 0 : kDefaultFloor);
+  // The authors' grid lies over the image: COLMAP's cameras give its size
+  // when they all share one and --image was not given.
+  core::Params params = opt.params;
+  if (!opt.image_given && opt.input == Input::kColmap && !m.colmap.cameras.empty()) {
+    const io::ColmapCamera& c = m.colmap.cameras.front();
+    const bool one_size = std::all_of(m.colmap.cameras.begin(), m.colmap.cameras.end(), [&](const io::ColmapCamera& o) {
+      return o.width == c.width && o.height == c.height;
+    });
+    if (one_size && c.width >= 1 && c.height >= 1 && c.width <= INT32_MAX && c.height <= INT32_MAX) {
+      params.image_width = static_cast<std::int32_t>(c.width);
+      params.image_height = static_cast<std::int32_t>(c.height);
+    }
+  }
   const std::uint64_t t_solve = platform::monotonic_ns();
   ModeResult r;
-  const core::Status s = decide(m.keyframes.file, mode, opt.params, opt.K, &r);
+  const core::Status s = decide(m.keyframes.file, mode, params, opt.K, &r);
   const double solve_ms = ms_since(t_solve);
   if (s != core::Status::kOk) {
     std::fprintf(stderr, "keepless_sparsify: %s failed: %s\n", to_string(mode), core::to_string(s));

@@ -30,6 +30,9 @@ struct ModelOptions {
   double scale = 1;          // --scale S
   std::int64_t floor = -1;   // --min-obs-per-image; -1: 30 for COLMAP/BAL, 0 for a window file
   core::Params params;
+  // --image was given; else a COLMAP model's one camera size (all cameras
+  // alike) sets params' image_width x image_height.
+  bool image_given = false;
   core::WindowFileLimits limits;
   bool map_flags = false;  // a flag above was given (parse_map_flag)
 };

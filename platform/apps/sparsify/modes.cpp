@@ -21,14 +21,16 @@ core::Capacities at_least_one(core::Capacities c) {
 }
 
 // The largest window of K consecutive keyframes, before any cull (culls
-// only shrink a window): observations, distinct points, pair arcs.
+// only shrink a window): observations, distinct points, pair arcs, unmapped
+// keypoints.
 core::Capacities replay_capacities(const core::WindowFile& f, std::uint32_t K) {
   core::Capacities c{std::min<std::uint32_t>(K, static_cast<std::uint32_t>(f.keyframes.size())), 0, 0, 0};
   std::unordered_map<core::PointId, std::uint32_t> count;
-  std::uint64_t obs = 0, arcs = 0;
+  std::uint64_t obs = 0, arcs = 0, unmapped = 0;
   for (std::size_t i = 0; i < f.keyframes.size(); ++i) {
     for (const core::Observation& o : f.observations[i]) arcs += count[o.point]++;
     obs += f.observations[i].size();
+    unmapped += f.keyframes[i].unmapped_count;
     if (i >= K) {
       for (const core::Observation& o : f.observations[i - K]) {
         auto it = count.find(o.point);
@@ -36,7 +38,9 @@ core::Capacities replay_capacities(const core::WindowFile& f, std::uint32_t K) {
         if (it->second == 0) count.erase(it);
       }
       obs -= f.observations[i - K].size();
+      unmapped -= f.keyframes[i - K].unmapped_count;
     }
+    c.max_unmapped_keypoints = std::max<std::uint32_t>(c.max_unmapped_keypoints, static_cast<std::uint32_t>(unmapped));
     c.max_observations = std::max<std::uint32_t>(c.max_observations, static_cast<std::uint32_t>(obs));
     c.max_points = std::max<std::uint32_t>(c.max_points, static_cast<std::uint32_t>(count.size()));
     c.max_pair_arcs = std::max<std::uint32_t>(c.max_pair_arcs, static_cast<std::uint32_t>(arcs));

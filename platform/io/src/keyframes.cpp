@@ -86,7 +86,36 @@ void matched_centres(const ColmapModel& a, const ColmapModel& b, std::vector<std
   }
 }
 
-Keyframes keyframes_from_colmap(const ColmapModel& model, KeyframeOrder order, const Similarity& to_metric_frame) {
+namespace {
+
+// The pinhole part of a COLMAP camera: fx, fy, cx, cy (unknown, all 0, when
+// the focal length is not positive).
+void colmap_intrinsics(const ColmapCamera& camera, core::Keyframe* kf) {
+  const CameraModelInfo* info = camera_model_by_id(camera.model_id);
+  if (info == nullptr || camera.params.size() < 3) return;
+  const std::string name = info->name;
+  const bool one_f = name == "SIMPLE_PINHOLE" || name == "SIMPLE_RADIAL" || name == "RADIAL" ||
+                     name == "SIMPLE_RADIAL_FISHEYE" || name == "RADIAL_FISHEYE";
+  const std::vector<double>& p = camera.params;
+  if (!one_f && p.size() < 4) return;
+  const double fx = p[0], fy = one_f ? p[0] : p[1];
+  if (!(fx > 0) || !(fy > 0)) return;
+  kf->fx = fx;
+  kf->fy = fy;
+  kf->cx = p[one_f ? 1 : 2];
+  kf->cy = p[one_f ? 2 : 3];
+}
+
+// Depth in metres from a model-frame z, or 0 (unknown).
+double metric_depth(double z, const Similarity& s) {
+  const double d = s.scale * z;
+  return std::isfinite(d) && d > 0 ? d : 0;
+}
+
+}  // namespace
+
+Keyframes keyframes_from_colmap(const ColmapModel& model, KeyframeOrder order, const Similarity& to_metric_frame,
+                                bool unmapped) {
   std::vector<std::size_t> slots(model.images.size());
   std::iota(slots.begin(), slots.end(), 0);
   const auto& im = model.images;
@@ -97,7 +126,18 @@ Keyframes keyframes_from_colmap(const ColmapModel& model, KeyframeOrder order, c
   } else if (order == KeyframeOrder::kId) {
     std::stable_sort(slots.begin(), slots.end(), [&](std::size_t a, std::size_t b) { return im[a].id < im[b].id; });
   }
+  std::unordered_map<std::uint32_t, const ColmapCamera*> cameras;
+  for (const ColmapCamera& c : model.cameras) cameras.emplace(c.id, &c);
+  std::unordered_map<std::uint64_t, const double*> xyz;
+  for (const ColmapPoint3D& p : model.points) xyz.emplace(p.id, p.xyz);
   Keyframes out;
+  if (unmapped) {
+    std::size_t total = 0;
+    for (const ColmapImage& image : im) {
+      for (const ColmapPoint2D& p : image.points2D) total += p.point3D_id == kNoPoint3D;
+    }
+    out.unmapped.reserve(total);  // the keyframes point into it: no reallocation below
+  }
   std::unordered_set<std::uint64_t> seen;
   for (const std::size_t i : slots) {
     const ColmapImage& image = im[i];
@@ -111,21 +151,37 @@ Keyframes keyframes_from_colmap(const ColmapModel& model, KeyframeOrder order, c
                                image.qvec[2] * image.qvec[2] + image.qvec[3] * image.qvec[3]);
     kf.orientation[0] = image.qvec[0] / n;
     for (int k = 1; k < 4; ++k) kf.orientation[k] = -image.qvec[k] / n;
+    const auto camera = cameras.find(image.camera_id);
+    if (camera != cameras.end()) colmap_intrinsics(*camera->second, &kf);
+    double r[9];
+    detail::quaternion_matrix(image.qvec, r);
+    const std::size_t first_unmapped = out.unmapped.size();
     std::vector<core::Observation> obs;
     seen.clear();
     for (const ColmapPoint2D& p : image.points2D) {
-      if (p.point3D_id == kNoPoint3D) continue;
+      if (p.point3D_id == kNoPoint3D) {
+        if (unmapped) out.unmapped.push_back({p.x, p.y});
+        continue;
+      }
       if (!seen.insert(p.point3D_id).second) {
         ++out.duplicates;
         continue;
       }
-      obs.push_back({p.point3D_id, p.x, p.y});
+      core::Observation& o = obs.emplace_back(core::Observation{p.point3D_id, p.x, p.y});
+      const auto x = xyz.find(p.point3D_id);
+      if (x != xyz.end()) {
+        const double* X = x->second;
+        o.depth = metric_depth(r[6] * X[0] + r[7] * X[1] + r[8] * X[2] + image.tvec[2], to_metric_frame);
+      }
     }
+    kf.unmapped_count = static_cast<std::uint32_t>(out.unmapped.size() - first_unmapped);
+    if (kf.unmapped_count > 0) kf.unmapped = out.unmapped.data() + first_unmapped;
     out.file.keyframes.push_back(kf);
     out.file.keyframe_lines.push_back(0);
     out.file.observations.push_back(std::move(obs));
   }
   out.file.needs = core::compute_needs(out.file);
+  out.file.needs.max_unmapped_keypoints = static_cast<std::uint32_t>(out.unmapped.size());
   return out;
 }
 
@@ -148,6 +204,8 @@ Keyframes keyframes_from_bal(const BalProblem& problem, KeyframeOrder /*order: i
       kf.orientation[0] = std::cos(theta / 2);
       for (int k = 0; k < 3; ++k) kf.orientation[k + 1] = -r[k] * s;
     }
+    const double f = r[6];
+    if (f > 0) kf.fx = kf.fy = f;  // cx = cy = 0: BAL's keypoints are relative to the image centre
   }
   std::vector<std::unordered_set<std::uint32_t>> seen(problem.num_cameras);
   for (const BalObservation& o : problem.observations) {
@@ -155,7 +213,11 @@ Keyframes keyframes_from_bal(const BalProblem& problem, KeyframeOrder /*order: i
       ++out.duplicates;
       continue;
     }
-    out.file.observations[o.camera].push_back({o.point, o.x, o.y});
+    // P = R X + t; BAL projects -P / P.z, so the depth is -P.z.
+    const double* cam = &problem.camera_params[9 * std::size_t{o.camera}];
+    double P[3];
+    detail::angle_axis_rotate(cam, &problem.point_params[3 * std::size_t{o.point}], P);
+    out.file.observations[o.camera].push_back({o.point, o.x, o.y, metric_depth(-(P[2] + cam[5]), to_metric_frame)});
   }
   out.file.needs = core::compute_needs(out.file);
   return out;

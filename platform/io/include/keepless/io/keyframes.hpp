@@ -9,6 +9,20 @@
 // naming one 3D point) gives the keyframe that point once, at the first of
 // those 2D points in the image's order; the others follow the point's fate
 // (kept or culled with it). duplicates counts the observations so merged.
+//
+// What the cost models need (core::CostModel), from the model itself:
+// - Intrinsics fx, fy, cx, cy: COLMAP, the pinhole part of the image's
+//   camera (one f for SIMPLE_PINHOLE, SIMPLE_RADIAL, RADIAL and their
+//   fisheye kin, fx and fy for the others; distortion is ignored); BAL,
+//   fx = fy = f, cx = cy = 0 (its keypoints are relative to the image centre;
+//   k1, k2 ignored). A focal length <= 0 leaves all four 0 (unknown).
+// - Observation::depth, metres (model units times the similarity's scale):
+//   COLMAP, z of R X + t; BAL, -z of R X + t (BAL projects -P / P.z, so its
+//   cameras look down -z: (P.x, P.y, -P.z) is the point in the +z-forward
+//   pinhole frame the keypoint back-projects into, a mirror of BAL's frame,
+//   which leaves every leverage unchanged). Not finite or <= 0: 0 (unknown).
+// - Unmapped keypoints (COLMAP only, and only with `unmapped`): an image's
+//   2D points that name no 3D point. BAL stores observations only, so none.
 
 #include <array>
 #include <cstdint>
@@ -40,8 +54,20 @@ enum class KeyframeOrder {
 const char* to_string(KeyframeOrder order);
 
 struct Keyframes {
-  core::WindowFile file;       // keyframes in replay order
+  // Keyframes in replay order; needs.max_unmapped_keypoints is the total
+  // held in `unmapped` (a window of all of them fits).
+  core::WindowFile file;
   std::uint64_t duplicates = 0;  // observations merged into an earlier one of the same image
+  // Storage of every keyframe's unmapped keypoints, in keyframe order: the
+  // keyframes point into it, so Keyframes moves (which keeps the storage)
+  // but does not copy.
+  std::vector<core::Keypoint> unmapped;
+
+  Keyframes() = default;
+  Keyframes(Keyframes&&) = default;
+  Keyframes& operator=(Keyframes&&) = default;
+  Keyframes(const Keyframes&) = delete;
+  Keyframes& operator=(const Keyframes&) = delete;
 };
 
 // The centre of an image: -R(q)^T t.
@@ -52,7 +78,11 @@ void colmap_camera_centre(const ColmapImage& image, double centre[3]);
 void matched_centres(const ColmapModel& a, const ColmapModel& b, std::vector<std::array<double, 3>>* in_a,
                      std::vector<std::array<double, 3>>* in_b);
 
-Keyframes keyframes_from_colmap(const ColmapModel& model, KeyframeOrder order, const Similarity& to_metric);
+// `unmapped`: also give each keyframe its unmapped keypoints (for
+// CostModel::kAuthors; they are most of a COLMAP image's 2D points, so
+// leave it off otherwise).
+Keyframes keyframes_from_colmap(const ColmapModel& model, KeyframeOrder order, const Similarity& to_metric,
+                                bool unmapped = false);
 Keyframes keyframes_from_bal(const BalProblem& problem, KeyframeOrder order, const Similarity& to_metric);
 
 }  // namespace keepless::io

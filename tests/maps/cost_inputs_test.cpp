@@ -1,0 +1,277 @@
+// What the bridge gives the cost models from a finished map (intrinsics,
+// depths, unmapped keypoints; keepless/io/keyframes.hpp), and that the
+// models then use it: on the shared COLMAP fixture the depths reproject
+// every observation through the camera; `information` and `authors` decide
+// differently from `paper` (and `authors` from itself without the unmapped
+// keypoints), repeatably; `paper` ignores all of it.
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <unordered_map>
+
+#include "keepless/io/bal_problem.hpp"
+#include "keepless/io/colmap_model.hpp"
+#include "keepless/io/keyframes.hpp"
+#include "maps_support.hpp"
+#include "sparsify/modes.hpp"
+
+namespace keepless {
+namespace {
+
+using maps_test::fixture;
+
+struct Fixture {
+  io::ColmapModel model;
+  io::Similarity sim;
+};
+
+Fixture read_fixture() {
+  Fixture f;
+  io::ColmapFormat format;
+  std::string error;
+  EXPECT_TRUE(io::read_colmap_model(fixture("sparse"), &f.model, &format, &error)) << error;
+  EXPECT_TRUE(io::read_similarity(fixture("sim3_to_kitti_gt.txt"), &f.sim, &error)) << error;
+  return f;
+}
+
+core::Params params_for(const io::ColmapModel& m, core::CostModel cost) {
+  core::Params p;
+  p.pair_capacity = 30;
+  p.cost_model = cost;
+  p.image_width = static_cast<std::int32_t>(m.cameras.front().width);
+  p.image_height = static_cast<std::int32_t>(m.cameras.front().height);
+  return p;
+}
+
+std::vector<core::PointDecision> decide(const io::Keyframes& k, sparsify::Mode mode, const core::Params& p) {
+  sparsify::ModeResult r;
+  EXPECT_EQ(sparsify::decide(k.file, mode, p, 20, &r), core::Status::kOk);
+  return r.decisions;
+}
+
+bool same_verdicts(const std::vector<core::PointDecision>& a, const std::vector<core::PointDecision>& b) {
+  return std::equal(a.begin(), a.end(), b.begin(), b.end(), [](const auto& x, const auto& y) {
+    return x.point == y.point && x.verdict == y.verdict;
+  });
+}
+
+bool same_decisions(const std::vector<core::PointDecision>& a, const std::vector<core::PointDecision>& b) {
+  return std::equal(a.begin(), a.end(), b.begin(), b.end(), [](const auto& x, const auto& y) {
+    return x.point == y.point && x.verdict == y.verdict && x.flow == y.flow && x.capacity == y.capacity;
+  });
+}
+
+// Replay: verdicts; whole: verdicts or flows (at M = 30 the whole map
+// keeps the same 42 longest tracks whatever the costs; which pairs' flow
+// they win moves).
+bool differ(sparsify::Mode mode, const std::vector<core::PointDecision>& a, const std::vector<core::PointDecision>& b) {
+  return mode == sparsify::Mode::kReplay ? !same_verdicts(a, b) : !same_decisions(a, b);
+}
+
+TEST(ColmapBridge, GivesTheCamerasIntrinsicsAndDepthsThatReprojectEachObservation) {
+  const Fixture f = read_fixture();
+  ASSERT_FALSE(::testing::Test::HasFailure());
+  const io::Keyframes k = io::keyframes_from_colmap(f.model, io::KeyframeOrder::kName, f.sim);
+  std::unordered_map<std::uint32_t, const io::ColmapImage*> images;
+  for (const auto& im : f.model.images) images[im.id] = &im;
+  std::unordered_map<std::uint64_t, Eigen::Vector3d> xyz;
+  for (const auto& p : f.model.points) xyz[p.id] = Eigen::Vector3d(p.xyz[0], p.xyz[1], p.xyz[2]);
+  std::size_t n = 0;
+  double sum = 0, worst = 0;
+  for (std::size_t i = 0; i < k.file.keyframes.size(); ++i) {
+    const core::Keyframe& kf = k.file.keyframes[i];
+    const io::ColmapImage& im = *images.at(static_cast<std::uint32_t>(kf.id));
+    const io::ColmapCamera& cam = f.model.cameras.front();
+    ASSERT_EQ(im.camera_id, cam.id);
+    ASSERT_STREQ(io::camera_model_by_id(cam.model_id)->name, "PINHOLE");
+    EXPECT_EQ(kf.fx, cam.params[0]);
+    EXPECT_EQ(kf.fy, cam.params[1]);
+    EXPECT_EQ(kf.cx, cam.params[2]);
+    EXPECT_EQ(kf.cy, cam.params[3]);
+    EXPECT_EQ(kf.unmapped_count, 0u);  // not asked for
+    const Eigen::Quaterniond q(im.qvec[0], im.qvec[1], im.qvec[2], im.qvec[3]);
+    const Eigen::Vector3d t(im.tvec[0], im.tvec[1], im.tvec[2]);
+    for (const core::Observation& o : k.file.observations[i]) {
+      ASSERT_GT(o.depth, 0) << "point " << o.point << " in image " << kf.id;  // COLMAP keeps points in front
+      // The point in the camera, in metres: its x and y over the bridge's
+      // depth, through the intrinsics, land on the keypoint.
+      const Eigen::Vector3d c = f.sim.scale * (q.normalized() * xyz.at(o.point) + t);
+      EXPECT_NEAR(o.depth, c.z(), 1e-9 * c.z());
+      const double du = kf.fx * c.x() / o.depth + kf.cx - o.u, dv = kf.fy * c.y() / o.depth + kf.cy - o.v;
+      const double e = std::hypot(du, dv);
+      sum += e;
+      worst = std::max(worst, e);
+      ++n;
+    }
+  }
+  ASSERT_GT(n, 80000u);
+  EXPECT_LT(sum / n, 1.0) << "mean reprojection error, px";
+  EXPECT_LT(worst, 4.0) << "COLMAP's mapper filters observations above 4 px";
+}
+
+TEST(ColmapBridge, OneFocalLengthOrTwoPerCameraModelAndUnmappedKeypointsOnRequest) {
+  io::ColmapModel m;
+  m.cameras.push_back({1, io::camera_model_by_name("SIMPLE_RADIAL")->id, 100, 80, {300, 50, 40, 0.1}});
+  m.cameras.push_back({2, io::camera_model_by_name("OPENCV")->id, 100, 80, {310, 320, 51, 41, 0, 0, 0, 0}});
+  m.cameras.push_back({3, io::camera_model_by_name("PINHOLE")->id, 100, 80, {0, 320, 51, 41}});
+  for (std::uint32_t id = 1; id <= 3; ++id) {
+    io::ColmapImage im;
+    im.id = id;
+    im.camera_id = id;
+    im.tvec[2] = id == 2 ? -10 : 1;  // image 2's camera has the point behind it
+    im.name = "i" + std::to_string(id);
+    im.points2D = {{50, 40, 7}, {1, 2, io::kNoPoint3D}, {3, 4, io::kNoPoint3D}};
+    m.images.push_back(im);
+  }
+  io::ColmapPoint3D p;
+  p.id = 7;
+  p.xyz[2] = 4;  // depth 5 in images 1 and 3, -6 in image 2
+  m.points.push_back(p);
+  io::Similarity twice;
+  twice.scale = 2;
+  const io::Keyframes plain = io::keyframes_from_colmap(m, io::KeyframeOrder::kId, twice);
+  const io::Keyframes k = io::keyframes_from_colmap(m, io::KeyframeOrder::kId, twice, true);
+  for (const io::Keyframes* x : {&plain, &k}) {
+    const auto& kfs = x->file.keyframes;
+    EXPECT_EQ(kfs[0].fx, 300);
+    EXPECT_EQ(kfs[0].fy, 300);
+    EXPECT_EQ(kfs[0].cx, 50);
+    EXPECT_EQ(kfs[0].cy, 40);
+    EXPECT_EQ(kfs[1].fx, 310);
+    EXPECT_EQ(kfs[1].fy, 320);
+    EXPECT_EQ(kfs[1].cx, 51);
+    EXPECT_EQ(kfs[1].cy, 41);
+    EXPECT_EQ(kfs[2].fx, 0);  // f = 0: unknown
+    EXPECT_EQ(kfs[2].fy, 0);
+    EXPECT_EQ(x->file.observations[0][0].depth, 10);  // metres: twice the model's 5
+    EXPECT_EQ(x->file.observations[1][0].depth, 0);   // behind: unknown
+    EXPECT_EQ(x->file.observations[2][0].depth, 10);
+  }
+  EXPECT_EQ(plain.file.needs.max_unmapped_keypoints, 0u);
+  EXPECT_EQ(plain.unmapped.size(), 0u);
+  EXPECT_EQ(k.file.needs.max_unmapped_keypoints, 6u);
+  for (const core::Keyframe& kf : k.file.keyframes) {
+    ASSERT_EQ(kf.unmapped_count, 2u);
+    EXPECT_EQ(kf.unmapped[0].u, 1);
+    EXPECT_EQ(kf.unmapped[1].v, 4);
+  }
+  // Moving keeps the storage the keyframes point into.
+  const core::Keypoint* at = nullptr;
+  io::Keyframes moved = io::keyframes_from_colmap(m, io::KeyframeOrder::kId, twice, true);
+  at = moved.file.keyframes[2].unmapped;
+  const io::Keyframes again = std::move(moved);
+  EXPECT_EQ(again.file.keyframes[2].unmapped, at);
+  EXPECT_EQ(again.file.keyframes[2].unmapped, again.unmapped.data() + 4);
+}
+
+TEST(BalBridge, FocalLengthAndMinusZDepthReprojectTheRealProblem) {
+  io::BalProblem p;
+  std::string error;
+  ASSERT_TRUE(io::read_bal(std::string(KEEPLESS_MAPS_DATA) + "/bal_zenslam/problem-49-7776-pre.txt", &p, &error))
+      << error;
+  const io::Keyframes k = io::keyframes_from_bal(p, io::KeyframeOrder::kFile, {});
+  std::size_t n = 0, with_depth = 0;
+  std::vector<double> errors;
+  for (std::uint32_t c = 0; c < p.num_cameras; ++c) {
+    const core::Keyframe& kf = k.file.keyframes[c];
+    const double* cam = &p.camera_params[9 * std::size_t{c}];
+    EXPECT_EQ(kf.fx, cam[6]);
+    EXPECT_EQ(kf.fy, cam[6]);
+    EXPECT_EQ(kf.cx, 0);
+    EXPECT_EQ(kf.cy, 0);
+    EXPECT_EQ(kf.unmapped_count, 0u);
+    const Eigen::Vector3d r(cam[0], cam[1], cam[2]);
+    const Eigen::AngleAxisd R(r.norm(), r.norm() > 0 ? Eigen::Vector3d(r.normalized()) : Eigen::Vector3d::UnitX());
+    for (const core::Observation& o : k.file.observations[c]) {
+      ++n;
+      const double* X = &p.point_params[3 * o.point];
+      const Eigen::Vector3d P = R * Eigen::Vector3d(X[0], X[1], X[2]) + Eigen::Vector3d(cam[3], cam[4], cam[5]);
+      if (!(-P.z() > 0)) {
+        EXPECT_EQ(o.depth, 0);
+        continue;
+      }
+      ++with_depth;
+      EXPECT_NEAR(o.depth, -P.z(), 1e-9 * -P.z());
+      // BAL's projection with its distortion, from the bridge's depth:
+      // (P.x, P.y) / depth is BAL's -P / P.z.
+      const double x = P.x() / o.depth, y = P.y() / o.depth, rr = x * x + y * y;
+      const double d = 1 + cam[7] * rr + cam[8] * rr * rr;
+      errors.push_back(std::hypot(kf.fx * d * x - o.u, kf.fy * d * y - o.v));
+    }
+  }
+  EXPECT_GT(with_depth, n * 99 / 100);
+  std::nth_element(errors.begin(), errors.begin() + errors.size() / 2, errors.end());
+  EXPECT_LT(errors[errors.size() / 2], 2.0) << "median reprojection error, px (the problem before its BA)";
+}
+
+TEST(CostModelsOnTheFixture, InformationUsesTheDepthsAndRepeats) {
+  const Fixture f = read_fixture();
+  ASSERT_FALSE(::testing::Test::HasFailure());
+  const io::Keyframes k = io::keyframes_from_colmap(f.model, io::KeyframeOrder::kName, f.sim);
+  for (const sparsify::Mode mode : {sparsify::Mode::kReplay, sparsify::Mode::kWhole}) {
+    const auto paper = decide(k, mode, params_for(f.model, core::CostModel::kPaper));
+    const auto info = decide(k, mode, params_for(f.model, core::CostModel::kInformation));
+    EXPECT_TRUE(differ(mode, paper, info)) << sparsify::to_string(mode);
+    EXPECT_TRUE(same_decisions(info, decide(k, mode, params_for(f.model, core::CostModel::kInformation))));
+    // Without the depths it is neutral: a level 2 on every observation.
+    io::Keyframes blind = io::keyframes_from_colmap(f.model, io::KeyframeOrder::kName, f.sim);
+    for (auto& obs : blind.file.observations) {
+      for (auto& o : obs) o.depth = 0;
+    }
+    EXPECT_TRUE(differ(mode, info, decide(blind, mode, params_for(f.model, core::CostModel::kInformation))));
+  }
+}
+
+TEST(CostModelsOnTheFixture, AuthorsCountsTheUnmappedKeypointsAndPaperIgnoresThem) {
+  const Fixture f = read_fixture();
+  ASSERT_FALSE(::testing::Test::HasFailure());
+  const io::Keyframes mapped = io::keyframes_from_colmap(f.model, io::KeyframeOrder::kName, f.sim);
+  const io::Keyframes all = io::keyframes_from_colmap(f.model, io::KeyframeOrder::kName, f.sim, true);
+  std::size_t unmapped = 0;
+  for (const auto& im : f.model.images) {
+    for (const auto& p : im.points2D) unmapped += p.point3D_id == io::kNoPoint3D;
+  }
+  ASSERT_GT(unmapped, 0u);
+  EXPECT_EQ(all.unmapped.size(), unmapped);
+  EXPECT_EQ(all.file.needs.max_unmapped_keypoints, unmapped);
+  for (const sparsify::Mode mode : {sparsify::Mode::kReplay, sparsify::Mode::kWhole}) {
+    const auto authors = decide(all, mode, params_for(f.model, core::CostModel::kAuthors));
+    EXPECT_TRUE(differ(mode, authors, decide(mapped, mode, params_for(f.model, core::CostModel::kAuthors))))
+        << sparsify::to_string(mode);
+    EXPECT_TRUE(same_decisions(authors, decide(all, mode, params_for(f.model, core::CostModel::kAuthors))));
+    EXPECT_TRUE(same_decisions(decide(mapped, mode, params_for(f.model, core::CostModel::kPaper)),
+                               decide(all, mode, params_for(f.model, core::CostModel::kPaper))));
+  }
+}
+
+class CostModelsCli : public maps_test::MapsTest {};
+
+// Through keepless_sparsify: each model's decisions repeat byte for byte
+// and the three differ.
+TEST_F(CostModelsCli, EachCostModelRepeatsAndTheyDiffer) {
+  const std::string sim = fixture("sim3_to_kitti_gt.txt");
+  for (const char* mode : {"replay", "whole"}) {
+    std::vector<std::string> decisions;
+    for (const char* cost : {"paper", "information", "authors"}) {
+      for (int run = 0; run < 2; ++run) {
+        const std::string d = path(std::string(mode) + cost + std::to_string(run));
+        const maps_test::Result r = sparsify({"--colmap", fixture("sparse"), "--M", "30", "--sim3", sim, "--mode", mode,
+                                              "--cost", cost, "--decisions", d});
+        ASSERT_EQ(r.status, 0) << cost << ": " << r.err;
+        decisions.push_back(maps_test::read_all(d));
+      }
+    }
+    EXPECT_EQ(decisions[0], decisions[1]) << mode;
+    EXPECT_EQ(decisions[2], decisions[3]) << mode;
+    EXPECT_EQ(decisions[4], decisions[5]) << mode;
+    EXPECT_NE(decisions[0], decisions[2]) << mode;
+    EXPECT_NE(decisions[0], decisions[4]) << mode;
+    EXPECT_NE(decisions[2], decisions[4]) << mode;
+  }
+}
+
+}  // namespace
+}  // namespace keepless
