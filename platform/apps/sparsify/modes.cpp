@@ -53,6 +53,10 @@ void add_totals(const core::Summary& s, core::Summary* t) {
   t->arcs += s.arcs;
   t->max_flow += s.max_flow;
   t->total_cost += s.total_cost;
+  t->out_of_scope += s.out_of_scope;  // the scope and floor counts: summed over the slides
+  t->floor_keyframes += s.floor_keyframes;
+  t->floor_promoted += s.floor_promoted;
+  t->floor_short += s.floor_short;
 }
 
 // Final counts over the decisions.
