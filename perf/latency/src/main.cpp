@@ -535,7 +535,12 @@ int main(int argc, char** argv) {
               granted.c_str(), pin_note.c_str(), lock_note.c_str());
   const bool with_reference = !is_reference(o.params);
   const std::uint32_t unmapped_per_kf = stream.keyframes.empty() ? 0 : stream.keyframes[0].unmapped_count;
-  const bool camera = !stream.keyframes.empty() && stream.keyframes[0].fx > 0;
+  // Intrinsics on the keyframes and a depth on every observation.
+  bool camera = !stream.keyframes.empty();
+  for (std::size_t k = 0; k < stream.keyframes.size() && camera; ++k) {
+    camera = stream.keyframes[k].fx > 0;
+    for (const core::Observation& ob : stream.observations[k]) camera = camera && ob.depth > 0;
+  }
   std::printf("policy: scope %s, floor %u, cost %s; stream: intrinsics and depths %s, %u unmapped keypoints"
               " per keyframe; reference: %s\n",
               core::to_string(o.params.scope), o.params.coverage_floor, core::to_string(o.params.cost_model),
