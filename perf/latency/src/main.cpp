@@ -21,8 +21,10 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <ctime>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "compare.hpp"
@@ -161,6 +163,15 @@ bool parse(int argc, char** argv, Options* o) {
 
 double ms(std::uint64_t ns) { return static_cast<double>(ns) * 1e-6; }
 
+// This thread's CPU time: the decision path's cost without the time another
+// process held the core (on a shared machine the wall-clock tail is mostly
+// that).
+std::uint64_t thread_cpu_ns() {
+  timespec ts{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return static_cast<std::uint64_t>(ts.tv_sec) * 1000000000ull + static_cast<std::uint64_t>(ts.tv_nsec);
+}
+
 // Nearest-rank percentile of a sorted sample.
 std::uint64_t percentile(const std::vector<std::uint64_t>& sorted, double p) {
   if (sorted.empty()) return 0;
@@ -187,7 +198,7 @@ struct Histogram {
 struct Replay {
   // Per measured decision.
   Histogram ingest{"ingest", {}}, network{"network", {}}, solve{"solve", {}}, decide{"decide", {}},
-      publish{"publish", {}}, e2e{"end-to-end", {}};
+      publish{"publish", {}}, e2e{"end-to-end", {}}, e2e_cpu{"CPU time", {}};
   std::uint32_t decisions = 0, exhausted = 0, deferred = 0, late = 0, mismatches = 0, failures = 0;
   // The policy at work: decisions where the coverage floor bound, the points
   // it promoted back, and points skipped as out of scope, over all decisions.
@@ -371,7 +382,7 @@ bool replay(const KeyframeStream& stream, std::uint32_t warmup, std::uint64_t bu
 
   const auto total = static_cast<std::uint32_t>(stream.keyframes.size());
   const std::uint32_t measured = total > warmup ? total - warmup : 0;
-  for (Histogram* h : {&r->ingest, &r->network, &r->solve, &r->decide, &r->publish, &r->e2e}) {
+  for (Histogram* h : {&r->ingest, &r->network, &r->solve, &r->decide, &r->publish, &r->e2e, &r->e2e_cpu}) {
     h->ns.clear();
     h->ns.reserve(measured);
   }
@@ -387,6 +398,7 @@ bool replay(const KeyframeStream& stream, std::uint32_t warmup, std::uint64_t bu
     if (measuring) counter.resume();
     // --- the decision path ---
     const std::uint64_t t0 = clock.now_ns();  // the keyframe arrives
+    const std::uint64_t cpu0 = thread_cpu_ns();
     core::Status added = core::Status::kOk;
     if (!slide_in(stream, k, window, &added)) return false;
     const std::uint64_t t1 = clock.now_ns();
@@ -401,6 +413,7 @@ bool replay(const KeyframeStream& stream, std::uint32_t warmup, std::uint64_t bu
     const std::uint64_t t2 = clock.now_ns();
     encoder.encode(k + 1, window, inc, status);
     const std::uint64_t t3 = clock.now_ns();
+    const std::uint64_t cpu3 = thread_cpu_ns();
     counter.pause();
     // --- outside the path: bookkeeping and checks ---
     if (added != core::Status::kOk ||
@@ -418,6 +431,7 @@ bool replay(const KeyframeStream& stream, std::uint32_t warmup, std::uint64_t bu
     r->decide.ns.push_back(st.decide_ns);
     r->publish.ns.push_back(t3 - t2);
     r->e2e.ns.push_back(t3 - t0);
+    r->e2e_cpu.ns.push_back(cpu3 - cpu0);
     ++r->decisions;
     r->exhausted += status == core::Status::kBudgetExhausted;
     r->deferred += inc.deferred();
@@ -578,7 +592,7 @@ int main(int argc, char** argv) {
     std::printf("budget: none\n");
   }
   std::printf("%-12s %9s %9s %9s %9s %9s  (ms)\n", "stage", "p50", "p90", "p99", "p99.9", "max");
-  for (const Histogram* h : {&r.ingest, &r.network, &r.solve, &r.decide, &r.publish, &r.e2e}) {
+  for (const Histogram* h : {&r.ingest, &r.network, &r.solve, &r.decide, &r.publish, &r.e2e, &r.e2e_cpu}) {
     std::printf("%-12s %9.3f %9.3f %9.3f %9.3f %9.3f\n", h->name, h->p(0.5), h->p(0.9), h->p(0.99),
                 h->p(0.999), h->max());
   }
@@ -616,6 +630,12 @@ int main(int argc, char** argv) {
                 " allocations %llu; this policy's p50 %.2fx, p99 %.2fx the reference's\n",
                 ref.e2e.p(0.5), ref.e2e.p(0.99), ref.exhausted, static_cast<unsigned long long>(ref.allocations),
                 ratio(r.e2e.p(0.5), ref.e2e.p(0.5)), ratio(r.e2e.p(0.99), ref.e2e.p(0.99)));
+    for (const auto& [mine, theirs] : {std::pair{&r.ingest, &ref.ingest}, {&r.network, &ref.network},
+                                       {&r.solve, &ref.solve}, {&r.decide, &ref.decide}, {&r.e2e_cpu, &ref.e2e_cpu}}) {
+      std::printf("  %-10s p50 %.3f (reference %.3f, %.2fx)  p99 %.3f (reference %.3f, %.2fx)\n", mine->name,
+                  mine->p(0.5), theirs->p(0.5), ratio(mine->p(0.5), theirs->p(0.5)), mine->p(0.99),
+                  theirs->p(0.99), ratio(mine->p(0.99), theirs->p(0.99)));
+    }
   }
 
   LcmResult lcm;
@@ -660,14 +680,18 @@ int main(int argc, char** argv) {
       "\"decisions_digest\":\"%016llx\",\"reference\":\"%s\",\"reference_e2e_p50_ms\":%.4f,"
       "\"reference_e2e_p99_ms\":%.4f,\"reference_budget_exhausted\":%u,"
       "\"reference_allocations_after_warmup\":%llu,\"reference_decisions_digest\":\"%016llx\","
-      "\"p50_ratio_to_paper\":%.3f,\"p99_ratio_to_paper\":%.3f,",
+      "\"p50_ratio_to_paper\":%.3f,\"p99_ratio_to_paper\":%.3f,"
+      "\"e2e_cpu_p50_ms\":%.4f,\"e2e_cpu_p99_ms\":%.4f,\"reference_e2e_cpu_p50_ms\":%.4f,"
+      "\"reference_e2e_cpu_p99_ms\":%.4f,\"cpu_p50_ratio_to_paper\":%.3f,\"cpu_p99_ratio_to_paper\":%.3f,",
       core::to_string(o.params.scope), o.params.coverage_floor, core::to_string(o.params.cost_model),
       camera ? "true" : "false", unmapped_per_kf, r.floor_bound,
       static_cast<unsigned long long>(r.floor_promoted),
       r.decisions > 0 ? static_cast<double>(r.out_of_scope) / r.decisions : 0.0,
       static_cast<unsigned long long>(r.digest), with_reference ? "paper" : "self", ref.e2e.p(0.5), ref.e2e.p(0.99),
       ref.exhausted, static_cast<unsigned long long>(ref.allocations), static_cast<unsigned long long>(ref.digest),
-      ratio(r.e2e.p(0.5), ref.e2e.p(0.5)), ratio(r.e2e.p(0.99), ref.e2e.p(0.99)));
+      ratio(r.e2e.p(0.5), ref.e2e.p(0.5)), ratio(r.e2e.p(0.99), ref.e2e.p(0.99)), r.e2e_cpu.p(0.5),
+      r.e2e_cpu.p(0.99), ref.e2e_cpu.p(0.5), ref.e2e_cpu.p(0.99), ratio(r.e2e_cpu.p(0.5), ref.e2e_cpu.p(0.5)),
+      ratio(r.e2e_cpu.p(0.99), ref.e2e_cpu.p(0.99)));
   std::printf("\"identical_decisions\":%s}\n", identical ? "true" : "false");
   return identical ? 0 : 1;
 }
