@@ -59,7 +59,7 @@ struct Options {
   std::int64_t unmapped = -1;  // unmapped keypoints per keyframe; -1: see usage()
 };
 
-// The policy differs from the paper's method as the library defaults it.
+// The policy is the paper's method as the library defaults it.
 bool is_reference(const core::Params& p) {
   const core::Params paper;
   return p.scope == paper.scope && p.coverage_floor == paper.coverage_floor && p.cost_model == paper.cost_model;
@@ -232,14 +232,14 @@ struct Answer {
   std::uint64_t solve_ns = 0, slide_ns = 0;  // sampled windows: update()'s solve, and all of it
 };
 
-// FNV-1a over each point's id, verdict and flow; for an unfinished decision
-// over each id and whether it was skipped, all that is fixed then (and that
-// nothing is culled, checked apart).
 constexpr std::uint64_t kFnvBasis = 1469598103934665603ull;
 void fnv_mix(std::uint64_t* h, std::uint64_t x) {
   for (int b = 0; b < 8; ++b) *h = (*h ^ ((x >> (8 * b)) & 0xff)) * 1099511628211ull;
 }
 
+// FNV-1a over each point's id, verdict and flow; for an unfinished decision
+// over each id and whether it was skipped, all that is fixed then (and that
+// nothing is culled, checked apart).
 std::uint64_t digest(const core::Sparsifier& s, bool unfinished) {
   std::uint64_t h = kFnvBasis;
   const auto mix = [&h](std::uint64_t x) { fnv_mix(&h, x); };
@@ -368,9 +368,8 @@ bool replay(const KeyframeStream& stream, std::uint32_t warmup, std::uint64_t bu
   core::Params unpolicied = params;
   unpolicied.scope = core::Scope::kWindow;
   unpolicied.coverage_floor = 0;
-  const bool policies = unpolicied.scope != params.scope || unpolicied.coverage_floor != params.coverage_floor;
   std::unique_ptr<core::Sparsifier> raw;
-  if (policies) {
+  if (params.scope != core::Scope::kWindow || params.coverage_floor > 0) {
     raw = std::make_unique<core::Sparsifier>(caps, unpolicied, core::SolveMode::kFromScratch,
                                              core::Start::kZeroFlow);
   }
