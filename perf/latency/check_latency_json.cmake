@@ -1,33 +1,95 @@
 # Runs keepless_latency on the small workload and checks its last stdout line
 # (a JSON object): every documented key is present, identical_decisions is
 # true and allocations_after_warmup is 0. Timings are not asserted.
-execute_process(
-  COMMAND ${BIN} --workload small --keyframes 40 --compare 3 --reps 1 --budget-ms 0
-  OUTPUT_VARIABLE out ERROR_VARIABLE err RESULT_VARIABLE rc)
-if(NOT rc EQUAL 0)
-  message(FATAL_ERROR "keepless_latency exited with ${rc}\n${out}\n${err}")
-endif()
-string(STRIP "${out}" out)
-string(REGEX REPLACE ".*\n" "" last "${out}")
-foreach(key workload decisions e2e_p50_ms e2e_p99_ms e2e_max_ms budget_exhausted
-            allocations_after_warmup footprint_bytes ours_scratch_median_ms incremental_median_ms
-            lemon_ns_median_ms lemon_cs_median_ms closed_form_median_ms ours_zero_flow_median_ms
-            slide_zero_flow_median_ms identical_decisions)
-  string(JSON value ERROR_VARIABLE missing GET "${last}" ${key})
-  if(missing)
-    message(FATAL_ERROR "key ${key} missing from: ${last}")
+#
+# With -DCOST=authors|information (optionally -DFLOOR=L) it also runs that
+# cost model and checks the policy's keys: the stream carried what the model
+# reads, the in-process paper reference decided exactly what the plain paper
+# run decided (the extras change nothing for it), the model decided
+# differently (it used them), and neither replay allocated.
+cmake_minimum_required(VERSION 3.20)  # quoted if() arguments are strings (CMP0054)
+
+function(run_latency last_var)
+  execute_process(
+    COMMAND ${BIN} --workload small --keyframes 40 --compare 3 --reps 1 --budget-ms 0 ${ARGN}
+    OUTPUT_VARIABLE out ERROR_VARIABLE err RESULT_VARIABLE rc)
+  if(NOT rc EQUAL 0)
+    message(FATAL_ERROR "keepless_latency ${ARGN} exited with ${rc}\n${out}\n${err}")
   endif()
-endforeach()
-string(JSON identical GET "${last}" identical_decisions)
-string(JSON allocations GET "${last}" allocations_after_warmup)
-string(JSON decisions GET "${last}" decisions)
-string(JSON workload GET "${last}" workload)
-if(NOT identical STREQUAL "ON" AND NOT identical STREQUAL "true")
-  message(FATAL_ERROR "identical_decisions is ${identical}: ${last}")
+  string(STRIP "${out}" out)
+  string(REGEX REPLACE ".*\n" "" last "${out}")
+  foreach(key workload decisions e2e_p50_ms e2e_p99_ms e2e_max_ms budget_exhausted
+              allocations_after_warmup footprint_bytes ours_scratch_median_ms incremental_median_ms
+              lemon_ns_median_ms lemon_cs_median_ms closed_form_median_ms ours_zero_flow_median_ms
+              slide_zero_flow_median_ms identical_decisions
+              scope coverage_floor cost_model intrinsics_and_depths unmapped_per_kf floor_bound_decisions
+              floor_promoted out_of_scope_mean decisions_digest reference reference_e2e_p50_ms
+              reference_e2e_p99_ms reference_allocations_after_warmup reference_decisions_digest
+              p50_ratio_to_paper p99_ratio_to_paper)
+    string(JSON value ERROR_VARIABLE missing GET "${last}" ${key})
+    if(missing)
+      message(FATAL_ERROR "key ${key} missing from: ${last}")
+    endif()
+  endforeach()
+  string(JSON identical GET "${last}" identical_decisions)
+  string(JSON allocations GET "${last}" allocations_after_warmup)
+  string(JSON ref_allocations GET "${last}" reference_allocations_after_warmup)
+  string(JSON decisions GET "${last}" decisions)
+  string(JSON workload GET "${last}" workload)
+  string(JSON exhausted GET "${last}" budget_exhausted)
+  if(NOT identical STREQUAL "ON" AND NOT identical STREQUAL "true")
+    message(FATAL_ERROR "identical_decisions is ${identical}: ${last}")
+  endif()
+  if(NOT allocations EQUAL 0 OR NOT ref_allocations EQUAL 0)
+    message(FATAL_ERROR "allocations after warm-up ${allocations} (reference ${ref_allocations}): ${last}")
+  endif()
+  if(NOT decisions EQUAL 40 OR NOT workload STREQUAL "small" OR NOT exhausted EQUAL 0)
+    message(FATAL_ERROR "unexpected run: ${last}")
+  endif()
+  set(${last_var} "${last}" PARENT_SCOPE)
+endfunction()
+
+run_latency(paper_json)
+string(JSON reference GET "${paper_json}" reference)
+string(JSON paper_digest GET "${paper_json}" decisions_digest)
+string(JSON paper_model GET "${paper_json}" cost_model)
+if(NOT reference STREQUAL "self" OR NOT paper_model STREQUAL "paper")
+  message(FATAL_ERROR "the default run is its own paper reference: ${paper_json}")
 endif()
-if(NOT allocations EQUAL 0)
-  message(FATAL_ERROR "allocations_after_warmup is ${allocations}: ${last}")
+if(NOT DEFINED COST)
+  return()
 endif()
-if(NOT decisions EQUAL 40 OR NOT workload STREQUAL "small")
-  message(FATAL_ERROR "unexpected run: ${last}")
+
+set(args --cost ${COST})
+if(DEFINED FLOOR)
+  list(APPEND args --floor ${FLOOR})
+endif()
+run_latency(policy_json ${args})
+string(JSON model GET "${policy_json}" cost_model)
+string(JSON reference GET "${policy_json}" reference)
+string(JSON floor GET "${policy_json}" coverage_floor)
+string(JSON camera GET "${policy_json}" intrinsics_and_depths)
+string(JSON unmapped GET "${policy_json}" unmapped_per_kf)
+string(JSON digest GET "${policy_json}" decisions_digest)
+string(JSON reference_digest GET "${policy_json}" reference_decisions_digest)
+if(NOT model STREQUAL COST OR NOT reference STREQUAL "paper")
+  message(FATAL_ERROR "expected cost_model ${COST} against the paper reference: ${policy_json}")
+endif()
+if(DEFINED FLOOR AND NOT floor EQUAL FLOOR)
+  message(FATAL_ERROR "coverage_floor is ${floor}, not ${FLOOR}: ${policy_json}")
+endif()
+# What each model reads: information the intrinsics and depths, authors the
+# unmapped keypoints (half the small workload's 600 observations a keyframe).
+if(COST STREQUAL "information" AND NOT (camera STREQUAL "ON" OR camera STREQUAL "true"))
+  message(FATAL_ERROR "--cost information ran without intrinsics and depths: ${policy_json}")
+endif()
+if(COST STREQUAL "authors" AND NOT unmapped EQUAL 300)
+  message(FATAL_ERROR "--cost authors ran with ${unmapped} unmapped keypoints a keyframe: ${policy_json}")
+endif()
+if(NOT reference_digest STREQUAL paper_digest)
+  message(FATAL_ERROR "the paper's decisions changed with the ${COST} extras in the stream: "
+                      "${reference_digest} vs ${paper_digest}")
+endif()
+if(digest STREQUAL paper_digest)
+  message(FATAL_ERROR "--cost ${COST} decided exactly as the paper model on every window: ${policy_json}")
 endif()

@@ -184,9 +184,13 @@ bool cast(const Pose& pose, double u, double v, Vec3* hit, int* surface) {
   return true;
 }
 
-bool project(const Pose& pose, Vec3 p, Rng* rng, double* u, double* v) {
+// Camera-frame z of a world point.
+double depth_in(const Pose& pose, Vec3 p) { return dot(pose.z, p - pose.c); }
+
+bool project(const Pose& pose, Vec3 p, Rng* rng, double* u, double* v, double* depth) {
   const Vec3 d = p - pose.c;
-  const double z = dot(pose.z, d);
+  const double z = depth_in(pose, p);
+  *depth = z;
   if (z < kMinDepth || z > kMaxDepth) return false;
   *u = kFocal * dot(pose.x, d) / z + kCx + rng->gauss(kPixelSigma);
   *v = kFocal * dot(pose.y, d) / z + kCy + rng->gauss(kPixelSigma);
@@ -199,6 +203,7 @@ struct Track {
   std::uint32_t first = 0;         // keyframe index of the first view
   std::vector<std::uint32_t> kfs;  // ascending
   std::vector<double> uv;          // u, v per view
+  std::vector<double> depth;       // camera-frame z per view
 };
 
 // A surface point with a feature, seen from `pose`: rejection sampling on the
@@ -232,7 +237,7 @@ std::vector<Track> generate(const SyntheticSpec& spec, const std::vector<Pose>& 
   const auto pose = [&](std::int64_t g) -> const Pose& { return poses[g - lo]; };
   std::vector<Track> tracks(spec.points);
   std::vector<std::int64_t> before;
-  std::vector<double> before_uv;
+  std::vector<double> before_uv, before_depth;
   for (Track& t : tracks) {
     // A track wholly outside the window is drawn again; after 64 tries the
     // anchor is forced inside (bounded; the chance is >= 1/3 per try).
@@ -253,25 +258,26 @@ std::vector<Track> generate(const SyntheticSpec& spec, const std::vector<Pose>& 
       const std::uint32_t back = rng.below(length);
       const std::uint32_t ahead = length - 1 - back;
 
-      before.clear(), before_uv.clear();
+      before.clear(), before_uv.clear(), before_depth.clear();
       for (std::int64_t g = anchor - 1; g >= anchor - back && g >= lo; --g) {
-        double pu = 0, pv = 0;
-        if (!project(pose(g), p, &rng, &pu, &pv)) break;
-        before.push_back(g), before_uv.push_back(pu), before_uv.push_back(pv);
+        double pu = 0, pv = 0, z = 0;
+        if (!project(pose(g), p, &rng, &pu, &pv, &z)) break;
+        before.push_back(g), before_uv.push_back(pu), before_uv.push_back(pv), before_depth.push_back(z);
       }
-      const auto keep = [&](std::int64_t g, double pu, double pv) {
+      const auto keep = [&](std::int64_t g, double pu, double pv, double z) {
         if (g < 0 || g >= k) return;
         t.kfs.push_back(static_cast<std::uint32_t>(g));
         t.uv.push_back(pu), t.uv.push_back(pv);
+        t.depth.push_back(z);
       };
       for (std::size_t i = before.size(); i-- > 0;) {
-        keep(before[i], before_uv[2 * i], before_uv[2 * i + 1]);
+        keep(before[i], before_uv[2 * i], before_uv[2 * i + 1], before_depth[i]);
       }
-      keep(anchor, u, v);
+      keep(anchor, u, v, depth_in(pose(anchor), p));
       for (std::int64_t g = anchor + 1; g <= anchor + ahead && g < hi; ++g) {
-        double pu = 0, pv = 0;
-        if (!project(pose(g), p, &rng, &pu, &pv)) break;
-        keep(g, pu, pv);
+        double pu = 0, pv = 0, z = 0;
+        if (!project(pose(g), p, &rng, &pu, &pv, &z)) break;
+        keep(g, pu, pv, z);
       }
     }
     t.first = t.kfs.front();
@@ -302,7 +308,8 @@ bool workload_spec(const std::string& name, SyntheticSpec* spec) {
   return true;
 }
 
-core::WindowFile make_synthetic_window(const SyntheticSpec& spec) {
+core::WindowFile make_synthetic_window(const SyntheticSpec& spec,
+                                       std::vector<std::vector<core::Keypoint>>* unmapped) {
   core::WindowFile file;
   if (spec.keyframes == 0) return file;
   std::uint64_t salt_state = spec.seed;
@@ -356,6 +363,7 @@ core::WindowFile make_synthetic_window(const SyntheticSpec& spec) {
     double q[4];
     orientation(pose, q);
     for (int c = 0; c < 4; ++c) kf.orientation[c] = round_to(q[c], 1e9);
+    if (spec.camera) kf.fx = kFocal, kf.fy = kFocal, kf.cx = kCx, kf.cy = kCy;
   }
   for (std::uint32_t rank = 0; rank < order.size(); ++rank) {
     const Track& t = tracks[order[rank]];
@@ -364,7 +372,27 @@ core::WindowFile make_synthetic_window(const SyntheticSpec& spec) {
       o.point = 1000 + static_cast<std::uint64_t>(rank);
       o.u = round_to(t.uv[2 * view], 1e3);
       o.v = round_to(t.uv[2 * view + 1], 1e3);
+      if (spec.camera) o.depth = round_to(t.depth[view], 1e6);
       file.observations[t.kfs[view]].push_back(o);
+    }
+  }
+  if (spec.unmapped_per_kf > 0 && unmapped != nullptr) {
+    // Their own stream, after everything above: the map is the same with or
+    // without them.
+    Rng rng(spec.seed ^ 0x756e6d6170706564ULL);
+    unmapped->assign(spec.keyframes, {});
+    for (std::uint32_t i = 0; i < spec.keyframes; ++i) {
+      std::vector<core::Keypoint>& list = (*unmapped)[i];
+      list.resize(spec.unmapped_per_kf);
+      for (core::Keypoint& kp : list) {
+        Vec3 p;
+        double u = 0, v = 0;
+        sample_point(poses[margin + i], salt, &rng, &p, &u, &v);
+        kp.u = std::min(round_to(u, 1e3), kWidth - 0.001);
+        kp.v = std::min(round_to(v, 1e3), kHeight - 0.001);
+      }
+      file.keyframes[i].unmapped = list.data();
+      file.keyframes[i].unmapped_count = spec.unmapped_per_kf;
     }
   }
   file.needs = core::compute_needs(file);

@@ -8,16 +8,23 @@
 // NetworkSimplex and CostScaling after Preflow, the per-pair closed form)
 // and checks that every path decides the same: each window is also decided
 // from scratch by successive shortest paths from zero flow, independently
-// of the closed-form start. With --lcm it measures
-// keyframe-published -> decision-received across keepless_node on loopback.
-// The last stdout line is one JSON object.
+// of the closed-form start. --scope, --floor and --cost set the decision
+// policy (core::Params); the stream then carries what the cost model reads
+// (intrinsics and depths, unmapped keypoints), and a second replay of the
+// same stream with the paper's defaults, in the same process, is the
+// reference the figures are divided by. With --lcm it measures
+// keyframe-published -> decision-received across keepless_node on loopback
+// (the node with its default policy). The last stdout line is one JSON object.
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <ctime>
+#include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "compare.hpp"
@@ -48,14 +55,29 @@ struct Options {
   std::uint32_t reps = 3;                   // timing repetitions per sampled window (min kept)
   bool lcm = false;
   std::string log;
+  core::Params params;  // scope, coverage_floor, cost_model; the rest the paper's defaults
+  std::int64_t unmapped = -1;  // unmapped keypoints per keyframe; -1: see usage()
 };
+
+// The policy is the paper's method as the library defaults it.
+bool is_reference(const core::Params& p) {
+  const core::Params paper;
+  return p.scope == paper.scope && p.coverage_floor == paper.coverage_floor && p.cost_model == paper.cost_model;
+}
 
 void usage() {
   std::fprintf(stderr,
                "usage: keepless_latency [--workload small|orbslam|large|map] [--keyframes N]\n"
                "         [--warmup N] [--seed S] [--cpus LIST] [--mlock] [--budget-ms MS]\n"
                "         [--budget-fraction F] [--compare WINDOWS] [--reps R] [--lcm] [--log FILE]\n"
+               "         [--scope window|newest] [--floor L] [--cost paper|authors|information]\n"
+               "         [--unmapped N]\n"
                "  --keyframes N       decisions measured after warm-up (default: 1000; map: 3)\n"
+               "  --scope, --floor, --cost  the decision policy (keepless_node's flags); other than\n"
+               "                      the defaults (window, 0, paper), the same stream is replayed\n"
+               "                      again with them as the reference of the *_ratio_to_paper figures\n"
+               "  --unmapped N        unmapped keypoints per keyframe (default: half the workload's\n"
+               "                      observations per keyframe with --cost authors, else 0)\n"
                "  --budget-ms MS      latency target per decision, from keyframe arrival; the\n"
                "                      solver's deadline is at 90%% of it (default %.1f, the\n"
                "                      node's; 0: none)\n"
@@ -91,6 +113,16 @@ bool parse(int argc, char** argv, Options* o) {
       o->cpus = v;
     } else if (a == "--log") {
       o->log = v;
+    } else if (a == "--scope") {
+      if (!core::parse_scope(v, &o->params.scope)) {
+        std::fprintf(stderr, "keepless_latency: bad --scope '%s' (window or newest)\n", v);
+        return false;
+      }
+    } else if (a == "--cost") {
+      if (!core::parse_cost_model(v, &o->params.cost_model)) {
+        std::fprintf(stderr, "keepless_latency: bad --cost '%s' (paper, authors or information)\n", v);
+        return false;
+      }
     } else if (a == "--budget-ms" || a == "--budget-fraction") {
       const double x = std::strtod(v, &end);
       if (end == v || *end != '\0' || !std::isfinite(x) || x < 0) {
@@ -98,7 +130,8 @@ bool parse(int argc, char** argv, Options* o) {
         return false;
       }
       (a == "--budget-ms" ? o->budget_ms : o->budget_fraction) = x;
-    } else if (a == "--keyframes" || a == "--warmup" || a == "--seed" || a == "--compare" || a == "--reps") {
+    } else if (a == "--keyframes" || a == "--warmup" || a == "--seed" || a == "--compare" || a == "--reps" ||
+               a == "--floor" || a == "--unmapped") {
       const unsigned long long x = std::strtoull(v, &end, 10);
       if (end == v || *end != '\0' || v[0] == '-') {
         std::fprintf(stderr, "keepless_latency: bad %s '%s'\n", a.c_str(), v);
@@ -106,6 +139,13 @@ bool parse(int argc, char** argv, Options* o) {
       }
       if (a == "--seed") {
         o->seed = x;
+      } else if (a == "--floor" || a == "--unmapped") {
+        if (x > 0xffffffffull) {
+          std::fprintf(stderr, "keepless_latency: bad %s '%s'\n", a.c_str(), v);
+          return false;
+        }
+        if (a == "--floor") o->params.coverage_floor = static_cast<std::uint32_t>(x);
+        if (a == "--unmapped") o->unmapped = static_cast<std::int64_t>(x);
       } else {
         std::uint32_t& t = a == "--keyframes" ? o->keyframes
                            : a == "--warmup"  ? o->warmup
@@ -122,6 +162,15 @@ bool parse(int argc, char** argv, Options* o) {
 }
 
 double ms(std::uint64_t ns) { return static_cast<double>(ns) * 1e-6; }
+
+// This thread's CPU time: the decision path's cost without the time another
+// process held the core (on a shared machine the wall-clock tail is mostly
+// that).
+std::uint64_t thread_cpu_ns() {
+  timespec ts{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return static_cast<std::uint64_t>(ts.tv_sec) * 1000000000ull + static_cast<std::uint64_t>(ts.tv_nsec);
+}
 
 // Nearest-rank percentile of a sorted sample.
 std::uint64_t percentile(const std::vector<std::uint64_t>& sorted, double p) {
@@ -149,8 +198,15 @@ struct Histogram {
 struct Replay {
   // Per measured decision.
   Histogram ingest{"ingest", {}}, network{"network", {}}, solve{"solve", {}}, decide{"decide", {}},
-      publish{"publish", {}}, e2e{"end-to-end", {}};
+      publish{"publish", {}}, e2e{"end-to-end", {}}, e2e_cpu{"CPU time", {}};
   std::uint32_t decisions = 0, exhausted = 0, deferred = 0, late = 0, mismatches = 0, failures = 0;
+  // The policy at work: decisions where the coverage floor bound, the points
+  // it promoted back, and points skipped as out of scope, over all decisions.
+  std::uint32_t floor_bound = 0;
+  std::uint64_t floor_promoted = 0, out_of_scope = 0;
+  // FNV-1a over every measured decision's digest() (see Answer): the same
+  // for the same stream and policy when no budget ran out (--budget-ms 0).
+  std::uint64_t digest = 0;
   std::uint64_t allocations = 0;
   std::size_t footprint = 0;
   core::Capacities caps{};
@@ -176,14 +232,17 @@ struct Answer {
   std::uint64_t solve_ns = 0, slide_ns = 0;  // sampled windows: update()'s solve, and all of it
 };
 
+constexpr std::uint64_t kFnvBasis = 1469598103934665603ull;
+void fnv_mix(std::uint64_t* h, std::uint64_t x) {
+  for (int b = 0; b < 8; ++b) *h = (*h ^ ((x >> (8 * b)) & 0xff)) * 1099511628211ull;
+}
+
 // FNV-1a over each point's id, verdict and flow; for an unfinished decision
 // over each id and whether it was skipped, all that is fixed then (and that
 // nothing is culled, checked apart).
 std::uint64_t digest(const core::Sparsifier& s, bool unfinished) {
-  std::uint64_t h = 1469598103934665603ull;
-  const auto mix = [&h](std::uint64_t x) {
-    for (int b = 0; b < 8; ++b) h = (h ^ ((x >> (8 * b)) & 0xff)) * 1099511628211ull;
-  };
+  std::uint64_t h = kFnvBasis;
+  const auto mix = [&h](std::uint64_t x) { fnv_mix(&h, x); };
   for (std::uint32_t i = 0; i < s.decision_count(); ++i) {
     const core::PointDecision& d = s.decisions()[i];
     mix(d.point);
@@ -221,6 +280,8 @@ bool agrees(const Answer& a, const core::Sparsifier& ref) {
   return a.total_cost == ref.summary().total_cost && a.max_flow == ref.summary().max_flow;
 }
 
+// `scratch`: the window decided from scratch without the policies (scope
+// window, no floor), whose verdicts follow from the flows alone.
 void compare_window(const core::Sparsifier& scratch, const core::Capacities& caps, const Options& o,
                     const solver::Clock& clock, Replay* r) {
   ArcList net;
@@ -294,15 +355,24 @@ bool slide_in(const KeyframeStream& stream, std::uint32_t k, core::Window& windo
 
 // One pass over the stream. budget_ns == 0: no deadline.
 bool replay(const KeyframeStream& stream, std::uint32_t warmup, std::uint64_t budget_ns,
-            const Options& o, bool compare, Replay* r) {
+            const core::Params& params, const Options& o, bool compare, Replay* r) {
   const core::Capacities caps = window_needs(stream);
   r->caps = caps;
-  const core::Params params;
   core::Window window(caps);
   core::Sparsifier inc(caps, params, core::SolveMode::kIncremental);
   // The independent check: from scratch, successive shortest paths from zero flow.
   core::Sparsifier scratch(caps, params, core::SolveMode::kFromScratch, core::Start::kZeroFlow);
   core::Sparsifier fresh(caps, params);  // run() as the library does it, timed on sampled windows
+  // The sampled windows' solvers are compared on the optimum before the
+  // policies act on it (same cost model).
+  core::Params unpolicied = params;
+  unpolicied.scope = core::Scope::kWindow;
+  unpolicied.coverage_floor = 0;
+  std::unique_ptr<core::Sparsifier> raw;
+  if (params.scope != core::Scope::kWindow || params.coverage_floor > 0) {
+    raw = std::make_unique<core::Sparsifier>(caps, unpolicied, core::SolveMode::kFromScratch,
+                                             core::Start::kZeroFlow);
+  }
   DecisionEncoder encoder(caps);
   solver::SteadyClock clock;
   inc.set_clock(&clock);
@@ -311,7 +381,7 @@ bool replay(const KeyframeStream& stream, std::uint32_t warmup, std::uint64_t bu
 
   const auto total = static_cast<std::uint32_t>(stream.keyframes.size());
   const std::uint32_t measured = total > warmup ? total - warmup : 0;
-  for (Histogram* h : {&r->ingest, &r->network, &r->solve, &r->decide, &r->publish, &r->e2e}) {
+  for (Histogram* h : {&r->ingest, &r->network, &r->solve, &r->decide, &r->publish, &r->e2e, &r->e2e_cpu}) {
     h->ns.clear();
     h->ns.reserve(measured);
   }
@@ -327,6 +397,7 @@ bool replay(const KeyframeStream& stream, std::uint32_t warmup, std::uint64_t bu
     if (measuring) counter.resume();
     // --- the decision path ---
     const std::uint64_t t0 = clock.now_ns();  // the keyframe arrives
+    const std::uint64_t cpu0 = thread_cpu_ns();
     core::Status added = core::Status::kOk;
     if (!slide_in(stream, k, window, &added)) return false;
     const std::uint64_t t1 = clock.now_ns();
@@ -341,6 +412,7 @@ bool replay(const KeyframeStream& stream, std::uint32_t warmup, std::uint64_t bu
     const std::uint64_t t2 = clock.now_ns();
     encoder.encode(k + 1, window, inc, status);
     const std::uint64_t t3 = clock.now_ns();
+    const std::uint64_t cpu3 = thread_cpu_ns();
     counter.pause();
     // --- outside the path: bookkeeping and checks ---
     if (added != core::Status::kOk ||
@@ -358,12 +430,16 @@ bool replay(const KeyframeStream& stream, std::uint32_t warmup, std::uint64_t bu
     r->decide.ns.push_back(st.decide_ns);
     r->publish.ns.push_back(t3 - t2);
     r->e2e.ns.push_back(t3 - t0);
+    r->e2e_cpu.ns.push_back(cpu3 - cpu0);
     ++r->decisions;
     r->exhausted += status == core::Status::kBudgetExhausted;
     r->deferred += inc.deferred();
     r->late += budget_ns > 0 && t3 - t0 > budget_ns;
     points += inc.summary().points;
     arcs += inc.summary().arcs;
+    r->floor_bound += inc.summary().floor_keyframes > 0;
+    r->floor_promoted += inc.summary().floor_promoted;
+    r->out_of_scope += inc.summary().out_of_scope;
 
     Answer a = answer_of(k, inc, status);
     if (stride > 0 && (k - warmup) % stride == stride / 2 && sampled < o.compare &&
@@ -397,8 +473,14 @@ bool replay(const KeyframeStream& stream, std::uint32_t warmup, std::uint64_t bu
     const std::uint64_t f0 = clock.now_ns();
     if (fresh.run(check) != core::Status::kOk || !agrees(a, fresh)) ++r->mismatches;
     r->slide_scratch.push_back(clock.now_ns() - f0);
-    compare_window(scratch, caps, o, clock, r);
+    if (raw && raw->run(check) != core::Status::kOk) {
+      ++r->mismatches;
+      continue;
+    }
+    compare_window(raw ? *raw : scratch, caps, o, clock, r);
   }
+  r->digest = kFnvBasis;
+  for (const Answer& a : answers) fnv_mix(&r->digest, a.digest);
   r->points_mean = r->decisions > 0 ? points / r->decisions : 0;
   r->arcs_mean = r->decisions > 0 ? arcs / r->decisions : 0;
   return true;
@@ -448,7 +530,13 @@ int main(int argc, char** argv) {
     }
     const std::uint32_t k = spec.keyframes;
     const std::uint32_t warmup = o.warmup > 0 ? o.warmup : k;
-    if (!make_stream(o.workload, k - 1 + warmup + measured, o.seed, &stream)) return 2;
+    StreamExtras extras;
+    extras.camera = o.params.cost_model == core::CostModel::kInformation;
+    const bool authors = o.params.cost_model == core::CostModel::kAuthors;
+    extras.unmapped_per_kf = o.unmapped >= 0 ? static_cast<std::uint32_t>(o.unmapped)
+                             : authors      ? spec.obs_per_kf / 2
+                                            : 0;
+    if (!make_stream(o.workload, k - 1 + warmup + measured, o.seed, extras, &stream)) return 2;
     o.warmup = k - 1 + warmup;
   }
   if (!o.log.empty() && o.warmup == 0) o.warmup = stream.window;
@@ -458,18 +546,36 @@ int main(int argc, char** argv) {
               static_cast<unsigned long long>(o.seed));
   std::printf("cpus: requested %s, granted %s (%s); mlock: %s\n", o.cpus.empty() ? "-" : o.cpus.c_str(),
               granted.c_str(), pin_note.c_str(), lock_note.c_str());
+  const bool with_reference = !is_reference(o.params);
+  const std::uint32_t unmapped_per_kf = stream.keyframes.empty() ? 0 : stream.keyframes[0].unmapped_count;
+  // Intrinsics on the keyframes and a depth on every observation.
+  bool camera = !stream.keyframes.empty();
+  for (std::size_t k = 0; k < stream.keyframes.size() && camera; ++k) {
+    camera = stream.keyframes[k].fx > 0;
+    for (const core::Observation& ob : stream.observations[k]) camera = camera && ob.depth > 0;
+  }
+  std::printf("policy: scope %s, floor %u, cost %s; stream: intrinsics and depths %s, %u unmapped keypoints"
+              " per keyframe; reference: %s\n",
+              core::to_string(o.params.scope), o.params.coverage_floor, core::to_string(o.params.cost_model),
+              camera ? "yes" : "no", unmapped_per_kf,
+              with_reference ? "the paper's defaults on the same stream, replayed after" : "this run");
 
   double budget_ms = o.budget_ms;
   Replay calibration;
   if (o.budget_fraction > 0) {
-    if (!replay(stream, o.warmup, 0, o, false, &calibration)) return 1;
+    if (!replay(stream, o.warmup, 0, o.params, o, false, &calibration)) return 1;
     budget_ms = o.budget_fraction * calibration.e2e.p(0.5);
     std::printf("calibration: end-to-end median %.3f ms without a budget -> budget %.3f ms\n",
                 calibration.e2e.p(0.5), budget_ms);
   }
   Replay r;
   const auto budget_ns = static_cast<std::uint64_t>(budget_ms * 1e6);
-  if (!replay(stream, o.warmup, budget_ns, o, true, &r)) return 1;
+  if (!replay(stream, o.warmup, budget_ns, o.params, o, true, &r)) return 1;
+  // The reference right after, on the same stream with the same budget: the
+  // ratios below compare like with like under whatever else the machine runs.
+  Replay ref_run;
+  if (with_reference && !replay(stream, o.warmup, budget_ns, core::Params{}, o, false, &ref_run)) return 1;
+  const Replay& ref = with_reference ? ref_run : r;
 
   std::printf("capacities: %u keyframes, %u points, %u observations, %u pair arcs; footprint %zu bytes;"
               " publish as %s\n",
@@ -485,7 +591,7 @@ int main(int argc, char** argv) {
     std::printf("budget: none\n");
   }
   std::printf("%-12s %9s %9s %9s %9s %9s  (ms)\n", "stage", "p50", "p90", "p99", "p99.9", "max");
-  for (const Histogram* h : {&r.ingest, &r.network, &r.solve, &r.decide, &r.publish, &r.e2e}) {
+  for (const Histogram* h : {&r.ingest, &r.network, &r.solve, &r.decide, &r.publish, &r.e2e, &r.e2e_cpu}) {
     std::printf("%-12s %9.3f %9.3f %9.3f %9.3f %9.3f\n", h->name, h->p(0.5), h->p(0.9), h->p(0.99),
                 h->p(0.999), h->max());
   }
@@ -508,11 +614,28 @@ int main(int argc, char** argv) {
                 median_ms(r.slide_zero_flow));
   }
   const bool identical = r.mismatches == 0 && r.cost_mismatches == 0 && r.lemon_decision_mismatches == 0 &&
-                         r.closed_mismatches == 0 && r.failures == 0 && r.decisions > 0;
+                         r.closed_mismatches == 0 && r.failures == 0 && r.decisions > 0 &&
+                         ref.mismatches == 0 && ref.failures == 0 && ref.decisions == r.decisions;
   std::printf("identical decisions: %s (%u windows incremental vs run() from zero flow; %u LEMON canonical, %u closed form;"
               " cost mismatches %u)\n",
               identical ? "true" : "false", r.decisions, r.lemon_checked, r.compared, r.cost_mismatches);
   std::printf("heap allocations after warm-up: %llu\n", static_cast<unsigned long long>(r.allocations));
+  std::printf("policy at work: floor bound in %u decisions (%llu points promoted), %.1f points out of scope"
+              " per decision\n",
+              r.floor_bound, static_cast<unsigned long long>(r.floor_promoted),
+              r.decisions > 0 ? static_cast<double>(r.out_of_scope) / r.decisions : 0.0);
+  if (with_reference) {
+    std::printf("reference (paper, replayed after): end-to-end p50 %.3f p99 %.3f ms, budget exhausted %u,"
+                " allocations %llu; this policy's p50 %.2fx, p99 %.2fx the reference's\n",
+                ref.e2e.p(0.5), ref.e2e.p(0.99), ref.exhausted, static_cast<unsigned long long>(ref.allocations),
+                ratio(r.e2e.p(0.5), ref.e2e.p(0.5)), ratio(r.e2e.p(0.99), ref.e2e.p(0.99)));
+    for (const auto& [mine, theirs] : {std::pair{&r.ingest, &ref.ingest}, {&r.network, &ref.network},
+                                       {&r.solve, &ref.solve}, {&r.decide, &ref.decide}, {&r.e2e_cpu, &ref.e2e_cpu}}) {
+      std::printf("  %-10s p50 %.3f (reference %.3f, %.2fx)  p99 %.3f (reference %.3f, %.2fx)\n", mine->name,
+                  mine->p(0.5), theirs->p(0.5), ratio(mine->p(0.5), theirs->p(0.5)), mine->p(0.99),
+                  theirs->p(0.99), ratio(mine->p(0.99), theirs->p(0.99)));
+    }
+  }
 
   LcmResult lcm;
   if (o.lcm) {
@@ -540,15 +663,34 @@ int main(int argc, char** argv) {
       "\"ours_zero_flow_median_ms\":%.4f,\"lemon_ns_over_ours_zero_flow\":%.3f,"
       "\"slide_scratch_median_ms\":%.4f,\"slide_incremental_median_ms\":%.4f,"
       "\"slide_zero_flow_median_ms\":%.4f,"
-      "\"lcm_decisions\":%u,\"lcm_p50_ms\":%.4f,\"lcm_p99_ms\":%.4f,\"lcm_max_ms\":%.4f,"
-      "\"identical_decisions\":%s}\n",
+      "\"lcm_decisions\":%u,\"lcm_p50_ms\":%.4f,\"lcm_p99_ms\":%.4f,\"lcm_max_ms\":%.4f,",
       o.workload.c_str(), stream.window, r.decisions, granted.c_str(), o.mlock ? "true" : "false",
       r.e2e.p(0.5), r.e2e.p(0.9), r.e2e.p(0.99), r.e2e.p(0.999), r.e2e.max(), r.ingest.p(0.5), r.ingest.p(0.99),
       r.network.p(0.5), r.network.p(0.99), r.solve.p(0.5), r.solve.p(0.99), r.decide.p(0.5), r.decide.p(0.99),
       r.publish.p(0.5), r.publish.p(0.99), budget_ms, r.exhausted, r.deferred, r.late,
       static_cast<unsigned long long>(r.allocations), r.footprint, r.compared, ours, inc, lemon_ns, lemon_cs,
       closed, ratio(lemon_ns, ours), ratio(ours, closed), ratio(ours, inc), zero, ratio(lemon_ns, zero),
-      median_ms(r.slide_scratch), median_ms(r.slide_incremental), median_ms(r.slide_zero_flow), lcm.decisions, lcm.p50_ms, lcm.p99_ms, lcm.max_ms,
-      identical ? "true" : "false");
+      median_ms(r.slide_scratch), median_ms(r.slide_incremental), median_ms(r.slide_zero_flow), lcm.decisions, lcm.p50_ms, lcm.p99_ms, lcm.max_ms);
+  // The policy and its reference. Digests are hex strings (64 bits do not
+  // survive a JSON number as a double).
+  std::printf(
+      "\"scope\":\"%s\",\"coverage_floor\":%u,\"cost_model\":\"%s\",\"intrinsics_and_depths\":%s,"
+      "\"unmapped_per_kf\":%u,\"floor_bound_decisions\":%u,\"floor_promoted\":%llu,\"out_of_scope_mean\":%.1f,"
+      "\"decisions_digest\":\"%016llx\",\"reference\":\"%s\",\"reference_e2e_p50_ms\":%.4f,"
+      "\"reference_e2e_p99_ms\":%.4f,\"reference_budget_exhausted\":%u,"
+      "\"reference_allocations_after_warmup\":%llu,\"reference_decisions_digest\":\"%016llx\","
+      "\"p50_ratio_to_paper\":%.3f,\"p99_ratio_to_paper\":%.3f,"
+      "\"e2e_cpu_p50_ms\":%.4f,\"e2e_cpu_p99_ms\":%.4f,\"reference_e2e_cpu_p50_ms\":%.4f,"
+      "\"reference_e2e_cpu_p99_ms\":%.4f,\"cpu_p50_ratio_to_paper\":%.3f,\"cpu_p99_ratio_to_paper\":%.3f,",
+      core::to_string(o.params.scope), o.params.coverage_floor, core::to_string(o.params.cost_model),
+      camera ? "true" : "false", unmapped_per_kf, r.floor_bound,
+      static_cast<unsigned long long>(r.floor_promoted),
+      r.decisions > 0 ? static_cast<double>(r.out_of_scope) / r.decisions : 0.0,
+      static_cast<unsigned long long>(r.digest), with_reference ? "paper" : "self", ref.e2e.p(0.5), ref.e2e.p(0.99),
+      ref.exhausted, static_cast<unsigned long long>(ref.allocations), static_cast<unsigned long long>(ref.digest),
+      ratio(r.e2e.p(0.5), ref.e2e.p(0.5)), ratio(r.e2e.p(0.99), ref.e2e.p(0.99)), r.e2e_cpu.p(0.5),
+      r.e2e_cpu.p(0.99), ref.e2e_cpu.p(0.5), ref.e2e_cpu.p(0.99), ratio(r.e2e_cpu.p(0.5), ref.e2e_cpu.p(0.5)),
+      ratio(r.e2e_cpu.p(0.99), ref.e2e_cpu.p(0.99)));
+  std::printf("\"identical_decisions\":%s}\n", identical ? "true" : "false");
   return identical ? 0 : 1;
 }

@@ -18,14 +18,25 @@ struct KeyframeStream {
   std::uint32_t window = 0;  // K
   std::vector<core::Keyframe> keyframes;
   std::vector<std::vector<core::Observation>> observations;
+  // What keyframes[i].unmapped points at (empty without unmapped keypoints).
+  std::vector<std::vector<core::Keypoint>> unmapped;
 };
 
-// `total` keyframes of workload `name`; false for an unknown name.
+// What the cost models read beyond the paper's inputs (SyntheticSpec):
+// intrinsics and depths, unmapped keypoints per keyframe.
+struct StreamExtras {
+  bool camera = false;
+  std::uint32_t unmapped_per_kf = 0;
+};
+
+// `total` keyframes of workload `name`; false for an unknown name. The
+// extras never change the points, views or keypoints of the stream.
 bool make_stream(const std::string& name, std::uint32_t total, std::uint64_t seed,
-                 KeyframeStream* out);
+                 const StreamExtras& extras, KeyframeStream* out);
 
 // The largest needs of any window of the stream (the last K keyframes after
-// each keyframe): the capacities the decision path is sized with, exactly.
+// each keyframe), unmapped keypoints included: the capacities the decision
+// path is sized with, exactly.
 core::Capacities window_needs(const KeyframeStream& stream);
 
 }  // namespace keepless::perf
