@@ -25,6 +25,13 @@ class RecentDuration {
     last_[0] = ns;
   }
   std::uint64_t expected() const { return std::min(last_[0], last_[1]); }
+  // A deferred call measures nothing: halving what is expected instead makes
+  // an estimate from a slow spell (preemption) expire, so deferring cannot
+  // become permanent; a stage that really is that slow is measured again.
+  void decay() {
+    last_[0] /= 2;
+    last_[1] /= 2;
+  }
 
  private:
   std::uint64_t last_[2] = {0, 0};
@@ -201,6 +208,9 @@ struct Sparsifier::Impl {
         for_slots(i, [&](std::uint32_t s) { ++covered[s]; });
       }
     }
+    const std::uint32_t floor = params.coverage_floor;
+    // Most windows hold the floor already: then the culled lists are not needed.
+    if (std::all_of(covered.begin(), covered.begin() + k, [floor](std::uint32_t c) { return c >= floor; })) return;
     for (std::uint32_t s = 0; s < k; ++s) culled_at[s + 1] += culled_at[s];
     for (std::uint32_t i = 0; i < count; ++i) {
       if (!evaluated(i) || decisions[i].verdict != Verdict::kCull) continue;
@@ -209,7 +219,6 @@ struct Sparsifier::Impl {
     for (std::uint32_t s = k; s > 0; --s) culled_at[s] = culled_at[s - 1];
     culled_at[0] = 0;
 
-    const std::uint32_t floor = params.coverage_floor;
     const auto nearer = [this](std::uint32_t a, std::uint32_t b) {
       const PointDecision& x = decisions[a];
       const PointDecision& y = decisions[b];
@@ -310,6 +319,11 @@ Status Sparsifier::update(const Window& window, const solver::Budget& budget) {
                 budget.deadline_ns - u0 <
                     s.network_time.expected() + s.solve_time.expected() + decide_ns);
   if (s.deferred) {
+    if (u0 < budget.deadline_ns) {  // deferred on the estimate, not because the call came late
+      s.network_time.decay();
+      s.solve_time.decay();
+      s.decide_time.decay();
+    }
     s.summary.keyframes = window.keyframe_count();
     s.summary.points = window.distinct_points();
     s.summary.kept = s.summary.points;

@@ -374,6 +374,7 @@ class SteppingClock final : public solver::Clock {
  public:
   explicit SteppingClock(std::uint64_t step) : step_(step) {}
   std::uint64_t now_ns() const override { return now_ += step_; }
+  void set_step(std::uint64_t step) { step_ = step; }
 
  private:
   std::uint64_t step_;
@@ -452,6 +453,53 @@ TEST(Incremental, DefersOnlyWhenLessTimeIsLeftThanTheNetworkAndDecidingTake) {
   ASSERT_EQ(s.update(window, budget(10000000)), Status::kOk);
   EXPECT_FALSE(s.deferred());
   EXPECT_TRUE(same_result(s, ref));
+}
+
+// Two slides preempted (every stage 3 ms) must not make the path defer every
+// later keyframe once the machine is fast again: a deferral measures
+// nothing, so the slow estimate has to expire on its own.
+TEST(Incremental, ASlowSpellDoesNotDeferForever) {
+  const Capacities caps{10, 600, 1500, 8000};
+  Stream stream(29, 60);
+  Window window(caps);
+  Sparsifier s(caps, Params{}, SolveMode::kIncremental);
+  Sparsifier ref(caps, Params{});
+  SteppingClock clock(3'000'000);
+  const auto slide = [&] {
+    if (window.keyframe_count() >= 6) {
+      ASSERT_EQ(window.remove_keyframe(window.keyframe(0).id), Status::kOk);
+    }
+    ASSERT_EQ(add(window, stream.next()), Status::kOk);
+    ASSERT_EQ(ref.run(window), Status::kOk);
+  };
+  const auto budget = [&clock](std::uint64_t left) {
+    solver::Budget b;
+    b.clock = &clock;
+    b.deadline_ns = clock.now_ns() + left;
+    return b;
+  };
+  for (int i = 0; i < 2; ++i) {  // the slow spell: measured, answered in an ample budget
+    slide();
+    ASSERT_EQ(s.update(window, budget(1'000'000'000'000)), Status::kOk);
+  }
+  clock.set_step(100);  // fast again; 10 ms is far more than a slide now needs
+  int deferred = 0, first_ok = -1;
+  for (int i = 0; i < 40; ++i) {
+    SCOPED_TRACE(::testing::Message() << "slide " << i);
+    slide();
+    const Status st = s.update(window, budget(10'000'000));
+    if (first_ok < 0 && st == Status::kOk) first_ok = i;
+    if (first_ok < 0) {
+      EXPECT_TRUE(s.deferred());
+      ++deferred;
+      continue;
+    }
+    ASSERT_EQ(st, Status::kOk);  // once measured fast, never deferred again
+    EXPECT_FALSE(s.deferred());
+    EXPECT_TRUE(same_result(s, ref));
+  }
+  EXPECT_GE(first_ok, 0) << "every keyframe after the slow spell was deferred";
+  EXPECT_LT(deferred, 40);
 }
 
 TEST(Incremental, FromScratchModeFallsBackToRun) {
