@@ -274,10 +274,7 @@ ke::RunRecord record_of(const ke::RunResult& r, std::uint64_t seed) {
   x.C = r.C;
   x.F = r.F;
   x.S = r.S;
-  x.windows = r.windows;
-  x.floor_keyframes = r.floor_keyframes;
-  x.floor_promoted = r.floor_promoted;
-  x.floor_short = r.floor_short;
+  x.selector = r.selector;
   return x;
 }
 

@@ -394,8 +394,8 @@ bool write_outputs(const EvalSummary& s, const std::string& out_dir, std::string
             << json_number(c.target_fraction, 3) << "," << c.M << "," << r.mps << "," << r.kfs << "," << r.observations
             << "," << f(r.ba_s, 4) << "," << f(r.total_s, 4) << "," << json_number(r.ate_m, 9) << ","
             << json_number(r.ate_r_deg, 6) << "," << json_number(r.C, 4) << "," << json_number(r.F, 4) << ","
-            << json_number(r.S, 4) << "," << r.frames << "," << r.frames_tracked << "," << r.windows << ","
-            << r.floor_keyframes << "," << r.floor_promoted << "," << r.floor_short << "\n";
+            << json_number(r.S, 4) << "," << r.frames << "," << r.frames_tracked << "," << r.selector.windows << ","
+            << r.selector.floor_keyframes << "," << r.selector.floor_promoted << "," << r.selector.floor_short << "\n";
   bool ok = write("runs.csv", csv.str());
   std::string meta = s.command + "\n" + s.mode + "\n" + s.settings + "\n" + json_number(s.elapsed_s, 1) + "\n";
   for (const std::string& i : s.settings_inputs) meta += i + "\n";
@@ -513,10 +513,10 @@ bool read_outputs(const std::string& out_dir, EvalSummary* s, std::string* error
     r.frames = col("frames") < 0 ? 0 : static_cast<int>(num("frames"));  // absent in older files
     r.frames_tracked = col("frames_tracked") < 0 ? 0 : static_cast<int>(num("frames_tracked"));
     auto count = [&](const char* name) { return col(name) < 0 ? 0 : static_cast<std::uint64_t>(num(name)); };
-    r.windows = count("windows");
-    r.floor_keyframes = count("floor_keyframes");
-    r.floor_promoted = count("floor_promoted");
-    r.floor_short = count("floor_short");
+    r.selector.windows = count("windows");
+    r.selector.floor_keyframes = count("floor_keyframes");
+    r.selector.floor_promoted = count("floor_promoted");
+    r.selector.floor_short = count("floor_short");
     // One comparison per input and operating point (compared_M tells --M points apart).
     const std::string key = str("input") + "|" + str("target_fraction") + "|" + str("compared_M");
     auto it = std::find(keys.begin(), keys.end(), key);

@@ -112,10 +112,10 @@ ContractRun summarize(const Comparison& c) {
   r.frames_tracked_random = stat_over(c.random, tracked);
   r.frames_tracked_longest_track = stat_over(c.longest_track, tracked);
   r.frames_tracked_anms = stat_over(c.anms, tracked);
-  r.floor_keyframes = stat_over(c.ours, [](const RunRecord& a) { return double(a.floor_keyframes); });
-  r.floor_promoted = stat_over(c.ours, [](const RunRecord& a) { return double(a.floor_promoted); });
-  r.floor_short = stat_over(c.ours, [](const RunRecord& a) { return double(a.floor_short); });
-  r.windows = stat_over(c.ours, [](const RunRecord& a) { return double(a.windows); }).mean;
+  r.floor_keyframes = stat_over(c.ours, [](const RunRecord& a) { return double(a.selector.floor_keyframes); });
+  r.floor_promoted = stat_over(c.ours, [](const RunRecord& a) { return double(a.selector.floor_promoted); });
+  r.floor_short = stat_over(c.ours, [](const RunRecord& a) { return double(a.selector.floor_short); });
+  r.windows = stat_over(c.ours, [](const RunRecord& a) { return double(a.selector.windows); }).mean;
   return r;
 }
 

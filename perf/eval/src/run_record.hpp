@@ -17,7 +17,23 @@
 #include <string>
 #include <vector>
 
+#include "keepless/core/decision.hpp"
+
 namespace keepless::eval {
+
+// The selector's windows and, summed over them, core::Summary's coverage
+// floor counts: keyframes where the floor bound, points it promoted,
+// keyframes below it with all their points kept. For a baseline they
+// describe the keepless run that set its count on its own window.
+struct SelectorCounts {
+  std::uint64_t windows = 0, floor_keyframes = 0, floor_promoted = 0, floor_short = 0;
+  void add(const core::Summary& s) {
+    ++windows;
+    floor_keyframes += s.floor_keyframes;
+    floor_promoted += s.floor_promoted;
+    floor_short += s.floor_short;
+  }
+};
 
 // One run of one variant on one input with one seed.
 struct RunRecord {
@@ -31,10 +47,7 @@ struct RunRecord {
   double ate_m = NAN, ate_r_deg = NAN;
   double C = NAN, F = NAN, S = NAN;  // section IV-F: observations per point, keyframe span, grid occupancy %
   int frames = 0, frames_tracked = 0;  // real VO (kind images / rgbd): frames given and tracked; 0 elsewhere
-  // The selector's windows and, summed over them, core::Summary's coverage
-  // floor counts: keyframes where the floor bound, points it promoted,
-  // keyframes below it with all their points kept.
-  std::uint64_t windows = 0, floor_keyframes = 0, floor_promoted = 0, floor_short = 0;
+  SelectorCounts selector;
 };
 
 struct InputInfo {

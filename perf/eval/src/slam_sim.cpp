@@ -348,11 +348,7 @@ class Engine {
       ++r->selector_errors;
       return;
     }
-    const core::Summary& summary = sparsifier_->summary();
-    ++r->windows;
-    r->floor_keyframes += summary.floor_keyframes;
-    r->floor_promoted += summary.floor_promoted;
-    r->floor_short += summary.floor_short;
+    r->selector.add(sparsifier_->summary());
     const core::PointDecision* d = sparsifier_->decisions();
     const std::uint32_t nd = sparsifier_->decision_count();
     std::vector<int> evaluated;

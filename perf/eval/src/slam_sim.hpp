@@ -25,6 +25,7 @@
 
 #include "geometry.hpp"
 #include "keepless/core/config.hpp"
+#include "run_record.hpp"
 #include "scenario.hpp"
 
 namespace keepless::eval {
@@ -66,9 +67,7 @@ struct RunResult {
   double ba_s = 0, select_s = 0, total_s = 0;
   std::uint64_t selector_culled = 0;
   std::uint32_t selector_errors = 0;  // keepless status != ok (window kept whole)
-  // Summed over the selector's windows (core::Summary): for a baseline these
-  // describe the keepless run that set its count on its own window.
-  std::uint64_t windows = 0, floor_keyframes = 0, floor_promoted = 0, floor_short = 0;
+  SelectorCounts selector;
   bool sim3 = false;                  // ATE after Sim(3) (monocular) rather than SE(3)
   double ate_m = 0, ate_r_deg = 0;
   double C = 0, F = 0, S = 0;    // ablation metrics (section IV-F)

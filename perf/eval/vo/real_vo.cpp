@@ -175,7 +175,6 @@ class Vo {
   core::Sparsifier sparsifier_;
   std::vector<std::unique_ptr<core::Sparsifier>> calibration_;
   std::vector<double> calibration_sum_;
-  int windows_ = 0;
   double kept_fraction_sum_ = 0;
   std::size_t marked_culls_ = 0;
   RealRunResult result_;
@@ -583,10 +582,7 @@ void Vo::select_points(int kf, const std::vector<int>& local) {
     result_.selector_seconds += seconds_since(start);
     return;
   }
-  const core::Summary& summary = sparsifier_.summary();
-  result_.floor_keyframes += summary.floor_keyframes;
-  result_.floor_promoted += summary.floor_promoted;
-  result_.floor_short += summary.floor_short;
+  result_.selector.add(sparsifier_.summary());
   // The authors' integration: only the new keyframe's points are decided.
   const KeyFrame& f = map_.kfs[static_cast<std::size_t>(kf)];
   std::vector<Candidate> candidates;
@@ -623,7 +619,6 @@ void Vo::select_points(int kf, const std::vector<int>& local) {
     }
     calibration_sum_[m] += candidates.empty() ? 1.0 : 1.0 - double(c) / double(candidates.size());
   }
-  ++windows_;
   kept_fraction_sum_ += candidates.empty() ? 1.0 : 1.0 - double(cull) / double(candidates.size());
   std::vector<core::PointId> culls;
   if (opt_.selector == Selector::kKeepless) {
@@ -992,9 +987,9 @@ RealRunResult Vo::run() {
   for (const MapPoint& m : map_.points) {
     if (!m.bad) result_.observations += static_cast<std::int64_t>(m.obs.size());
   }
-  result_.windows = windows_;
-  result_.mean_kept_fraction = windows_ > 0 ? kept_fraction_sum_ / windows_ : 1.0;
-  for (double s : calibration_sum_) result_.calibration_kept_fraction.push_back(windows_ > 0 ? s / windows_ : 1.0);
+  const double windows = static_cast<double>(result_.selector.windows);
+  result_.mean_kept_fraction = windows > 0 ? kept_fraction_sum_ / windows : 1.0;
+  for (double s : calibration_sum_) result_.calibration_kept_fraction.push_back(windows > 0 ? s / windows : 1.0);
   std::vector<Pose> estimate, truth;
   for (const FrameRecord& r : records_) {
     const Eigen::Isometry3d Twc = (r.T_cr * final_pose(r.ref_kf)).inverse();

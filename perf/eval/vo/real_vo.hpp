@@ -10,6 +10,7 @@
 #include "geometry.hpp"
 #include "keepless/core/config.hpp"
 #include "real_sequence.hpp"
+#include "run_record.hpp"
 
 namespace keepless::eval::vo {
 
@@ -48,10 +49,7 @@ struct RealRunResult {
   std::int64_t points_culled_by_selector = 0;
   int local_bas = 0;
   int window_rejections = 0;  // windows the adapter or Sparsifier refused (nothing culled there)
-  int windows = 0;  // windows the selector decided
-  // core::Summary's coverage-floor counts of the selector's Sparsifier (the
-  // one that sets keepless's and the baselines' counts), summed over windows.
-  std::int64_t floor_keyframes = 0, floor_promoted = 0, floor_short = 0;
+  SelectorCounts selector;  // windows the selector decided, its Sparsifier's floor counts over them
   double local_ba_seconds = 0, selector_seconds = 0, total_seconds = 0;
   double ate_m = 0, ate_r_deg = 0;  // RMS over tracked frames, SE(3) for RGB-D, Sim(3) monocular
   double mean_kept_fraction = 1;    // of the new keyframes' evaluated points (>= 2 views in the window), over windows

@@ -28,23 +28,22 @@ RunRecord record_of(const RealRunResult& r, const char* variant, std::uint64_t s
   x.ate_r_deg = r.ate_r_deg;
   x.frames = r.frames;
   x.frames_tracked = r.frames_tracked;
-  x.windows = static_cast<std::uint64_t>(r.windows);
-  x.floor_keyframes = static_cast<std::uint64_t>(r.floor_keyframes);
-  x.floor_promoted = static_cast<std::uint64_t>(r.floor_promoted);
-  x.floor_short = static_cast<std::uint64_t>(r.floor_short);
+  x.selector = r.selector;
   return x;
 }
 
 void log_run(const RealSequence& s, const RunRecord& r, const RealRunResult& x) {
   std::fprintf(stderr,
                "  %s seed %llu %s M=%lld: tracked %d/%d (losses %d) mps %d kfs %d (made %d) culled %lld "
-               "(windows %d, refused %d) kept %.1f%% floor kfs %lld promoted %lld short %lld, ate %.4f m, "
+               "(windows %llu, refused %d) kept %.1f%% floor kfs %llu promoted %llu short %llu, ate %.4f m, "
                "local BA %.2f s (%d), total %.1f s\n",
                s.name.c_str(), static_cast<unsigned long long>(r.seed), r.variant.c_str(),
                static_cast<long long>(r.M), x.frames_tracked, x.frames, x.tracking_losses, x.map_points, x.keyframes,
-               x.keyframes_created, static_cast<long long>(x.points_culled_by_selector), x.windows, x.window_rejections,
-               100.0 * x.mean_kept_fraction, static_cast<long long>(x.floor_keyframes),
-               static_cast<long long>(x.floor_promoted), static_cast<long long>(x.floor_short), x.ate_m,
+               x.keyframes_created, static_cast<long long>(x.points_culled_by_selector),
+               static_cast<unsigned long long>(x.selector.windows), x.window_rejections, 100.0 * x.mean_kept_fraction,
+               static_cast<unsigned long long>(x.selector.floor_keyframes),
+               static_cast<unsigned long long>(x.selector.floor_promoted),
+               static_cast<unsigned long long>(x.selector.floor_short), x.ate_m,
                x.local_ba_seconds, x.local_bas, x.total_seconds);
 }
 
