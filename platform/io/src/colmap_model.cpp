@@ -16,15 +16,15 @@ namespace keepless::io {
 
 namespace {
 
-// COLMAP's camera models (src/base/camera_models.h): id, name, parameters.
-// 0-10 are COLMAP 3.8's; 11 was added in later releases.
+// COLMAP's camera models (src/base/camera_models.h): id, name, parameters,
+// focal lengths. 0-10 are COLMAP 3.8's; 11 was added in later releases.
 constexpr CameraModelInfo kCameraModels[] = {
-    {0, "SIMPLE_PINHOLE", 3},  {1, "PINHOLE", 4},
-    {2, "SIMPLE_RADIAL", 4},   {3, "RADIAL", 5},
-    {4, "OPENCV", 8},          {5, "OPENCV_FISHEYE", 8},
-    {6, "FULL_OPENCV", 12},    {7, "FOV", 5},
-    {8, "SIMPLE_RADIAL_FISHEYE", 4}, {9, "RADIAL_FISHEYE", 5},
-    {10, "THIN_PRISM_FISHEYE", 12},  {11, "RAD_TAN_THIN_PRISM_FISHEYE", 16},
+    {0, "SIMPLE_PINHOLE", 3, 1},  {1, "PINHOLE", 4, 2},
+    {2, "SIMPLE_RADIAL", 4, 1},   {3, "RADIAL", 5, 1},
+    {4, "OPENCV", 8, 2},          {5, "OPENCV_FISHEYE", 8, 2},
+    {6, "FULL_OPENCV", 12, 2},    {7, "FOV", 5, 2},
+    {8, "SIMPLE_RADIAL_FISHEYE", 4, 1}, {9, "RADIAL_FISHEYE", 5, 1},
+    {10, "THIN_PRISM_FISHEYE", 12, 2},  {11, "RAD_TAN_THIN_PRISM_FISHEYE", 16, 2},
 };
 
 std::string at(const std::string& file, std::uint64_t pos) { return file + ":" + std::to_string(pos) + ": "; }

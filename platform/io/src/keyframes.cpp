@@ -93,9 +93,7 @@ namespace {
 void colmap_intrinsics(const ColmapCamera& camera, core::Keyframe* kf) {
   const CameraModelInfo* info = camera_model_by_id(camera.model_id);
   if (info == nullptr || camera.params.size() < 3) return;
-  const std::string name = info->name;
-  const bool one_f = name == "SIMPLE_PINHOLE" || name == "SIMPLE_RADIAL" || name == "RADIAL" ||
-                     name == "SIMPLE_RADIAL_FISHEYE" || name == "RADIAL_FISHEYE";
+  const bool one_f = info->focal_lengths == 1;
   const std::vector<double>& p = camera.params;
   if (!one_f && p.size() < 4) return;
   const double fx = p[0], fy = one_f ? p[0] : p[1];

@@ -15,11 +15,14 @@ namespace keepless::io {
 // COLMAP's "no 3D point" (kInvalidPoint3DId); "-1" in images.txt.
 constexpr std::uint64_t kNoPoint3D = ~std::uint64_t{0};
 
-// A camera model's COLMAP id and name and its parameter count, or nullptr.
+// A camera model's COLMAP id and name, its parameter count, and its focal
+// lengths: 1 (params f, cx, cy, ...) or 2 (fx, fy, cx, cy, ...). Lookups
+// return nullptr for an unknown model.
 struct CameraModelInfo {
   int id;
   const char* name;
   int num_params;
+  int focal_lengths;
 };
 const CameraModelInfo* camera_model_by_id(int id);
 const CameraModelInfo* camera_model_by_name(const std::string& name);
