@@ -381,23 +381,43 @@ class SteppingClock final : public solver::Clock {
   mutable std::uint64_t now_ = 0;
 };
 
-TEST(Incremental, NoTimeForTheNetworkDefersAndKeepsEverything) {
+// The deadline tests' window: at most 6 keyframes slid along a stream, with
+// run()'s decisions on each slide as the reference.
+struct SlidingWindow {
+  SlidingWindow(std::uint64_t seed, std::uint32_t per_frame) : stream(seed, per_frame) {}
+  void slide() {
+    if (window.keyframe_count() >= 6) {
+      ASSERT_EQ(window.remove_keyframe(window.keyframe(0).id), Status::kOk);
+    }
+    ASSERT_EQ(add(window, stream.next()), Status::kOk);
+    ASSERT_EQ(ref.run(window), Status::kOk);
+  }
   const Capacities caps{10, 600, 1500, 8000};
-  Stream stream(17, 40);
-  Window window(caps);
-  Sparsifier s(caps, Params{}, SolveMode::kIncremental);
-  Sparsifier ref(caps, Params{});
+  Stream stream;
+  Window window{caps};
+  Sparsifier ref{caps, Params{}};
+};
+
+// A deadline `left` after a read of `clock` (a SteppingClock moves on that
+// read: deadline = next read + left - step).
+solver::Budget budget_after(const solver::Clock& clock, std::uint64_t left) {
+  solver::Budget b;
+  b.clock = &clock;
+  b.deadline_ns = clock.now_ns() + left;
+  return b;
+}
+
+TEST(Incremental, NoTimeForTheNetworkDefersAndKeepsEverything) {
+  SlidingWindow w(17, 40);
+  const Window& window = w.window;
+  Sparsifier s(w.caps, Params{}, SolveMode::kIncremental);
   ManualClock clock;
   solver::Budget past;
   past.clock = &clock;
   past.deadline_ns = clock.now;  // already due
   for (std::uint32_t step = 0; step < 24; ++step) {
     SCOPED_TRACE(::testing::Message() << "step " << step);
-    if (window.keyframe_count() >= 6) {
-      ASSERT_EQ(window.remove_keyframe(window.keyframe(0).id), Status::kOk);
-    }
-    ASSERT_EQ(add(window, stream.next()), Status::kOk);
-    ASSERT_EQ(ref.run(window), Status::kOk);
+    ASSERT_NO_FATAL_FAILURE(w.slide());
     // Runs of deferred keyframes between full updates: the update after a
     // run catches up with several slides at once, exactly.
     if (step % 5 != 0) {
@@ -410,83 +430,55 @@ TEST(Incremental, NoTimeForTheNetworkDefersAndKeepsEverything) {
     } else {
       ASSERT_EQ(s.update(window), Status::kOk);
       EXPECT_FALSE(s.deferred());
-      ASSERT_TRUE(same_result(s, ref));
+      ASSERT_TRUE(same_result(s, w.ref));
     }
   }
 }
 
 TEST(Incremental, DefersOnlyWhenLessTimeIsLeftThanTheNetworkAndDecidingTake) {
-  const Capacities caps{10, 600, 1500, 8000};
-  Stream stream(23, 40);
-  Window window(caps);
-  Sparsifier s(caps, Params{}, SolveMode::kIncremental);
-  Sparsifier ref(caps, Params{});
+  SlidingWindow w(23, 40);
+  const Window& window = w.window;
+  Sparsifier s(w.caps, Params{}, SolveMode::kIncremental);
   SteppingClock clock(100);  // network updates and deciding take 100 ns each
-  const auto slide = [&] {
-    if (window.keyframe_count() >= 6) {
-      ASSERT_EQ(window.remove_keyframe(window.keyframe(0).id), Status::kOk);
-    }
-    ASSERT_EQ(add(window, stream.next()), Status::kOk);
-    ASSERT_EQ(ref.run(window), Status::kOk);
-  };
-  const auto budget = [&clock](std::uint64_t left) {
-    solver::Budget b;
-    b.clock = &clock;
-    b.deadline_ns = clock.now_ns() + left;  // this read moves the clock: deadline = next read + left - 100
-    return b;
-  };
+  const auto budget = [&clock](std::uint64_t left) { return budget_after(clock, left); };
   // No estimate yet: a deadline in the future is tried however close (the
   // network is updated; the solver then finds the deadline passed).
-  slide();
+  ASSERT_NO_FATAL_FAILURE(w.slide());
   EXPECT_EQ(s.update(window, budget(150)), Status::kBudgetExhausted);
   EXPECT_FALSE(s.deferred());
   EXPECT_EQ(s.decision_count(), window.distinct_points());
-  slide();
+  ASSERT_NO_FATAL_FAILURE(w.slide());
   EXPECT_EQ(s.update(window, budget(150)), Status::kBudgetExhausted);
   EXPECT_FALSE(s.deferred());
   // Both stages measured twice at 100 ns: 50 ns left is too little (200 ns
   // expected), 10 ms enough.
-  slide();
+  ASSERT_NO_FATAL_FAILURE(w.slide());
   EXPECT_EQ(s.update(window, budget(150)), Status::kBudgetExhausted);
   EXPECT_TRUE(s.deferred());
-  slide();
+  ASSERT_NO_FATAL_FAILURE(w.slide());
   ASSERT_EQ(s.update(window, budget(10000000)), Status::kOk);
   EXPECT_FALSE(s.deferred());
-  EXPECT_TRUE(same_result(s, ref));
+  EXPECT_TRUE(same_result(s, w.ref));
 }
 
 // Two slides preempted (every stage 3 ms) must not make the path defer every
 // later keyframe once the machine is fast again: a deferral measures
 // nothing, so the slow estimate has to expire on its own.
 TEST(Incremental, ASlowSpellDoesNotDeferForever) {
-  const Capacities caps{10, 600, 1500, 8000};
-  Stream stream(29, 60);
-  Window window(caps);
-  Sparsifier s(caps, Params{}, SolveMode::kIncremental);
-  Sparsifier ref(caps, Params{});
+  SlidingWindow w(29, 60);
+  const Window& window = w.window;
+  Sparsifier s(w.caps, Params{}, SolveMode::kIncremental);
   SteppingClock clock(3'000'000);
-  const auto slide = [&] {
-    if (window.keyframe_count() >= 6) {
-      ASSERT_EQ(window.remove_keyframe(window.keyframe(0).id), Status::kOk);
-    }
-    ASSERT_EQ(add(window, stream.next()), Status::kOk);
-    ASSERT_EQ(ref.run(window), Status::kOk);
-  };
-  const auto budget = [&clock](std::uint64_t left) {
-    solver::Budget b;
-    b.clock = &clock;
-    b.deadline_ns = clock.now_ns() + left;
-    return b;
-  };
+  const auto budget = [&clock](std::uint64_t left) { return budget_after(clock, left); };
   for (int i = 0; i < 2; ++i) {  // the slow spell: measured, answered in an ample budget
-    slide();
+    ASSERT_NO_FATAL_FAILURE(w.slide());
     ASSERT_EQ(s.update(window, budget(1'000'000'000'000)), Status::kOk);
   }
   clock.set_step(100);  // fast again; 10 ms is far more than a slide now needs
   int deferred = 0, first_ok = -1;
   for (int i = 0; i < 40; ++i) {
     SCOPED_TRACE(::testing::Message() << "slide " << i);
-    slide();
+    ASSERT_NO_FATAL_FAILURE(w.slide());
     const Status st = s.update(window, budget(10'000'000));
     if (first_ok < 0 && st == Status::kOk) first_ok = i;
     if (first_ok < 0) {
@@ -496,7 +488,7 @@ TEST(Incremental, ASlowSpellDoesNotDeferForever) {
     }
     ASSERT_EQ(st, Status::kOk);  // once measured fast, never deferred again
     EXPECT_FALSE(s.deferred());
-    EXPECT_TRUE(same_result(s, ref));
+    EXPECT_TRUE(same_result(s, w.ref));
   }
   EXPECT_GE(first_ok, 0) << "every keyframe after the slow spell was deferred";
   EXPECT_LT(deferred, 40);
