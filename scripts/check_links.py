@@ -57,9 +57,10 @@ errors = []
 links = 0
 for page in pages:
     rel = page.relative_to(root)
-    for n, line in prose(page):
+    for n, line in enumerate(page.read_text(encoding="utf-8").split("\n"), 1):  # code blocks too
         if INTERNAL.search(line):
             errors.append(f"{rel}:{n}: internal reference: {INTERNAL.search(line).group(0)!r}")
+    for n, line in prose(page):
         for target in LINK.findall(re.sub(r"`[^`]*`", "", line)):
             if re.match(r"^[a-z][a-z0-9+.-]*:", target):
                 continue  # https:, mailto: ...

@@ -29,7 +29,7 @@ pages = [root / "README.md"] + sorted((root / "docs").rglob("*.md"))
 for page in pages:
     lines = page.read_text(encoding="utf-8").split("\n")
     for i, line in enumerate(lines):
-        m = MARK.search(line)
+        m = MARK.match(line.strip())
         if not m:
             continue
         where = f"{page.relative_to(root)}:{i + 1}"
