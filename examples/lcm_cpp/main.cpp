@@ -55,8 +55,8 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "lcm_cpp: no keepless_node status on %s within 10 s\n", url.c_str());
     return 1;
   }
-  // snippet-begin: publish
   for (int k = 0; k < kKeyframes; ++k) {
+    // snippet-begin: publish
     keepless::keyframe_t kf{};  // value-initialised: the optional arrays' counts are 0
     kf.sequence = k + 1;       // strictly increasing per publisher
     kf.utime = 1000000 + 100000 * k;
@@ -74,10 +74,10 @@ int main(int argc, char** argv) {
     kf.num_observations = kPointsPerKeyframe;
     kf.publisher_id = 42;  // any identity of this process
     bus.publish("KEEPLESS_KEYFRAME", &kf);
+    // snippet-end: publish
     const int before = inbox.decisions;
     for (int i = 0; i < 50 && inbox.decisions == before; ++i) wait(bus, 100);  // decision_t
   }
-  // snippet-end: publish
   std::printf("lcm_cpp: %d decisions for %d keyframes, %d points culled\n", inbox.decisions, kKeyframes,
               inbox.culled);
   return inbox.decisions == kKeyframes && inbox.culled > 0 ? 0 : 1;
