@@ -47,7 +47,7 @@ const char* kUsage =
     "  --format            applies to the --trajectory just before it; without it the format is guessed\n"
     "  --images, --rgbd    the real VO (perf/eval/vo) on a KITTI-layout (--calib, --poses follow it) or 7-Scenes\n"
     "                      RGB-D sequence, frames A..B inclusive (--frames; default all, --quick 0:59)\n"
-    "  --image-tracks      the synthetic back end on ORB tracks of KITTI-layout images (issue 6)\n"
+    "  --image-tracks      the synthetic back end on ORB tracks of KITTI-layout images\n"
     "  --kept-fraction F   per input, the M (found on the first seed) at which keepless keeps F of the original's\n"
     "                      map points (default 0.3); --M gives M directly instead\n"
     "  --seeds N           seeds FIRST .. FIRST+N-1 (default 5, --quick 2); tables show mean +- sd over them\n"
