@@ -143,7 +143,8 @@ class Vo {
   void point_culling(int kf);
   void create_points(int kf);
   void search_in_neighbours(int kf);
-  std::vector<int> local_keyframes(int kf) const;
+  std::vector<int> local_keyframes(int kf, int most) const;
+  void measure_windows(int kf);
   void select_points(int kf, const std::vector<int>& local);
   // fix_first: hold local.front() too (the two-view start's gauge).
   void local_ba(const std::vector<int>& local, bool fix_first);
@@ -521,7 +522,7 @@ void Vo::search_in_neighbours(int kf) {
   }
 }
 
-std::vector<int> Vo::local_keyframes(int kf) const {
+std::vector<int> Vo::local_keyframes(int kf, int most) const {
   std::vector<int> local = {kf};
   auto cov = map_.covisibles(kf, 15);
   if (cov.empty()) {
@@ -529,10 +530,37 @@ std::vector<int> Vo::local_keyframes(int kf) const {
     if (cov.size() > 1) cov.resize(1);
   }
   for (const auto& c : cov) {
-    if (static_cast<int>(local.size()) >= opt_.max_local_keyframes) break;
+    if (static_cast<int>(local.size()) >= most) break;
     local.push_back(c.first);
   }
   return local;
+}
+
+// window_sizes.hpp: the local and sliding windows at keyframe kf, per K.
+void Vo::measure_windows(int kf) {
+  WindowMeasure m;
+  std::vector<core::PointId> ids;
+  const auto measure = [&](const std::vector<int>& window) {
+    m.clear();
+    for (int k : window) {
+      const KeyFrame& f = map_.kfs[static_cast<std::size_t>(k)];
+      ids.clear();
+      for (int p : f.mp)
+        if (p >= 0 && !map_.points[static_cast<std::size_t>(p)].bad) ids.push_back(static_cast<core::PointId>(p));
+      m.add_keyframe(ids, f.mp.size() - ids.size());
+    }
+    return m.size();
+  };
+  WindowSizes& w = result_.window_sizes;
+  for (std::size_t i = 0; i < WindowSizes::kSizes.size(); ++i) {
+    const int most = WindowSizes::kSizes[i];
+    w.local[i].max_with(measure(local_keyframes(kf, most)));
+    std::vector<int> sliding;
+    for (int k = kf; k >= 0 && static_cast<int>(sliding.size()) < most; --k)
+      if (!map_.kfs[static_cast<std::size_t>(k)].bad) sliding.push_back(k);
+    w.sliding[i].max_with(measure(sliding));
+  }
+  ++w.steps;
 }
 
 void Vo::select_points(int kf, const std::vector<int>& local) {
@@ -720,7 +748,8 @@ void Vo::local_mapping(int kf) {
   point_culling(kf);
   create_points(kf);
   search_in_neighbours(kf);
-  const std::vector<int> local = local_keyframes(kf);
+  const std::vector<int> local = local_keyframes(kf, opt_.max_local_keyframes);
+  if (opt_.measure_windows) measure_windows(kf);
   if (opt_.selector != Selector::kOriginal || !calibration_.empty()) select_points(kf, local);
   local_ba(local, false);
   keyframe_culling(kf);
