@@ -20,6 +20,7 @@
 
 #include "bal_eval.hpp"
 #include "keepless/core/config.hpp"
+#include "keepless/platform/node_config.hpp"
 #include "kitti_images.hpp"
 #include "prng.hpp"
 #include "report.hpp"
@@ -491,8 +492,10 @@ int main(int argc, char** argv) {
     for (const auto& in : a.vo) {
       std::string name, err;
       ke::WindowSizes w;
+      // Replayed at keepless_node's default capacities (K = 20).
       if (!keepless::eval::vo::measure_real_windows(in, a.frames_first, a.frames_last != -2 ? a.frames_last : -1,
-                                                    a.first_seed, &name, &w, &err))
+                                                    a.first_seed, keepless::platform::window_capacities({}), &name,
+                                                    &w, &err))
         fail(err);
       sizes.emplace_back(name, w);
     }

@@ -22,6 +22,8 @@ void WindowSizes::max_with(const WindowSizes& o) {
     sliding[i].max_with(o.sliding[i]);
   }
   steps += o.steps;
+  replayed += o.replayed;
+  refused += o.refused;
 }
 
 void WindowMeasure::clear() {
@@ -73,10 +75,18 @@ std::string window_sizes_table(const std::vector<std::pair<std::string, WindowSi
   std::ostringstream o;
   o << "| input | window | K | keyframes | points | observations | pair arcs | unmapped keypoints | windows |\n"
        "|---|---|---:|---:|---:|---:|---:|---:|---:|\n";
+  std::ostringstream replay;
+  for (const auto& [name, w] : rows) {
+    if (w.replayed > 0) {
+      replay << "- " << name << ": " << w.replayed << " K = 20 windows replayed at the node's capacities, " << w.refused
+             << " refused for a capacity\n";
+    }
+  }
   each(rows, [&](const std::string& name, const char* kind, int k, const WindowSize& s, std::uint64_t steps) {
     o << "| " << name << " | " << kind << " | " << k << " | " << s.keyframes << " | " << s.points << " | "
       << s.observations << " | " << s.pair_arcs << " | " << s.unmapped << " | " << steps << " |\n";
   });
+  if (!replay.str().empty()) o << "\n" << replay.str();
   return o.str();
 }
 
@@ -90,6 +100,14 @@ std::string window_sizes_json(const std::vector<std::pair<std::string, WindowSiz
       << ",\"pair_arcs\":" << s.pair_arcs << ",\"unmapped\":" << s.unmapped << ",\"windows\":" << steps << "}";
     first = false;
   });
+  o << "],\"replays\":[";
+  first = true;
+  for (const auto& [name, w] : rows) {
+    if (w.replayed == 0) continue;
+    o << (first ? "" : ",") << "{\"input\":" << json_string(name) << ",\"windows\":" << w.replayed
+      << ",\"refused\":" << w.refused << "}";
+    first = false;
+  }
   o << "]}";
   return o.str();
 }

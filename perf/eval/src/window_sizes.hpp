@@ -30,6 +30,10 @@ struct WindowSizes {
   static constexpr std::array<int, 3> kSizes = {10, 20, 40};
   std::array<WindowSize, 3> local{}, sliding{};
   std::uint64_t steps = 0;  // local-mapping steps measured
+  // The K = 20 windows (local and sliding) replayed into a Window and an
+  // incremental Sparsifier sized by given capacities (keepless_node's
+  // defaults): windows decided, and refused for a capacity.
+  std::uint64_t replayed = 0, refused = 0;
   void max_with(const WindowSizes& o);
 };
 

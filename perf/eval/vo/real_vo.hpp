@@ -31,6 +31,9 @@ struct RealVoOptions {
   int max_local_keyframes = 20;      // local BA / keepless window: the new keyframe and its best covisibles
   std::vector<std::int64_t> calibrate_M;  // original runs: mean kept fraction per M, on every window
   bool measure_windows = false;  // fill RealRunResult::window_sizes (window_sizes.hpp)
+  // With measure_windows: replay the K = 20 windows at these capacities
+  // (max_keyframes 0: no replay).
+  core::Capacities replay_capacities{0, 0, 0, 0, 0};
   bool verbose = false;
 };
 

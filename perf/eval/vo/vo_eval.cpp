@@ -129,8 +129,8 @@ bool evaluate_real_vo(const VoInput& in, const VoEvalOptions& o, std::vector<Com
   return true;
 }
 
-bool measure_real_windows(const VoInput& in, int first, int last, std::uint64_t seed, std::string* name,
-                          WindowSizes* sizes, std::string* error) {
+bool measure_real_windows(const VoInput& in, int first, int last, std::uint64_t seed, const core::Capacities& replay,
+                          std::string* name, WindowSizes* sizes, std::string* error) {
   RealSequence seq;
   const bool loaded = in.rgbd ? load_rgbd_sequence(in.dir, first, last, &seq, error)
                               : load_kitti_sequence(in.dir, in.calib, in.poses, first, last, &seq, error);
@@ -139,6 +139,7 @@ bool measure_real_windows(const VoInput& in, int first, int last, std::uint64_t 
   vo.seed = seed;
   vo.selector = Selector::kOriginal;
   vo.measure_windows = true;
+  vo.replay_capacities = replay;
   const RealRunResult r = run_real_vo(seq, vo);
   if (!r.error.empty()) {
     *error = r.error;

@@ -38,7 +38,9 @@ struct VoEvalOptions {
 
 // The original run of one seed with its windows measured (window_sizes.hpp);
 // `name` gets the sequence's name. False with `error` on unreadable input.
+// `replay`: RealVoOptions::replay_capacities.
 [[nodiscard]] bool measure_real_windows(const VoInput& input, int first, int last, std::uint64_t seed,
-                                        std::string* name, WindowSizes* sizes, std::string* error);
+                                        const core::Capacities& replay, std::string* name, WindowSizes* sizes,
+                                        std::string* error);
 
 }  // namespace keepless::eval::vo
