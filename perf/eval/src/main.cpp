@@ -500,7 +500,9 @@ int main(int argc, char** argv) {
       sizes.emplace_back(name, w);
     }
     for (const auto& [group, w] : group_sizes) sizes.emplace_back("group " + group, w);
-    std::cout << summary.settings << "; seed " << a.first_seed << ", original runs\n\n"
+    std::cout << (a.trajectories.empty() ? std::string() : "synthetic back end: " + summary.settings + "; ")
+              << (a.vo.empty() ? "" : "real VO: its defaults (local BA of at most 20 keyframes); ") << "seed "
+              << a.first_seed << ", original runs\n\n"
               << ke::window_sizes_table(sizes) << "\n"
               << ke::window_sizes_json(sizes) << std::endl;
     return 0;
