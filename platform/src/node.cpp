@@ -86,6 +86,8 @@ struct Node::Impl {
     observations.resize(c.max_observations);
     id_scratch.resize(std::max<std::size_t>(c.max_observations, 2 * std::size_t{c.max_event_ids}));
     out.resize(max_decision);
+    status.last_capacity = keepless::status_t::CAPACITY_NONE;
+    status.last_capacity_sequence = -1;
     start_ns = monotonic_ns();
     next_status_ns = start_ns;
   }
@@ -124,6 +126,37 @@ struct Node::Impl {
     if (r == RejectReason::kWindowCapacity) ++counters.capacity_exceeded;
     fill_rejected_decision(decision, request(), sliding.window(), r);
     publish_decision();
+  }
+
+  // A window beyond a capacity: counted, remembered for status_t, logged
+  // with what it needed; the decision (STATUS_CAPACITY_EXCEEDED) culls nothing.
+  void note_capacity(std::int8_t which, std::uint64_t needed, std::uint64_t held) {
+    ++counters.capacity_exceeded;
+    status.last_capacity = which;
+    status.last_capacity_sequence = kf.sequence;
+    status.last_capacity_needed = static_cast<std::int64_t>(needed);
+    status.last_capacity_held = static_cast<std::int64_t>(held);
+    if (config.quiet) return;
+    static const char* const kNames[] = {"points", "observations", "pair arcs", "unmapped keypoints"};
+    std::fprintf(stderr,
+                 "keepless_node: keyframe seq %lld: window beyond capacity: %s needed %llu, held %llu "
+                 "(nothing culled)\n",
+                 static_cast<long long>(kf.sequence), kNames[which], static_cast<unsigned long long>(needed),
+                 static_cast<unsigned long long>(held));
+  }
+
+  // The window's points, observations or unmapped keypoints: the push made
+  // room by dropping older keyframes (SlidingWindow::push).
+  void note_window_overflow() {
+    using S = keepless::status_t;
+    const SlidingWindow::Demand& d = sliding.overflow();
+    if (d.observations > capacities.max_observations) {
+      note_capacity(S::CAPACITY_OBSERVATIONS, d.observations, capacities.max_observations);
+    } else if (d.points > capacities.max_points) {
+      note_capacity(S::CAPACITY_POINTS, d.points, capacities.max_points);
+    } else {
+      note_capacity(S::CAPACITY_UNMAPPED, d.unmapped, capacities.max_unmapped_keypoints);
+    }
   }
 
   // A refused run of messages became the publisher's order (OrderTracker);
@@ -165,6 +198,7 @@ struct Node::Impl {
     r = v.reason;
     if (r == RejectReason::kNone) r = check_keyframe(kf, sliding.window(), id_scratch.data());
     const std::uint64_t t1 = monotonic_ns();
+    std::uint32_t evicted = 0;  // older keyframes dropped to make room (beyond the slide)
     if (r == RejectReason::kNone) {
       // Points culled by a decision the VO may not have applied yet when it
       // sent this keyframe stay culled.
@@ -196,7 +230,7 @@ struct Node::Impl {
       }
       keyframe.unmapped = unmapped.data();
       keyframe.unmapped_count = m;
-      const core::Status s = sliding.push(keyframe, observations.data(), kept);
+      const core::Status s = sliding.push(keyframe, observations.data(), kept, &evicted);
       if (s != core::Status::kOk) r = reason_of(s);
     }
     if (r != RejectReason::kNone) {
@@ -208,6 +242,7 @@ struct Node::Impl {
     order.accept(kf.publisher_id, kf.sequence, kf.utime);
     const std::uint64_t t2 = monotonic_ns();
     if (!decide) {
+      if (evicted > 0) note_window_overflow();  // counted; a skipped keyframe is not decided anyway
       ++counters.keyframes_skipped;
       fill_rejected_decision(decision, request(), sliding.window(), RejectReason::kNone);
       decision.status = keepless::decision_t::STATUS_SKIPPED;
@@ -222,12 +257,20 @@ struct Node::Impl {
       budget.deadline_ns = t0 + static_cast<std::uint64_t>(config.latency_target_ms * 1e6);
     }
     // A stop for budget culls nothing; the next keyframe's update() catches up.
-    const core::Status run = sparsifier.update(sliding.window(), budget);
+    // A window the push had to shorten is not decided: the keyframe is held,
+    // the next ones are decided as usual.
+    const core::Status run =
+        evicted > 0 ? core::Status::kCapacityExceeded : sparsifier.update(sliding.window(), budget);
     const std::uint64_t t3 = monotonic_ns();
     const std::uint32_t n_culled = fill_decision(decision, request(), sliding.window(), sparsifier, run);
     if (run == core::Status::kBudgetExhausted) ++counters.budget_exhaustions;
-    if (run == core::Status::kCapacityExceeded) ++counters.capacity_exceeded;
-    if (run != core::Status::kOk && run != core::Status::kBudgetExhausted) {
+    if (evicted > 0) {
+      note_window_overflow();
+    } else if (run == core::Status::kCapacityExceeded) {
+      // The network's pair arcs (the window's own capacities held it).
+      note_capacity(keepless::status_t::CAPACITY_PAIR_ARCS, sliding.window().pair_arcs(), capacities.max_pair_arcs);
+    }
+    if (run != core::Status::kOk && run != core::Status::kBudgetExhausted && run != core::Status::kCapacityExceeded) {
       std::fprintf(stderr, "keepless_node: sparsifier failed on keyframe seq %lld: %s (nothing culled)\n",
                    static_cast<long long>(kf.sequence), core::to_string(run));
     }
@@ -394,6 +437,7 @@ struct Node::Impl {
     status.capacity_keyframes = static_cast<std::int32_t>(capacities.max_keyframes);
     status.capacity_points = static_cast<std::int32_t>(capacities.max_points);
     status.capacity_observations = static_cast<std::int32_t>(capacities.max_observations);
+    status.capacity_pair_arcs = static_cast<std::int32_t>(capacities.max_pair_arcs);
     status.memory_bytes = static_cast<std::int64_t>(memory_bytes());
     status.latency_p50_ns = static_cast<std::int64_t>(latency.quantile(0.5));
     status.latency_p99_ns = static_cast<std::int64_t>(latency.quantile(0.99));

@@ -235,8 +235,11 @@ namespace {
 // bad_alloc (rc 134). Now the fixed memory is checked before it is allocated.
 TEST(NodeEndToEnd, FlagsBeyondTheMemoryLimitExitTwoBeforeAllocating) {
   TempDir tmp;
+  // The window's capacities at their worst case of K full keyframes (the
+  // defaults are sized from real windows, far below it).
   kt::ChildProcess node(target_argv({KEEPLESS_NODE_BIN, "--url", "memq://", "--window", "256",
-                                     "--max-observations", "4096"}),
+                                     "--max-observations", "4096", "--max-points", "0",
+                                     "--max-window-observations", "0", "--max-pair-arcs", "0"}),
                         tmp.file("node.log"));
   ASSERT_TRUE(node.started());
   ASSERT_TRUE(node.wait(60000));
