@@ -210,15 +210,6 @@ bool OrderTracker::extend_restart(std::int64_t publisher, std::int64_t sequence,
   return true;
 }
 
-void OrderTracker::clear() {
-  owned_ = false;
-  owner_ = 0;
-  last_sequence_ = -1;
-  last_utime_ = 0;
-  last_heard_ns_ = 0;
-  run_length_ = 0;
-}
-
 RejectReason check_keyframe(const keepless::keyframe_t& msg, const core::Window& window,
                             std::uint64_t* scratch) {
   for (double c : msg.centre) {

@@ -119,8 +119,6 @@ class OrderTracker {
   // An owner keyframe, valid against the window, refused by the order:
   // extends (or starts) the restart candidate. Returns true if it did.
   bool extend_restart(std::int64_t publisher, std::int64_t sequence, std::int64_t utime);
-  // No owner, no order (a fresh node).
-  void clear();
 
   bool owned() const { return owned_; }
   std::int64_t owner() const { return owner_; }
