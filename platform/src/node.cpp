@@ -219,7 +219,7 @@ struct Node::Impl {
       if (c.verdict.takeover || c.verdict.restart) decide_pending();
       r = admit_keyframe(c.verdict);
     } else if (c.content == RejectReason::kNone && c.verdict.reason != RejectReason::kNotOwner) {
-      // Valid, refused by the order: may be the start of a restart.
+      // Valid, refused by the order only: may be part of a restart.
       (void)order.extend_restart(kf.publisher_id, kf.sequence, kf.utime);
     }
     const std::uint64_t t1 = clock->now_ns();
