@@ -146,11 +146,6 @@ RejectReason follows(std::int64_t last_sequence, std::int64_t last_utime, std::i
 
 }  // namespace
 
-RejectReason check_order(std::int64_t last_sequence, std::int64_t last_utime, std::int64_t sequence,
-                         std::int64_t utime, const OrderBounds& bounds) {
-  return follows(last_sequence, last_utime, sequence, utime, bounds);
-}
-
 OrderTracker::OrderTracker(const OrderBounds& bounds) : bounds_(bounds) {}
 
 bool OrderTracker::continues_run(std::int64_t sequence, std::int64_t utime) const {

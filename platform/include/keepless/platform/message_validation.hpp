@@ -94,11 +94,6 @@ struct OrderBounds {
 // A restart candidate starts at a sequence no larger than this.
 constexpr std::int64_t kRestartMaxFirstSequence = 16;
 
-// kNone, or why (sequence, utime) does not follow (last_sequence,
-// last_utime): kOutOfOrder, kUtimeBackwards, kSequenceJump, kUtimeJump.
-RejectReason check_order(std::int64_t last_sequence, std::int64_t last_utime, std::int64_t sequence,
-                         std::int64_t utime, const OrderBounds& bounds = {});
-
 // The owner and its order (rules 1-3 above). check() is pure; the node
 // calls accept() for a message it accepted, extend_restart() for a valid
 // keyframe the order refused, and nothing for any other refusal.
@@ -125,7 +120,6 @@ class OrderTracker {
   std::int64_t last_sequence() const { return owned_ ? last_sequence_ : -1; }
   std::int64_t last_utime() const { return last_utime_; }
   std::uint64_t last_heard_ns() const { return last_heard_ns_; }
-  std::uint32_t restart_run() const { return run_length_; }
   std::uint64_t sequence_gaps() const { return gaps_; }
   std::uint64_t restarts() const { return restarts_; }
   std::uint64_t takeovers() const { return takeovers_; }
@@ -147,7 +141,7 @@ class OrderTracker {
   std::uint64_t gaps_ = 0, restarts_ = 0, takeovers_ = 0, owners_seen_ = 0;
 };
 
-// Decoded keyframe against the window (not the order: see check_order).
+// Decoded keyframe against the window (not the order: see OrderTracker).
 // `scratch` must hold msg.num_observations ids.
 RejectReason check_keyframe(const keepless::keyframe_t& msg, const core::Window& window,
                             std::uint64_t* scratch);
