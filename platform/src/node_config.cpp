@@ -74,9 +74,10 @@ std::string node_usage() {
          "  --max-memory-mb N         refuse to start when the fixed memory would exceed N MB (default 1024)\n"
          "  --max-sequence-jump N     refuse a sequence more than N above the publisher's last (default 1000000)\n"
          "  --max-utime-jump-s X      refuse a utime more than X s above the publisher's last (default 600)\n"
-         "  --restart-confirm N       N consecutive refused messages in order among themselves become the\n"
-         "                            publisher's new order: a restart or a poisoned order (default 3, 2..64)\n"
-         "  --max-publishers N        publisher ids tracked, each with its own order (default 4)\n"
+         "  --restart-confirm N       N valid keyframes of the window's publisher that start again near\n"
+         "                            sequence 0, in order among themselves, are a restart (default 3, 2..64)\n"
+         "  --owner-timeout-s X       another publisher id takes the window over only after its owner has\n"
+         "                            been silent X s (default 1; 0 = never)\n"
          "  --cull-memory N           culled point ids remembered against in-flight keyframes\n"
          "                            (default 0: the window's point capacity)\n"
          "  --M N                     pair -> sink capacity (default 100)\n"
@@ -234,9 +235,10 @@ ParseResult parse_node_arguments(int argc, const char* const* argv, NodeConfig& 
     } else if (flag == "--restart-confirm") {
       if (!parse_u64(value, 2, 64, n)) return bad("expected an integer in 2..64");
       config.restart_confirm = static_cast<std::uint32_t>(n);
-    } else if (flag == "--max-publishers") {
-      if (!parse_u64(value, 1, 64, n)) return bad("expected an integer in 1..64");
-      config.max_publishers = static_cast<std::uint32_t>(n);
+    } else if (flag == "--owner-timeout-s") {
+      double t = 0;
+      if (!parse_double(value, t) || t < 0 || t > 1e6) return bad("expected seconds in [0, 1e6]");
+      config.owner_timeout_s = t;
     } else if (flag == "--cull-memory") {
       if (!parse_u64(value, 0, 1u << 26, n)) return bad("expected an integer in 0..2^26");
       config.cull_memory = static_cast<std::uint32_t>(n);
@@ -315,6 +317,7 @@ OrderBounds order_bounds(const NodeConfig& config) {
   b.max_sequence_jump = config.max_sequence_jump;
   b.max_utime_jump_us = static_cast<std::uint64_t>(config.max_utime_jump_s * 1e6);
   b.restart_confirm = config.restart_confirm;
+  b.owner_timeout_ns = static_cast<std::uint64_t>(config.owner_timeout_s * 1e9);
   return b;
 }
 

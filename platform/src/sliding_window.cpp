@@ -99,13 +99,18 @@ core::Status SlidingWindow::edit(const Edit& e) {
   if (e.deleted_count > drop_table_.size() || e.merged_count > merge_table_.size()) {
     return core::Status::kCapacityExceeded;
   }
+  merges_effective_ = 0;
   if (e.deleted_count == 0 && e.merged_count == 0 && e.removed_count == 0) return core::Status::kOk;
   std::copy(e.deleted, e.deleted + e.deleted_count, drop_table_.begin());
   std::sort(drop_table_.begin(), drop_table_.begin() + e.deleted_count);
-  for (std::uint32_t i = 0; i < e.merged_count; ++i) merge_table_[i] = {e.merged_from[i], e.merged_into[i]};
+  for (std::uint32_t i = 0; i < e.merged_count; ++i) merge_table_[i] = {e.merged_from[i], e.merged_into[i], false};
   std::sort(merge_table_.begin(), merge_table_.begin() + e.merged_count,
             [](const Merge& x, const Merge& y) { return x.from < y.from; });
-  return rebuild(0, e.removed, e.removed_count, e.deleted_count, e.merged_count, nullptr, nullptr, 0);
+  const core::Status s = rebuild(0, e.removed, e.removed_count, e.deleted_count, e.merged_count, nullptr, nullptr, 0);
+  if (s == core::Status::kOk) {
+    for (std::uint32_t i = 0; i < e.merged_count; ++i) merges_effective_ += merge_table_[i].used ? 1 : 0;
+  }
+  return s;
 }
 
 core::Status SlidingWindow::rebuild(std::uint32_t skip_front, const core::KeyframeId* removed,
@@ -140,6 +145,7 @@ core::Status SlidingWindow::rebuild(std::uint32_t skip_front, const core::Keyfra
                                          [](const Merge& m, core::PointId p) { return m.from < p; });
         if (it != merge_end && it->from == o.point) {
           o.point = it->into;
+          it->used = true;
           merged = true;
         }
       }

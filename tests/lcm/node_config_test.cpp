@@ -225,7 +225,7 @@ TEST(NodeConfig, ParsesTheReliabilityFlags) {
   NodeConfig c;
   std::string error;
   ASSERT_EQ(parse({"--event-ack-channel", "ACK", "--max-memory-mb", "64", "--max-sequence-jump", "50",
-                   "--max-utime-jump-s", "2.5", "--restart-confirm", "5", "--max-publishers", "2",
+                   "--max-utime-jump-s", "2.5", "--restart-confirm", "5", "--owner-timeout-s", "0.25",
                    "--cull-memory", "100"},
                   c, error),
             ParseResult::kOk)
@@ -236,12 +236,13 @@ TEST(NodeConfig, ParsesTheReliabilityFlags) {
   EXPECT_EQ(b.max_sequence_jump, 50u);
   EXPECT_EQ(b.max_utime_jump_us, 2500000u);
   EXPECT_EQ(b.restart_confirm, 5u);
-  EXPECT_EQ(c.max_publishers, 2u);
+  EXPECT_EQ(b.owner_timeout_ns, 250000000u);
   EXPECT_EQ(c.cull_memory, 100u);
   for (const auto& bad : std::vector<std::vector<std::string>>{{"--restart-confirm", "1"},
                                                                {"--max-sequence-jump", "0"},
                                                                {"--max-utime-jump-s", "-1"},
-                                                               {"--max-publishers", "0"},
+                                                               {"--owner-timeout-s", "-1"},
+                                                               {"--max-publishers", "4"},  // removed: one owner
                                                                {"--max-memory-mb", "0"}}) {
     NodeConfig d;
     EXPECT_EQ(parse(bad, d, error), ParseResult::kError) << bad[0] << " " << bad[1];

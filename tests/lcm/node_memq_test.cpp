@@ -103,27 +103,29 @@ TEST_F(NodeOnMemq, AnUnknownKeyframeIdLosesNoValidItemAndIsAcknowledged) {
 }
 
 // Each bad merge or removal is refused alone, with its reason; every valid
-// item of the same event is applied.
+// item of the same event is applied. A source whose first item was refused
+// (3 -> 2, a chain) is merged by its next valid item (3 -> 8): a refused
+// item does not take the source's turn.
 TEST_F(NodeOnMemq, BadMergeItemsAreRefusedOneByOne) {
   fill_without_culling();  // 10: 0..29, 11: 10..39, 12: 20..49
   keepless::map_event_t e = kt::make_event(4);
   e.deleted_point_id = {5};
-  e.merged_from_id = {1, 2, 3, 3, 4, 6};
-  e.merged_into_id = {1, 7, 2, 8, 5, 9};  // self, ok, chain (2 is a source), repeat, into deleted, ok
-  e.removed_keyframe_id = {10, 10};
+  e.merged_from_id = {1, 2, 3, 3, 4, 6, 6};
+  e.merged_into_id = {1, 7, 2, 8, 5, 9, 10};  // self, ok, chain (2 is a source), ok, into deleted, ok, repeat
+  e.removed_keyframe_id = {12, 12};
   send(e);
   ASSERT_EQ(acks_.size(), 1u);
   const keepless::map_event_ack_t& a = acks_.back();
   using A = keepless::map_event_ack_t;
   EXPECT_EQ(a.status, A::STATUS_PARTIAL);
-  EXPECT_EQ(a.merged_applied, 2);  // 2 -> 7 and 6 -> 9
+  EXPECT_EQ(a.merged_applied, 3);  // 2 -> 7, 3 -> 8 and 6 -> 9
   EXPECT_EQ(a.refused[A::ITEM_MERGE_SELF], 1);
   EXPECT_EQ(a.refused[A::ITEM_MERGE_CHAIN], 1);
   EXPECT_EQ(a.refused[A::ITEM_MERGE_REPEATED_SOURCE], 1);
   EXPECT_EQ(a.refused[A::ITEM_MERGE_INTO_DELETED], 1);
   EXPECT_EQ(a.refused[A::ITEM_REMOVE_REPEATED], 1);
   EXPECT_EQ(a.removed_applied, 1);
-  EXPECT_EQ(node_->window().find_keyframe(10), -1);
+  EXPECT_EQ(node_->window().find_keyframe(12), -1);
   EXPECT_EQ(node_->counters().messages_rejected, 0u);
 }
 

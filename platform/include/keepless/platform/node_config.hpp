@@ -38,8 +38,10 @@ struct NodeConfig {
   // Stream-order policy (message_validation.hpp, OrderTracker).
   std::uint64_t max_sequence_jump = 1000000;  // messages
   double max_utime_jump_s = 600;
-  std::uint32_t restart_confirm = 3;  // refused in-order messages that become the new order
-  std::uint32_t max_publishers = 4;   // publisher ids with their own order
+  std::uint32_t restart_confirm = 3;  // valid keyframes back near the start that are a restart
+  // Another publisher id takes the window over only after its owner has been
+  // silent this long; 0: never.
+  double owner_timeout_s = 1.0;
   // Culled point ids remembered (a keyframe already in flight cannot bring
   // them back); 0: the window's point capacity.
   std::uint32_t cull_memory = 0;

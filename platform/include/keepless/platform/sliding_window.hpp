@@ -62,6 +62,9 @@ class SlidingWindow {
     std::uint32_t removed_count = 0;
   };
   [[nodiscard]] core::Status edit(const Edit& edit);
+  // Of the last successful edit's merges, those whose source the window
+  // held (the others changed nothing).
+  std::uint32_t merges_effective() const { return merges_effective_; }
 
   void clear();
   std::size_t memory_bytes() const;
@@ -70,6 +73,7 @@ class SlidingWindow {
   struct Merge {
     core::PointId from;
     core::PointId into;
+    bool used;  // the window held `from`
   };
   // Copies the active window into the spare, minus `skip_slots` slots from the
   // front, minus removed keyframes, with point ids mapped through the sorted
@@ -95,6 +99,7 @@ class SlidingWindow {
   std::vector<std::uint8_t> keep_scratch_;
   std::vector<core::PointId> drop_table_;           // sorted
   std::vector<Merge> merge_table_;                  // sorted by from
+  std::uint32_t merges_effective_ = 0;
 };
 
 }  // namespace keepless::platform
