@@ -430,6 +430,7 @@ std::string markdown_tables(const EvalSummary& s) {
         << " | " << n(r.failed.random, r.ate_random) << " | " << n(r.failed.longest_track, r.ate_longest_track) << " | "
         << n(r.failed.anms, r.ate_anms) << " |\n";
     }
+    o << "\n";
     // The coverage floor: how often it bound on ours's windows (only when it ever did or was asked for).
     bool floor_header = false;
     for (const ContractRun& r : s.runs) {
