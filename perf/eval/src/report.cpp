@@ -279,15 +279,23 @@ std::string sweep_tables(const EvalSummary& s) {
 std::string svg_sweep(const EvalSummary& s, const std::string& input) {
   std::string name;
   const std::vector<SweepSeries> series = sweep_of(s, input, &name);
-  double xmax = 1, ymax = 1e-9;
+  // ATE on a log scale: a lost run's error is orders above a tracked one's.
+  double xmax = 1, lo = INFINITY, hi = -INFINITY;
   for (const SweepSeries& se : series)
     for (const SweepPoint& p : se.points) {
       if (std::isfinite(p.observations.mean)) xmax = std::max(xmax, p.observations.mean);
-      if (std::isfinite(p.ate.mean)) ymax = std::max(ymax, p.ate.mean);
+      if (std::isfinite(p.ate.mean) && p.ate.mean > 0) {
+        lo = std::min(lo, std::log10(p.ate.mean));
+        hi = std::max(hi, std::log10(p.ate.mean));
+      }
     }
+  if (!std::isfinite(lo)) lo = -1, hi = 0;
+  lo = std::floor(lo);
+  hi = std::max(std::ceil(hi), lo + 1);
+  const auto log_ate = [](double v) { return v > 0 ? std::log10(v) : NAN; };
   Svg svg(800, 500);
-  Axes ax{90, 40, 540, 380, 0, xmax * 1.05, 0, ymax * 1.1};
-  ax.draw(svg, "local-BA observations (sum over the run, mean over seeds)", "RMS ATE (m)",
+  Axes ax{90, 40, 540, 380, 0, xmax * 1.05, lo, hi};
+  ax.draw(svg, "local-BA observations (sum over the run, mean over seeds)", "log10 RMS ATE (m)",
           name + ": ATE against local-BA size over the kept fraction F");
   const char* colours[] = {"#000000", "#1f77b4", "#7f7f7f", "#2ca02c", "#d62728"};
   double ly = 60;
@@ -296,10 +304,10 @@ std::string svg_sweep(const EvalSummary& s, const std::string& input) {
     const auto& pts = series[m].points;
     for (std::size_t i = 0; i < pts.size(); ++i) {
       const SweepPoint& p = pts[i];
-      if (!std::isfinite(p.observations.mean) || !std::isfinite(p.ate.mean)) continue;
-      const double x = ax.X(p.observations.mean), y = ax.Y(p.ate.mean);
-      if (i > 0 && std::isfinite(pts[i - 1].ate.mean) && std::isfinite(pts[i - 1].observations.mean))
-        svg.line(ax.X(pts[i - 1].observations.mean), ax.Y(pts[i - 1].ate.mean), x, y, c, 1.5);
+      if (!std::isfinite(p.observations.mean) || !std::isfinite(log_ate(p.ate.mean))) continue;
+      const double x = ax.X(p.observations.mean), y = ax.Y(log_ate(p.ate.mean));
+      if (i > 0 && std::isfinite(log_ate(pts[i - 1].ate.mean)) && std::isfinite(pts[i - 1].observations.mean))
+        svg.line(ax.X(pts[i - 1].observations.mean), ax.Y(log_ate(pts[i - 1].ate.mean)), x, y, c, 1.5);
       svg.circle(x, y, 4, c);
       if (m > 0) svg.text(x + 6, y - 6, "F " + f(p.fraction, 2), "start", 9);
       if (p.failed > 0) {
