@@ -67,7 +67,7 @@ run_job() {
   start=$(date +%s)
   if [ "$name" = colmap ]; then
     dir="$out/colmap"
-    mkdir -p "$dir"
+    mkdir -p "$dir/work"
     "$bin/keepless_maps_bench" --data "$data" --keep-fraction "$fractions" --seeds "$seeds" --work "$dir/work" \
       > "$dir/stdout.txt" 2> "$dir/stderr.txt" || rc=$?
   else
