@@ -615,7 +615,6 @@ std::string json_summary(const EvalSummary& s) {
 }
 
 bool read_outputs(const std::string& out_dir, EvalSummary* s, std::string* error) {
-  const std::size_t before = s->comparisons.size();
   namespace fsys = std::filesystem;
   const std::string csv_path = (fsys::path(out_dir) / "runs.csv").string();
   std::ifstream csv(csv_path);
@@ -653,7 +652,12 @@ bool read_outputs(const std::string& out_dir, EvalSummary* s, std::string* error
       *error = csv_path + ":1: no column " + need;
       return false;
     }
+  // One comparison per input and operating point across every directory
+  // read: a directory holding other seeds of the same point (the sweep's
+  // one process per seed) adds its records to the same comparison.
   std::vector<std::string> keys;
+  for (const Comparison& c : s->comparisons)
+    keys.push_back(c.info.input + "|" + json_number(c.target_fraction, 3) + "|" + std::to_string(c.M));
   int lineno = 1;
   while (std::getline(csv, line)) {
     ++lineno;
@@ -708,7 +712,7 @@ bool read_outputs(const std::string& out_dir, EvalSummary* s, std::string* error
       s->comparisons.push_back(c);
       it = keys.end() - 1;
     }
-    Comparison& c = s->comparisons[before + static_cast<std::size_t>(it - keys.begin())];
+    Comparison& c = s->comparisons[static_cast<std::size_t>(it - keys.begin())];
     if (r.variant != "original" && col("compared_M") < 0) c.M = r.M;
     std::vector<RunRecord>* to = &c.ablation;
     if (r.variant == "original") to = &c.original;
