@@ -16,6 +16,16 @@ const char* to_string(CostModel model) {
   return "paper";
 }
 
+const char* to_string(BudgetKind kind) {
+  switch (kind) {
+    case BudgetKind::kPoints: return "points";
+    case BudgetKind::kFraction: return "fraction";
+    case BudgetKind::kObservations: return "observations";
+    case BudgetKind::kNone: break;
+  }
+  return "none";
+}
+
 bool parse_scope(const char* text, Scope* out) {
   for (Scope s : {Scope::kWindow, Scope::kNewest}) {
     if (std::strcmp(text, to_string(s)) == 0) {

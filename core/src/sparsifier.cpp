@@ -5,6 +5,7 @@
 #include <memory>
 #include <vector>
 
+#include "keepless/core/keep_thresholds.hpp"
 #include "keepless/core/pairwise_start.hpp"
 #include "solver_status.hpp"
 
@@ -71,6 +72,17 @@ struct Sparsifier::Impl {
   std::vector<std::uint32_t> culled_at;    // [max_keyframes + 1]
   std::vector<std::uint32_t> culled_list;  // [max_observations]
   std::vector<std::uint32_t> candidates;   // [max_observations]
+  // Keep budgets (Params::budget, kind != kNone): the thresholds, each
+  // decision's M* (0: skipped), the kept-count curve (curve[b + 1]: the
+  // candidates with M* <= b, b <= max_points; M* = kNever counts in none),
+  // a counting sort's cursors and the candidates by (M*, id).
+  std::unique_ptr<KeepThresholds> thresholds;
+  std::vector<std::uint32_t> threshold_of;  // [max_points]
+  std::vector<std::uint32_t> curve;         // [max_points + 3]
+  std::vector<std::uint32_t> cursor;        // [max_points + 3]
+  std::vector<std::uint32_t> ranked;        // [max_points]
+  std::uint32_t max_points = 0;
+  bool budgeted = false;
   std::uint32_t count = 0;
   Summary summary;
   const solver::Clock* clock = nullptr;
@@ -90,6 +102,15 @@ struct Sparsifier::Impl {
                    : PaperNetwork::solver_capacity(c)),
         pairwise(st == Start::kClosedForm ? solver.capacity_limits() : solver::Capacity{}) {
     decisions.resize(c.max_points);
+    max_points = c.max_points;
+    budgeted = p.budget.kind != BudgetKind::kNone;
+    if (budgeted) {
+      thresholds = std::make_unique<KeepThresholds>(solver.capacity_limits());
+      threshold_of.resize(c.max_points);
+      curve.resize(std::size_t{c.max_points} + 3);
+      cursor.resize(std::size_t{c.max_points} + 3);
+      ranked.resize(c.max_points);
+    }
     // The policies' scratch only where they are on (Params are fixed).
     if (p.scope == Scope::kNewest) in_scope.resize(c.max_points);
     if (p.coverage_floor > 0) {
@@ -157,12 +178,105 @@ struct Sparsifier::Impl {
     sum.total_cost = solver.total_cost();
   }
 
+  // Keep budgets: every evaluated point's threshold M*, the scope, then the
+  // budget keeps the candidates (evaluated, in scope) with the smallest M*,
+  // ties to the smaller point id; flows are reported at the budget's M (the
+  // largest M* kept), so a point tied at that M beyond the budget is culled
+  // with a flow that M would keep.
+  template <typename Net>
+  void decide_budget(const Window& window, const Net& net) {
+    Summary& sum = summary;
+    const solver::Arc* arc = solver.arc_data();
+    thresholds->compute(solver, net.sink(), net.canonical_order(),
+                        static_cast<std::int32_t>(net.evaluated_count()), params.theta);
+    count = net.point_count();
+    for (std::uint32_t i = 0; i < count; ++i) {
+      PointDecision& d = decisions[i];
+      d.point = net.point_id(i);
+      d.flow = 0;
+      const std::int32_t a = net.point_source_arc(i);
+      if (a < 0) {
+        d.verdict = Verdict::kSkip;
+        d.capacity = 0;
+        threshold_of[i] = 0;
+        ++sum.skipped;
+        continue;
+      }
+      const std::int64_t n = net.point_views(i);
+      d.capacity = n * (n - 1) / 2;
+      d.verdict = Verdict::kCull;
+      threshold_of[i] = thresholds->threshold(arc[a].head);
+      ++sum.culled;
+    }
+    sum.points = count;
+    sum.evaluated = net.evaluated_count();
+    sum.pairs = net.pair_count();
+    sum.arcs = net.evaluated_count() + net.pair_arc_count() + net.pair_count();
+    const std::uint32_t k = window.keyframe_count();
+    if (params.scope == Scope::kNewest && k > 0) restrict_to_newest(window, k - 1);
+
+    // Candidates by (M*, id): a stable counting sort (decisions ascend by id).
+    const std::uint32_t never = max_points + 1;
+    const auto bucket = [&](std::uint32_t i) { return std::min(threshold_of[i], never); };
+    std::fill(curve.begin(), curve.begin() + never + 2, 0u);
+    std::uint32_t candidates = 0;
+    for (std::uint32_t i = 0; i < count; ++i) {
+      if (decisions[i].verdict != Verdict::kCull) continue;
+      ++curve[bucket(i) + 1];
+      ++candidates;
+    }
+    for (std::uint32_t b = 0; b <= never; ++b) curve[b + 1] += curve[b];
+    std::copy(curve.begin(), curve.begin() + never + 2, cursor.begin());
+    for (std::uint32_t i = 0; i < count; ++i) {
+      if (decisions[i].verdict == Verdict::kCull) ranked[cursor[bucket(i)]++] = i;
+    }
+
+    const KeepBudget& b = params.budget;
+    std::uint32_t take = 0;
+    std::uint64_t observations = 0;
+    if (b.kind == BudgetKind::kPoints) {
+      take = static_cast<std::uint32_t>(std::min<std::uint64_t>(b.count, candidates));
+    } else if (b.kind == BudgetKind::kFraction) {
+      const double want = std::floor(b.fraction * static_cast<double>(candidates) + 0.5);
+      take = static_cast<std::uint32_t>(std::min(want, static_cast<double>(candidates)));
+    } else {  // kObservations: the longest prefix within B
+      while (take < candidates && observations + net.point_views(ranked[take]) <= b.count) {
+        observations += net.point_views(ranked[take++]);
+      }
+    }
+    observations = 0;
+    std::uint32_t top = 0;
+    for (std::uint32_t j = 0; j < take; ++j) {
+      const std::uint32_t i = ranked[j];
+      decisions[i].verdict = Verdict::kKeep;
+      observations += net.point_views(i);
+      top = std::max(top, bucket(i));
+    }
+    sum.kept += take;
+    sum.culled -= take;
+    sum.budget_observations = observations;
+    sum.budget_m = top == never ? static_cast<std::int64_t>(never) : top;
+    thresholds->evaluate_at(sum.budget_m);
+    for (std::uint32_t i = 0; i < count; ++i) {
+      if (decisions[i].verdict == Verdict::kSkip) continue;
+      decisions[i].flow = thresholds->flow_at(arc[net.point_source_arc(i)].head);
+    }
+    sum.max_flow = thresholds->max_flow();
+    sum.total_cost = thresholds->total_cost();
+  }
+
+  std::uint32_t kept_at(std::int64_t m) const {
+    if (!budgeted || m < 1) return 0;
+    const std::uint32_t b = static_cast<std::uint32_t>(std::min<std::int64_t>(m, max_points));
+    return curve[b + 1];
+  }
+
   // The decision policies, on the verdicts of the exact optimum (see
   // Params::scope and Params::coverage_floor).
   template <typename Net>
   void apply_policies(const Window& window, const Net& net, bool finished) {
     const std::uint32_t k = window.keyframe_count();
-    if (params.scope == Scope::kNewest && k > 0) restrict_to_newest(window, k - 1);
+    if (!budgeted && params.scope == Scope::kNewest && k > 0) restrict_to_newest(window, k - 1);
     if (params.coverage_floor > 0 && finished) {
       net.point_slots(slots_at.data(), slots.data());
       apply_floor(k);
@@ -225,6 +339,9 @@ struct Sparsifier::Impl {
     culled_at[0] = 0;
 
     const auto nearer = [this](std::uint32_t a, std::uint32_t b) {
+      if (budgeted) {  // smaller threshold first
+        return threshold_of[a] != threshold_of[b] ? threshold_of[a] < threshold_of[b] : a < b;
+      }
       const PointDecision& x = decisions[a];
       const PointDecision& y = decisions[b];
       const std::int64_t l = x.flow * y.capacity, r = y.flow * x.capacity;
@@ -262,6 +379,17 @@ Status Sparsifier::validate(const Params& p) {
   if (!std::isfinite(p.theta) || p.theta < 0.0 || p.theta > 1.0) return Status::kInvalidArgument;
   if (p.box_width < 0 || p.box_height < 0) return Status::kInvalidArgument;
   if (p.scope != Scope::kWindow && p.scope != Scope::kNewest) return Status::kInvalidArgument;
+  switch (p.budget.kind) {
+    case BudgetKind::kNone:
+    case BudgetKind::kPoints:
+    case BudgetKind::kObservations: break;
+    case BudgetKind::kFraction:
+      if (!std::isfinite(p.budget.fraction) || p.budget.fraction < 0.0 || p.budget.fraction > 1.0) {
+        return Status::kInvalidArgument;
+      }
+      break;
+    default: return Status::kInvalidArgument;
+  }
   switch (p.cost_model) {
     case CostModel::kPaper:
     case CostModel::kInformation: return Status::kOk;
@@ -284,6 +412,14 @@ Status Sparsifier::run(const Window& window, const solver::Budget& budget) {
   if (Status b = net.build(window, s.params, s.solver); b != Status::kOk) return b;
   const std::uint64_t t1 = s.now();
   const solver::NodeId source = net.source(), sink = net.sink();
+  if (s.budgeted) {  // no solve: the thresholds decide
+    s.summary.keyframes = window.keyframe_count();
+    s.decide_budget(window, net);
+    const std::uint64_t t2 = s.now();
+    s.apply_policies(window, net, true);
+    s.times = StageTimes{t1 - t0, t2 - t1, s.now() - t2};
+    return Status::kOk;
+  }
   const Status result =
       s.start == Start::kClosedForm
           ? s.solve_closed_form(source, sink, net.canonical_order(),
@@ -362,7 +498,8 @@ Status Sparsifier::update(const Window& window, const solver::Budget& budget) {
   const solver::ArcId* order = net.canonical_order();
   Status result = Status::kOk;
   bool warm = false;
-  if (s.start == Start::kClosedForm) {
+  if (s.budgeted) {  // no solve: the thresholds decide (in the decide stage)
+  } else if (s.start == Start::kClosedForm) {
     result = s.solve_closed_form(net.source(), net.sink(), order, evaluated, solve_budget);
   } else {
     result = from_solver(s.solver.set_tie_order(order, evaluated));
@@ -386,7 +523,11 @@ Status Sparsifier::update(const Window& window, const solver::Budget& budget) {
   }
   const std::uint64_t d0 = deadline_clock != nullptr ? deadline_clock->now_ns() : 0;
   s.summary.keyframes = window.keyframe_count();
-  s.decide_all(net, result == Status::kOk);
+  if (s.budgeted) {
+    s.decide_budget(window, net);
+  } else {
+    s.decide_all(net, result == Status::kOk);
+  }
   s.apply_policies(window, net, result == Status::kOk);
   if (deadline_clock != nullptr) s.decide_time.add(deadline_clock->now_ns() - d0);
   s.times = StageTimes{t1 - t0, t2 - t1, s.now() - t2};
@@ -399,6 +540,10 @@ bool Sparsifier::deferred() const { return impl_->deferred; }
 const Summary& Sparsifier::summary() const { return impl_->summary; }
 std::uint32_t Sparsifier::decision_count() const { return impl_->count; }
 const PointDecision* Sparsifier::decisions() const { return impl_->decisions.data(); }
+std::uint32_t Sparsifier::kept_at(std::int64_t m) const { return impl_->kept_at(m); }
+const std::uint32_t* Sparsifier::keep_thresholds() const {
+  return impl_->budgeted ? impl_->threshold_of.data() : nullptr;
+}
 const Params& Sparsifier::params() const { return impl_->params; }
 const PaperNetwork& Sparsifier::network() const {
   if (impl_->network) return *impl_->network;
@@ -416,7 +561,9 @@ std::size_t Sparsifier::memory_bytes() const {
   const Impl& s = *impl_;
   return sizeof(Sparsifier) + sizeof(Impl) + (s.network ? s.network->memory_bytes() : 0) +
          (s.incremental ? s.incremental->memory_bytes() : 0) + s.solver.memory_bytes() +
-         s.pairwise.memory_bytes() +
+         s.pairwise.memory_bytes() + (s.thresholds ? s.thresholds->memory_bytes() : 0) +
+         (s.threshold_of.capacity() + s.curve.capacity() + s.cursor.capacity() +
+          s.ranked.capacity()) * sizeof(std::uint32_t) +
          s.decisions.capacity() * sizeof(PointDecision) +
          s.in_scope.capacity() +
          (s.slots_at.capacity() + s.slots.capacity() + s.covered.capacity() +

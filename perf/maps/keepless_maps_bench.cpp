@@ -1,19 +1,23 @@
 // keepless_maps_bench: what map compression costs in accuracy on a real
 // reconstruction, checked by COLMAP's own bundle adjuster.
 //
-//   keepless_maps_bench [--data DIR] [--colmap BIN] [--M 30,100,200] [--K 20] [--seeds 5] [--work DIR]
-//                       [--cost paper|authors|information]
+//   keepless_maps_bench [--data DIR] [--colmap BIN] [--M 30,100,200 | --keep-fraction 0.1,0.3] [--K 20]
+//                       [--seeds 5] [--work DIR] [--cost paper|authors|information]
 //
 // On the shared fixture (DIR/colmap_kitti06_first51, 51 KITTI 06 images):
 // the full model is re-solved by `colmap bundle_adjuster` (fixed intrinsics,
-// SOURCES.md's flags); then, per M, keepless replay and whole (each with the
+// SOURCES.md's flags); then, per M (or per keep fraction F: keepless with
+// that keep budget per window, M unused, reported as 0), keepless replay and whole (each with the
 // per-image floor), and at replay's point count: random (--seeds seeds),
 // longest-track-first and `colmap point_filtering` (the --min_track_len
 // whose count is nearest). Each sparsified model is bundle-adjusted the same
 // way. Printed per row: points kept, min observations per image, BA time
 // and termination, camera-centre deviation from the full solution (max and
 // RMS, same gauge), and ATE (RMS) against the KITTI poses after the
-// fixture's similarity. Last line: a JSON summary.
+// fixture's similarity. A BA that does not terminate by convergence is
+// reported as such: "conv" NO, "converged" 0 and "failed" per row (for
+// random, the seeds whose BA did not converge, which its means include),
+// "not_converged" over all rows. Last line: a JSON summary.
 
 #include <sys/stat.h>
 #include <unistd.h>
@@ -50,6 +54,7 @@ struct Options {
   std::string data = "../shared/data";
   std::string colmap = "colmap";
   std::vector<std::int64_t> Ms = {30, 100, 200};
+  std::vector<double> fractions;  // --keep-fraction: keep budgets instead of Ms
   std::uint32_t K = 20;
   int seeds = 5;
   std::string work;
@@ -178,10 +183,11 @@ struct Bench {
     return r;
   }
 
-  std::vector<bool> keepless_culls(sp::Mode mode, std::int64_t M, const io::Keyframes& kfs,
+  std::vector<bool> keepless_culls(sp::Mode mode, std::int64_t M, double fraction, const io::Keyframes& kfs,
                                    const std::vector<std::vector<core::PointId>>& images) {
     core::Params params;
-    params.pair_capacity = M;
+    params.pair_capacity = std::max<std::int64_t>(M, 1);
+    if (std::isfinite(fraction)) params.budget = {core::BudgetKind::kFraction, 0, fraction};
     params.cost_model = opt.cost;
     params.image_width = static_cast<std::int32_t>(original.cameras.front().width);
     params.image_height = static_cast<std::int32_t>(original.cameras.front().height);
@@ -225,6 +231,16 @@ int main(int argc, char** argv) {
     if (f == "--data") opt.data = argv[i + 1];
     else if (f == "--colmap") opt.colmap = argv[i + 1];
     else if (f == "--M") opt.Ms = parse_list(argv[i + 1]);
+    else if (f == "--keep-fraction") {
+      opt.fractions.clear();
+      std::stringstream in(argv[i + 1]);
+      for (std::string t; std::getline(in, t, ',');) {
+        char* end = nullptr;
+        const double x = std::strtod(t.c_str(), &end);
+        if (t.empty() || *end != '\0' || !(x >= 0 && x <= 1)) die("bad --keep-fraction (numbers in [0, 1])");
+        opt.fractions.push_back(x);
+      }
+    }
     else if (f == "--K") opt.K = static_cast<std::uint32_t>(std::atoi(argv[i + 1]));
     else if (f == "--seeds") opt.seeds = std::atoi(argv[i + 1]);
     else if (f == "--work") opt.work = argv[i + 1];
@@ -293,28 +309,40 @@ int main(int argc, char** argv) {
               "dev_max_m", "dev_rms_m", "ATE_m");
   std::vector<Row> rows;
   std::string json = "{\"rows\":[";
+  int not_converged = 0;
+  double fraction = NAN;  // the operating point's keep fraction (NaN: an M)
   const auto add_json = [&](const std::string& method, std::int64_t M, std::uint64_t points, double min_obs,
                             double ba_s, double dev_max, double dev_rms, double ate_m, double ate_sd,
-                            int converged) {
-    char line[512];
+                            int converged, int failed, double fraction) {
+    char line[640];
     std::snprintf(line, sizeof line,
                   "%s{\"method\":\"%s\",\"M\":%" PRId64 ",\"points\":%" PRIu64
                   ",\"min_obs\":%.1f,\"ba_s\":%.3f,\"dev_max_m\":%.5f,\"dev_rms_m\":%.5f,\"ate_m\":%.5f,"
-                  "\"ate_sd_m\":%.5f,\"converged\":%d}",
+                  "\"ate_sd_m\":%.5f,\"converged\":%d,\"failed\":%d,\"keep_fraction\":%s}",
                   json.back() == '[' ? "" : ",", method.c_str(), M, points, min_obs, ba_s, dev_max, dev_rms, ate_m,
-                  ate_sd, converged);
+                  ate_sd, converged, failed, std::isfinite(fraction) ? std::to_string(fraction).c_str() : "null");
     json += line;
+    not_converged += failed;
   };
   const auto add_row = [&](const Row& r) {
-    add_json(r.method, r.M, r.points, r.min_obs, r.ba_s, r.dev_max, r.dev_rms, r.ate, 0, r.converged ? 1 : 0);
+    add_json(r.method, r.M, r.points, r.min_obs, r.ba_s, r.dev_max, r.dev_rms, r.ate, 0, r.converged ? 1 : 0,
+             r.converged ? 0 : 1, fraction);
   };
   Row full_row{"full", 0, b.original.points.size(), min_observations(b.original), full.seconds, full.converged, 0, 0,
                ate(b.full, b.gt)};
   add_row(full_row);
-  for (const std::int64_t M : opt.Ms) {
-    const Row replay = b.score("keepless_replay", M, b.keepless_culls(sp::Mode::kReplay, M, kfs, images));
+  std::vector<std::pair<std::int64_t, double>> ops;  // (M, NaN) or (0, F)
+  if (opt.fractions.empty()) {
+    for (const std::int64_t M : opt.Ms) ops.emplace_back(M, NAN);
+  } else {
+    for (const double F : opt.fractions) ops.emplace_back(0, F);
+  }
+  for (const auto& [M, F] : ops) {
+    fraction = F;
+    if (std::isfinite(F)) std::printf("keep fraction %.2f (a keep budget per window; M unused)\n", F);
+    const Row replay = b.score("keepless_replay", M, b.keepless_culls(sp::Mode::kReplay, M, F, kfs, images));
     add_row(replay);
-    add_row(b.score("keepless_whole", M, b.keepless_culls(sp::Mode::kWhole, M, kfs, images)));
+    add_row(b.score("keepless_whole", M, b.keepless_culls(sp::Mode::kWhole, M, F, kfs, images)));
     const std::uint64_t n = replay.points;
     add_row(b.score("longest_track", M, b.keep_first(longest, n)));
     std::vector<double> dmax, drms, at, mins, ba_s;
@@ -333,9 +361,12 @@ int main(int argc, char** argv) {
       converged += r.converged;
     }
     const Stat sm = stat(dmax), sr = stat(drms), sa = stat(at), smin = stat(mins);
-    std::printf("%-22s %5" PRId64 " %7" PRIu64 " %7.1f %8.2f %d/%d   %5.4f±%.4f %5.4f±%.4f %.4f±%.4f\n", "random (mean±sd)",
-                M, n, smin.mean, stat(ba_s).mean, converged, opt.seeds, sm.mean, sm.sd, sr.mean, sr.sd, sa.mean, sa.sd);
-    add_json("random", M, n, smin.mean, stat(ba_s).mean, sm.mean, sr.mean, sa.mean, sa.sd, converged);
+    std::printf("%-22s %5" PRId64 " %7" PRIu64 " %7.1f %8.2f %d/%d   %5.4f±%.4f %5.4f±%.4f %.4f±%.4f%s\n",
+                "random (mean±sd)", M, n, smin.mean, stat(ba_s).mean, converged, opt.seeds, sm.mean, sm.sd, sr.mean,
+                sr.sd, sa.mean, sa.sd,
+                converged < opt.seeds ? "  (includes seeds whose BA did not converge)" : "");
+    add_json("random", M, n, smin.mean, stat(ba_s).mean, sm.mean, sr.mean, sa.mean, sa.sd, converged,
+             opt.seeds - converged, F);
     // COLMAP's own filter, at the track length whose count is nearest.
     int best = 2;
     for (const auto& [t, count] : filter_count) {
@@ -353,7 +384,8 @@ int main(int argc, char** argv) {
     add_row(b.score("colmap_filter_len" + std::to_string(best), M, culled));
   }
   json += "],\"full_ba_s\":" + std::to_string(full.seconds) + ",\"K\":" + std::to_string(opt.K) +
-          ",\"seeds\":" + std::to_string(opt.seeds) + ",\"floor\":" + std::to_string(sp::kDefaultFloor) +
+          ",\"seeds\":" + std::to_string(opt.seeds) + ",\"not_converged\":" + std::to_string(not_converged) +
+          ",\"floor\":" + std::to_string(sp::kDefaultFloor) +
           ",\"cost\":\"" + core::to_string(opt.cost) + "\"}";
   std::printf("%s\n", json.c_str());
   return 0;

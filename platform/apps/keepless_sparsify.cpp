@@ -1,6 +1,6 @@
 // keepless_sparsify: decides one window (or a whole map) offline.
 //
-//   keepless_sparsify --window FILE [--M 100] [--theta 0.5] [--box 64x48] [--decisions OUT]
+//   keepless_sparsify --window FILE [--M 100 | --keep-points K | --keep-fraction F | --keep-observations B] [--theta 0.5] [--box 64x48] [--decisions OUT]
 //                     [--scope window|newest] [--floor L] [--cost paper|authors|information]
 //                     [--image 640x480] [--max-keyframes N] [--max-points N]
 //                     [--max-observations N] [--max-pair-arcs N] [--max-memory-mb N]
@@ -54,7 +54,8 @@ constexpr int kExitInput = 2;
 constexpr int kExitInternal = 1;
 
 constexpr const char* kUsage =
-    "usage: keepless_sparsify --window FILE [--M 100] [--theta 0.5] [--box 64x48] "
+    "usage: keepless_sparsify --window FILE [--M 100 | --keep-points K | --keep-fraction F | "
+    "--keep-observations B] [--theta 0.5] [--box 64x48] "
     "[--decisions OUT] [--scope window|newest] [--floor 0] [--cost paper|authors|information] "
     "[--image 640x480] [--max-keyframes 10000] [--max-points 2000000] "
     "[--max-observations 10000000] [--max-pair-arcs 50000000] [--max-memory-mb 2048]; or --colmap DIR | --bal FILE "
@@ -86,6 +87,7 @@ bool parse_limit(const char* text, std::uint32_t* out) {
 
 // Returns -1 on success, else the exit status (after printing).
 int parse_args(int argc, char** argv, Options* opt, bool* help) {
+  bool m_given = false;  // --M and a keep budget exclude each other
   for (int i = 1; i < argc; ++i) {
     const std::string flag = argv[i];
     if (flag == "--help" || flag == "-h") {
@@ -112,6 +114,25 @@ int parse_args(int argc, char** argv, Options* opt, bool* help) {
         return usage_error(bad + " (an integer in 1..2147483647)");
       }
       opt->params.pair_capacity = static_cast<std::int64_t>(m);
+      m_given = true;
+    } else if (flag == "--keep-points" || flag == "--keep-fraction" || flag == "--keep-observations") {
+      if (opt->params.budget.kind != core::BudgetKind::kNone) {
+        return usage_error(bad + " (only one keep budget may be given)");
+      }
+      if (flag == "--keep-fraction") {
+        double f = 0;
+        if (!core::parse_finite_double(value, &f) || !(f >= 0.0 && f <= 1.0)) {
+          return usage_error(bad + " (a number in [0, 1])");
+        }
+        opt->params.budget = core::KeepBudget{core::BudgetKind::kFraction, 0, f};
+      } else {
+        std::uint64_t n = 0;
+        if (!core::parse_uint64(value, &n) || n > std::numeric_limits<std::uint32_t>::max()) {
+          return usage_error(bad + " (an integer >= 0)");
+        }
+        opt->params.budget = core::KeepBudget{
+            flag == "--keep-points" ? core::BudgetKind::kPoints : core::BudgetKind::kObservations, n, 0.0};
+      }
     } else if (flag == "--theta") {
       double theta = 0;
       if (!core::parse_finite_double(value, &theta) || !(theta >= 0.0 && theta <= 1.0)) {
@@ -159,6 +180,10 @@ int parse_args(int argc, char** argv, Options* opt, bool* help) {
     } else {
       return usage_error("unknown flag '" + flag + "'");
     }
+  }
+  if (m_given && opt->params.budget.kind != core::BudgetKind::kNone) {
+    return usage_error(std::string("--M and --keep-") + core::to_string(opt->params.budget.kind) +
+                       " exclude each other: a keep budget replaces M");
   }
   if (opt->window.empty() == opt->model.path.empty()) {
     return usage_error("one of --window, --colmap, --bal is required");
@@ -262,6 +287,14 @@ int run(const Options& opt) {
   const std::size_t memory = window.memory_bytes() + sparsifier.memory_bytes();
   char theta[32];
   *std::to_chars(theta, theta + sizeof theta - 1, opt.params.theta).ptr = '\0';  // shortest exact
+  // The budget's value: K or B, or F (shortest exact); 0 without a budget.
+  char budget_value[32];
+  const core::KeepBudget& kb = opt.params.budget;
+  if (kb.kind == core::BudgetKind::kFraction) {
+    *std::to_chars(budget_value, budget_value + sizeof budget_value - 1, kb.fraction).ptr = '\0';
+  } else {
+    *std::to_chars(budget_value, budget_value + sizeof budget_value - 1, kb.count).ptr = '\0';
+  }
   std::printf(
       "{\"keyframes\":%u,\"points\":%u,\"evaluated\":%u,\"kept\":%u,\"culled\":%u,"
       "\"skipped\":%u,\"pairs\":%u,\"arcs\":%u,\"max_flow\":%" PRId64 ",\"total_cost\":%" PRId64
@@ -269,12 +302,14 @@ int run(const Options& opt) {
       ",\"theta\":%s,\"box_width\":%d,\"box_height\":%d,"
       "\"parse_ms\":%.3f,\"build_ms\":%.3f,\"solve_ms\":%.3f,\"memory_bytes\":%zu,"
       "\"scope\":\"%s\",\"floor\":%u,\"cost\":\"%s\",\"out_of_scope\":%u,"
-      "\"floor_keyframes\":%u,\"floor_promoted\":%u,\"floor_short\":%u}\n",
+      "\"floor_keyframes\":%u,\"floor_promoted\":%u,\"floor_short\":%u,"
+      "\"budget\":\"%s\",\"budget_value\":%s,\"budget_m\":%" PRId64 ",\"budget_observations\":%" PRIu64 "}\n",
       sum.keyframes, sum.points, sum.evaluated, sum.kept, sum.culled, sum.skipped, sum.pairs,
       sum.arcs, sum.max_flow, sum.total_cost, opt.params.pair_capacity, theta, opt.params.box_width,
       opt.params.box_height, parse_ms, build_ms, solve_ms, memory, core::to_string(opt.params.scope),
       opt.params.coverage_floor, core::to_string(opt.params.cost_model), sum.out_of_scope,
-      sum.floor_keyframes, sum.floor_promoted, sum.floor_short);
+      sum.floor_keyframes, sum.floor_promoted, sum.floor_short,
+      core::to_string(opt.params.budget.kind), budget_value, sum.budget_m, sum.budget_observations);
   return std::fflush(stdout) == 0 ? 0 : kExitInternal;
 }
 

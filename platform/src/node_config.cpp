@@ -81,6 +81,11 @@ std::string node_usage() {
          "  --cull-memory N           culled point ids remembered against in-flight keyframes\n"
          "                            (default 0: the window's point capacity)\n"
          "  --M N                     pair -> sink capacity (default 100)\n"
+         "  --keep-points K           keep budget instead of --M: the K evaluated points with the smallest\n"
+         "                            keep threshold per window (ties to the smaller point id)\n"
+         "  --keep-fraction F         keep budget: round(F x evaluated) points per window, F in [0, 1]\n"
+         "  --keep-observations B     keep budget: points in the same order while their window\n"
+         "                            observations sum to <= B\n"
          "  --theta X                 keep iff flow > X * n(n-1)/2 (default 0.5)\n"
          "  --box WxH                 spatial-diversity box in pixels (default 64x48)\n"
          "  --scope window|newest     decide every window point, or only the newest keyframe's (default window)\n"
@@ -157,6 +162,7 @@ bool apply_profile(const std::string& name, NodeConfig& config) {
 ParseResult parse_node_arguments(int argc, const char* const* argv, NodeConfig& config,
                                  std::string& error) {
   if (ParseResult r = parse_profile(argc, argv, config, error); r != ParseResult::kOk) return r;
+  bool m_given = false;  // --M and a keep budget exclude each other
   for (int i = 1; i < argc; ++i) {
     std::string flag = argv[i];
     if (is_profile_flag(flag)) {  // applied above
@@ -245,6 +251,18 @@ ParseResult parse_node_arguments(int argc, const char* const* argv, NodeConfig& 
     } else if (flag == "--M") {
       if (!parse_u64(value, 1, 1u << 30, n)) return bad("expected an integer >= 1");
       config.params.pair_capacity = static_cast<std::int64_t>(n);
+      m_given = true;
+    } else if (flag == "--keep-points" || flag == "--keep-observations" || flag == "--keep-fraction") {
+      if (config.params.budget.kind != core::BudgetKind::kNone) return bad("only one keep budget may be given");
+      if (flag == "--keep-fraction") {
+        double f = 0;
+        if (!parse_double(value, f) || !(f >= 0 && f <= 1)) return bad("expected a number in [0, 1]");
+        config.params.budget = core::KeepBudget{core::BudgetKind::kFraction, 0, f};
+      } else {
+        if (!parse_u64(value, 0, std::numeric_limits<std::uint32_t>::max(), n)) return bad("expected an integer >= 0");
+        config.params.budget = core::KeepBudget{
+            flag == "--keep-points" ? core::BudgetKind::kPoints : core::BudgetKind::kObservations, n, 0.0};
+      }
     } else if (flag == "--theta") {
       double t = 0;
       if (!parse_double(value, t) || t < 0 || t > 1) return bad("expected a number in [0, 1]");
@@ -299,6 +317,11 @@ ParseResult parse_node_arguments(int argc, const char* const* argv, NodeConfig& 
               std::to_string(config.max_observations) + ": one keyframe would not fit the window";
       return ParseResult::kError;
     }
+  }
+  if (m_given && config.params.budget.kind != core::BudgetKind::kNone) {
+    error = "--M and --keep-" + std::string(core::to_string(config.params.budget.kind)) +
+            " exclude each other: a keep budget replaces M";
+    return ParseResult::kError;
   }
   // The worst-case window must stay addressable by the solver's int32 arc ids.
   const std::uint64_t arcs = static_cast<std::uint64_t>(config.window) * config.max_observations *

@@ -24,6 +24,8 @@
 
 #include "keepless/core/config.hpp"
 #include "keepless/core/decision.hpp"
+#include "keepless/core/sparsifier.hpp"
+#include "keepless/core/window.hpp"
 #include "keepless/core/window_file.hpp"
 #include "child_run.hpp"
 #include "keepless/platform/window_file_io.hpp"
@@ -251,6 +253,13 @@ TEST_F(SparsifyCliTest, FlagErrorsPrintOneUsageLine) {
       {"--window", window, "--floor", "4294967296"},
       {"--window", window, "--cost", "Paper"},
       {"--window", window, "--image", "0x480"},
+      {"--window", window, "--M", "5", "--keep-points", "10"},
+      {"--window", window, "--keep-fraction", "0.3", "--M", "5"},
+      {"--window", window, "--keep-fraction", "1.5"},
+      {"--window", window, "--keep-fraction", "nan"},
+      {"--window", window, "--keep-points", "-1"},
+      {"--window", window, "--keep-observations", "x"},
+      {"--window", window, "--keep-points", "3", "--keep-fraction", "0.3"},
   };
   for (const auto& args : cases) {
     std::string shown;
@@ -481,6 +490,55 @@ TEST_F(SparsifyCliTest, PoliciesMatchReference) {
     const Result r = sparsify({"--window", window, "--M", "2", "--scope", p.scope, "--floor",
                                p.floor, "--cost", p.cost, "--image", "320x240", "--decisions", out});
     expect_matches_reference(r, window, out, params);
+  }
+}
+
+// --keep-points/--keep-fraction/--keep-observations reach the library: the
+// JSON's counts and the decisions file are the library's under that budget,
+// and the budget is echoed.
+TEST_F(SparsifyCliTest, KeepBudgetsReachTheLibrary) {
+  const std::string window = write("clustered.txt", clustered_window());
+  const std::string out = path("decisions.txt");
+  struct B {
+    const char* flag;
+    const char* value;
+    core::KeepBudget budget;
+    const char* kind;
+  };
+  for (const B& b : {B{"--keep-points", "7", {core::BudgetKind::kPoints, 7, 0.0}, "points"},
+                     B{"--keep-fraction", "0.3", {core::BudgetKind::kFraction, 0, 0.3}, "fraction"},
+                     B{"--keep-observations", "20", {core::BudgetKind::kObservations, 20, 0.0},
+                       "observations"}}) {
+    SCOPED_TRACE(b.flag);
+    const Result r = sparsify({"--window", window, b.flag, b.value, "--decisions", out});
+    ASSERT_EQ(r.status, 0) << r.err;
+    core::Params params;
+    params.budget = b.budget;
+    core::WindowFile file;
+    std::string error;
+    ASSERT_TRUE(keepless::platform::read_window_file(window, &file, &error)) << error;
+    const core::Capacities caps = core::compute_needs(file);
+    core::Window w(caps);
+    for (std::size_t k = 0; k < file.keyframes.size(); ++k) {
+      ASSERT_EQ(w.add_keyframe(file.keyframes[k], file.observations[k].data(),
+                               static_cast<std::uint32_t>(file.observations[k].size())),
+                core::Status::kOk);
+    }
+    core::Sparsifier s(caps, params);
+    ASSERT_EQ(s.run(w), core::Status::kOk);
+    EXPECT_NE(r.out.find("\"kept\":" + std::to_string(s.summary().kept) + ","), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find(std::string("\"budget\":\"") + b.kind + "\",\"budget_value\":" + b.value),
+              std::string::npos)
+        << r.out;
+    EXPECT_NE(r.out.find("\"budget_m\":" + std::to_string(s.summary().budget_m) + ","), std::string::npos);
+    std::ifstream in(out);
+    std::uint32_t kept = 0, lines = 0;
+    for (std::string line; std::getline(in, line);) {
+      ++lines;
+      kept += line.find(" keep ") != std::string::npos;
+    }
+    EXPECT_EQ(kept, s.summary().kept);
+    EXPECT_GT(lines, kept);
   }
 }
 

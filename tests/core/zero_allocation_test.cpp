@@ -99,7 +99,8 @@ TEST(ZeroAllocation, DecisionPathAllocatesNothing) {
 
 // The same with every policy on: the newest keyframe's scope, a floor that
 // binds, and each cost model reading depths, intrinsics and unmapped
-// keypoints; from-scratch and incremental, both starts.
+// keypoints, without and with each keep budget; from-scratch and
+// incremental, both starts.
 TEST(ZeroAllocation, PoliciesAndCostModelsAllocateNothing) {
   const Capacities caps{12, 2048, 8192, 32768, 2048};
   struct Frame {
@@ -119,14 +120,20 @@ TEST(ZeroAllocation, PoliciesAndCostModelsAllocateNothing) {
     windows.push_back(std::move(frames));
   }
   std::vector<std::unique_ptr<Sparsifier>> sparsifiers;
+  // Each with no budget and with each kind of keep budget.
+  const KeepBudget budgets[] = {{}, {BudgetKind::kPoints, 40, 0.0}, {BudgetKind::kFraction, 0, 0.3},
+                                {BudgetKind::kObservations, 150, 0.0}};
   for (CostModel model : {CostModel::kPaper, CostModel::kAuthors, CostModel::kInformation}) {
-    Params p;
-    p.pair_capacity = 2;
-    p.scope = Scope::kNewest;
-    p.coverage_floor = 10;
-    p.cost_model = model;
-    for (Start start : {Start::kClosedForm, Start::kZeroFlow}) {
-      sparsifiers.push_back(std::make_unique<Sparsifier>(caps, p, SolveMode::kIncremental, start));
+    for (const KeepBudget& budget : budgets) {
+      Params p;
+      p.pair_capacity = 2;
+      p.scope = Scope::kNewest;
+      p.coverage_floor = 10;
+      p.cost_model = model;
+      p.budget = budget;
+      for (Start start : {Start::kClosedForm, Start::kZeroFlow}) {
+        sparsifiers.push_back(std::make_unique<Sparsifier>(caps, p, SolveMode::kIncremental, start));
+      }
     }
   }
   Window window(caps);

@@ -32,6 +32,7 @@ namespace {
 constexpr std::uint64_t kExpectedCostHash = 0x231e8d5f5870d2a7ULL;
 constexpr std::uint64_t kExpectedDecisionHash = 0x6da842663cdda28eULL;
 constexpr std::uint64_t kExpectedPolicyHash = 0x8092a28e8907ad34ULL;
+constexpr std::uint64_t kExpectedBudgetHash = 0x95b5b9d23195ea3dULL;
 
 // splitmix64: a fixed, portable stream (std:: distributions are not
 // specified bit for bit across standard libraries).
@@ -401,6 +402,77 @@ TEST(CrossArchitecture, PolicyDecisionsMatchRecordedHash) {
   EXPECT_EQ(hash.value(), kExpectedPolicyHash)
       << "policy decision hash " << hex(hash.value()) << " (expected " << hex(kExpectedPolicyHash)
       << ")";
+}
+
+// Keep budgets (points, fraction, observations) with every cost model, a
+// scope and a floor: the decisions, each point's keep threshold M*, the
+// budget's M and the kept-count curve.
+TEST(CrossArchitecture, BudgetDecisionsMatchRecordedHash) {
+  constexpr std::uint32_t kWindows = 24;
+  const Capacities capacities = generated_capacities();
+
+  SplitMix64 rng(0x6275646765740001ULL);
+  SplitMix64 extra(0x6275646765740002ULL);
+  Fnv1a64 hash;
+  Window window(capacities);
+  std::uint64_t kept = 0, culled = 0;
+  std::vector<Keypoint> unmapped;
+  for (std::uint32_t index = 0; index < kWindows; ++index) {
+    GeneratedWindow g = generate_window(rng, index);
+    window.clear();
+    for (std::size_t f = 0; f < g.keyframes.size(); ++f) {
+      Keyframe kf = g.keyframes[f];
+      kf.fx = 500.0 + 100.0 * extra.fraction(20);
+      kf.fy = kf.fx * (1.0 + 0.01 * extra.fraction(10));
+      kf.cx = 320.0 + 10.0 * extra.fraction(20);
+      kf.cy = 240.0 + 10.0 * extra.fraction(20);
+      unmapped.resize(extra.below(200));
+      for (Keypoint& k : unmapped) k = {700.0 * extra.fraction(24) - 30.0, 520.0 * extra.fraction(24) - 20.0};
+      kf.unmapped = unmapped.data();
+      kf.unmapped_count = static_cast<std::uint32_t>(unmapped.size());
+      for (Observation& o : g.observations[f]) {
+        o.depth = extra.below(10) == 0 ? 0.0 : 0.3 + 30.0 * extra.fraction(30);
+      }
+      ASSERT_EQ(window.add_keyframe(kf, g.observations[f].data(),
+                                    static_cast<std::uint32_t>(g.observations[f].size())),
+                Status::kOk)
+          << "window " << index << " keyframe " << f;
+    }
+    const KeepBudget budgets[] = {{BudgetKind::kPoints, 40u + 13u * index, 0.0},
+                                  {BudgetKind::kFraction, 0, 0.05 * (1 + index % 12)},
+                                  {BudgetKind::kObservations, 150u + 41u * index, 0.0}};
+    for (CostModel model : {CostModel::kPaper, CostModel::kAuthors, CostModel::kInformation}) {
+      Params p = g.params;
+      p.cost_model = model;
+      p.scope = index % 2 == 0 ? Scope::kNewest : Scope::kWindow;
+      p.coverage_floor = index % 3 == 0 ? 0 : 5 + 3 * (index % 4);
+      p.budget = budgets[(index + static_cast<std::uint32_t>(model)) % 3];
+      Sparsifier sparsifier(capacities, p);
+      ASSERT_EQ(sparsifier.run(window), Status::kOk) << "window " << index;
+      const Summary& s = sparsifier.summary();
+      hash.add(index, 4);
+      hash.add(static_cast<std::uint64_t>(model), 1);
+      const PointDecision* d = sparsifier.decisions();
+      for (std::uint32_t i = 0; i < sparsifier.decision_count(); ++i) {
+        hash.add(d[i].point);
+        hash.add(static_cast<std::uint64_t>(d[i].verdict), 1);
+        hash.add_signed(d[i].flow);
+        hash.add(sparsifier.keep_thresholds()[i], 4);
+      }
+      hash.add_signed(s.max_flow);
+      hash.add_signed(s.total_cost);
+      hash.add_signed(s.budget_m);
+      hash.add(s.budget_observations);
+      hash.add(s.floor_promoted, 4);
+      for (std::int64_t m = 1; m <= 64; ++m) hash.add(sparsifier.kept_at(m), 4);
+      kept += s.kept;
+      culled += s.culled;
+    }
+  }
+  EXPECT_GT(kept, 0u);
+  EXPECT_GT(culled, 0u);
+  EXPECT_EQ(hash.value(), kExpectedBudgetHash)
+      << "budget decision hash " << hex(hash.value()) << " (expected " << hex(kExpectedBudgetHash) << ")";
 }
 
 }  // namespace

@@ -177,7 +177,15 @@ TEST(KeeplessEval, QuickRunReportsTheContractForEveryInput) {
     SCOPED_TRACE(in.at("input").str);
     const double seeds = num(in, "seeds");
     EXPECT_EQ(seeds, 2.0);  // --quick's default
-    EXPECT_GE(num(in, "M"), 1.0);
+    // --kept-fraction is a keep budget: no M is searched or used.
+    EXPECT_EQ(num(in, "M"), 0.0);
+    EXPECT_NEAR(num(in, "target_fraction"), 0.3, 1e-9);
+    ASSERT_TRUE(in.has("failed_seeds"));
+    for (const char* m : {"original", "ours", "random", "longest_track", "anms"}) {
+      ASSERT_TRUE(in.at("failed_seeds").has(m)) << m;
+      EXPECT_LE(num(in.at("failed_seeds"), m), seeds);
+    }
+    ASSERT_TRUE(in.has("frames") && in.has("frames_tracked"));
     // Sparsification keeps fewer points; it never adds any.
     const double mp = num(in, "mp_percent");
     EXPECT_GT(mp, 0.0);

@@ -3,6 +3,9 @@
 // outlier stage, and the contract's statistics.
 
 #include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <string>
 #include <vector>
 
@@ -11,6 +14,7 @@
 #include "local_ba.hpp"
 #include "metrics.hpp"
 #include "prng.hpp"
+#include "report.hpp"
 #include "run_record.hpp"
 #include "window_sizes.hpp"
 
@@ -204,7 +208,10 @@ TEST(EvalContract, RealVoRunsReportFramesTracked) {
   c.info.kind = "rgbd";
   c.original = {rec(1.0, 100, 400, 1), rec(1.0, 100, 400, 2)};
   c.ours = {rec(1.0, 30, 100, 1), rec(1.0, 30, 100, 2)};
-  EXPECT_EQ(ke::contract_json({ke::summarize(c)}, "").find("\"frames"), std::string::npos);
+  // Not a real VO: frames 0, nothing failed (every run object carries the keys).
+  const std::string none = ke::contract_json({ke::summarize(c)}, "");
+  EXPECT_NE(none.find("\"frames\":0,\"frames_tracked\":0"), std::string::npos) << none;
+  EXPECT_NE(none.find("\"failed_seeds\":{\"original\":0,\"ours\":0,"), std::string::npos) << none;
   for (auto* v : {&c.original, &c.ours})
     for (ke::RunRecord& r : *v) r.frames = 60, r.frames_tracked = 60;
   c.ours[1].frames_tracked = 50;
@@ -218,6 +225,68 @@ TEST(EvalContract, RealVoRunsReportFramesTracked) {
   EXPECT_NE(j.find("\"frames_tracked\":55.00"), std::string::npos) << j;
   EXPECT_NE(j.find("\"frames_tracked_original\":60.00"), std::string::npos) << j;
   EXPECT_NE(j.find("\"frames_tracked_random\":null"), std::string::npos) << j;
+  // The run that lost 10 frames is a failure of ours, and only of ours.
+  EXPECT_EQ(r.failed.ours, 1);
+  EXPECT_EQ(r.failed.original, 0);
+  EXPECT_NE(j.find("\"failed_seeds\":{\"original\":0,\"ours\":1,\"random\":0,\"longest_track\":0,\"anms\":0}"),
+            std::string::npos)
+      << j;
+}
+
+// A diverged BA is a failure too; the tables mark every mean that includes one.
+TEST(EvalContract, FailuresAreCountedInTheTables) {
+  ke::Comparison c;
+  c.info.input = "seq";
+  c.info.name = "seq";
+  c.info.kind = "rgbd";
+  c.target_fraction = 0.2;
+  c.original = {rec(1.0, 100, 400, 1), rec(1.0, 100, 400, 2)};
+  c.ours = {rec(1.0, 30, 100, 1), rec(2.0, 30, 100, 2)};
+  c.random = {rec(1.0, 30, 100, 1), rec(1.0, 30, 100, 2)};
+  for (auto* v : {&c.original, &c.ours, &c.random})
+    for (ke::RunRecord& r : *v) r.frames = 60, r.frames_tracked = 60;
+  for (ke::RunRecord& r : c.original) r.variant = "original";
+  for (ke::RunRecord& r : c.ours) r.variant = "ours";
+  for (ke::RunRecord& r : c.random) r.variant = "random";
+  c.ours[1].frames_tracked = 7;
+  c.random[0].diverged = true;
+  EXPECT_TRUE(c.ours[1].failed());
+  EXPECT_TRUE(c.random[0].failed());
+  EXPECT_FALSE(c.ours[0].failed());
+  ke::EvalSummary s;
+  s.comparisons = {c};
+  ke::Comparison d = c;  // a second fraction makes a sweep
+  d.target_fraction = 0.4;
+  d.ours[1].frames_tracked = 60;
+  s.comparisons.push_back(d);
+  for (const ke::Comparison& x : s.comparisons) s.runs.push_back(ke::summarize(x));
+  EXPECT_EQ(s.runs[0].failed.ours, 1);
+  EXPECT_EQ(s.runs[0].failed.random, 1);
+  EXPECT_EQ(s.runs[1].failed.ours, 0);
+  const std::string md = ke::markdown_tables(s);
+  EXPECT_NE(md.find("#### Failures (F = 0.20"), std::string::npos) << md;
+  EXPECT_NE(md.find("(1 failed)"), std::string::npos) << md;
+  EXPECT_NE(md.find("| seq | 0 / 2 | 1 / 2 | 1 / 2 | – | – |"), std::string::npos) << md;
+  EXPECT_NE(md.find("#### Budget sweep: seq"), std::string::npos) << md;
+  EXPECT_NE(md.find("ours 0.40"), std::string::npos) << md;  // smallest F without a failure
+  const std::string out = ::testing::TempDir() + "/eval_sweep_outputs";
+  std::filesystem::remove_all(out);
+  std::filesystem::create_directories(out);
+  std::string error;
+  ASSERT_TRUE(ke::write_outputs(s, out, &error)) << error;
+  const std::string svg = out + "/sweep_seq.svg";
+  ASSERT_TRUE(std::filesystem::exists(svg));
+  std::ifstream in(svg);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("1/2 failed"), std::string::npos);
+  // runs.csv round-trips the failure.
+  ke::EvalSummary back;
+  ASSERT_TRUE(ke::read_outputs(out, &back, &error)) << error;
+  ASSERT_EQ(back.comparisons.size(), 2u);
+  ASSERT_EQ(back.comparisons[0].random.size(), 2u);
+  ASSERT_EQ(back.comparisons[0].ours.size(), 2u);
+  EXPECT_TRUE(back.comparisons[0].random[0].diverged);
+  EXPECT_EQ(back.comparisons[0].ours[1].frames_tracked, 7);
 }
 
 }  // namespace

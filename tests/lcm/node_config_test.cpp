@@ -221,6 +221,37 @@ TEST(NodeConfig, ParsesThePolicyFlags) {
   }
 }
 
+TEST(NodeConfig, ParsesTheKeepBudgets) {
+  using keepless::core::BudgetKind;
+  NodeConfig c;
+  std::string error;
+  ASSERT_EQ(parse({}, c, error), ParseResult::kOk);
+  EXPECT_EQ(c.params.budget.kind, BudgetKind::kNone);
+  ASSERT_EQ(parse({"--keep-fraction", "0.3"}, c, error), ParseResult::kOk) << error;
+  EXPECT_EQ(c.params.budget.kind, BudgetKind::kFraction);
+  EXPECT_EQ(c.params.budget.fraction, 0.3);
+  NodeConfig p;
+  ASSERT_EQ(parse({"--keep-points=250"}, p, error), ParseResult::kOk) << error;
+  EXPECT_EQ(p.params.budget.kind, BudgetKind::kPoints);
+  EXPECT_EQ(p.params.budget.count, 250u);
+  NodeConfig o;
+  ASSERT_EQ(parse({"--keep-observations", "4000"}, o, error), ParseResult::kOk) << error;
+  EXPECT_EQ(o.params.budget.kind, BudgetKind::kObservations);
+  EXPECT_EQ(o.params.budget.count, 4000u);
+  for (const std::vector<std::string>& bad :
+       {std::vector<std::string>{"--keep-fraction", "1.2"}, {"--keep-fraction", "nan"},
+        {"--keep-points", "-3"}, {"--keep-observations", "x"},
+        {"--M", "10", "--keep-points", "5"}, {"--keep-fraction", "0.2", "--M", "10"},
+        {"--keep-points", "5", "--keep-observations", "9"}}) {
+    NodeConfig d;
+    EXPECT_EQ(parse(bad, d, error), ParseResult::kError) << bad[0] << " " << bad[1];
+    EXPECT_FALSE(error.empty());
+  }
+  NodeConfig d;
+  ASSERT_EQ(parse({"--M", "10", "--keep-points", "5"}, d, error), ParseResult::kError);
+  EXPECT_NE(error.find("exclude each other"), std::string::npos) << error;
+}
+
 TEST(NodeConfig, ParsesTheReliabilityFlags) {
   NodeConfig c;
   std::string error;

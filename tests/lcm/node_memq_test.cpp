@@ -540,4 +540,30 @@ TEST_F(NodeOnMemq, PoliciesAndOptionalFieldsMatchTheLibrary) {
   }
 }
 
+// --keep-fraction 0.3: every decision keeps exactly floor(0.3 x evaluated
+// + 0.5) points, the library's decisions on the same keyframes.
+TEST_F(NodeOnMemq, KeepFractionKeepsExactlyThatShare) {
+  NodeConfig c = default_config();
+  c.params.budget = keepless::core::KeepBudget{keepless::core::BudgetKind::kFraction, 0, 0.3};
+  make_node(c);
+  kt::ReferenceNode ref(keepless::platform::window_capacities(config_), config_.params, config_.window);
+  std::vector<kt::ReferenceDecision> expected;
+  for (int i = 0; i < 8; ++i) {
+    keepless::keyframe_t m = kt::make_keyframe(i + 1, 100 + i, kt::id_range(i * 8, 40));
+    expected.push_back(ref.step(m));
+    send(m);
+  }
+  ASSERT_EQ(decisions_.size(), 8u);
+  std::int32_t culled = 0;
+  for (int i = 0; i < 8; ++i) {
+    const std::string where = "keyframe " + std::to_string(i);
+    kt::expect_same(expected[i], decisions_[i], where.c_str());
+    const auto e = decisions_[i].evaluated;
+    EXPECT_EQ(decisions_[i].kept, static_cast<std::int32_t>(std::floor(0.3 * e + 0.5))) << where;
+    EXPECT_EQ(decisions_[i].culled, e - decisions_[i].kept) << where;
+    culled += decisions_[i].culled;
+  }
+  EXPECT_GT(culled, 0);
+}
+
 }  // namespace

@@ -329,6 +329,27 @@ TEST(OpencvKeyframes, NativeUnmappedListCountsUnderAuthorsButNotInThePapersBox) 
   EXPECT_EQ(w.keyframe_count(), 0u);
 }
 
+// A keep budget through the adapter: reserved-id unmapped keypoints are
+// never candidates, so the budget's share is of the map points alone.
+TEST(OpencvKeyframes, KeepBudgetCountsOnlyMapPoints) {
+  const core::Capacities caps = small_capacities();
+  core::Params params;
+  params.budget = {core::BudgetKind::kFraction, 0, 0.3};
+  core::Window cluttered(caps);
+  KeyframeAdapter b(caps);
+  fill(cluttered, b, 5, true);
+  core::Sparsifier s(caps, params);
+  ASSERT_EQ(s.run(cluttered), core::Status::kOk);
+  std::vector<core::PointId> culled, kept;
+  culled_points(s, &culled);
+  points_with_verdict(s, core::Verdict::kKeep, &kept);
+  const std::size_t evaluated = culled.size() + kept.size();
+  EXPECT_EQ(evaluated, s.summary().evaluated);
+  EXPECT_EQ(kept.size(), static_cast<std::size_t>(std::floor(0.3 * static_cast<double>(evaluated) + 0.5)));
+  EXPECT_GT(culled.size(), 0u);
+  for (core::PointId id : kept) EXPECT_EQ(id & kUnmappedBit, 0u);
+}
+
 TEST(OpencvKeyframes, UnmappedKeypointsCountInTheSpatialCostButAreNeverDecided) {
   const core::Capacities caps = small_capacities();
   core::Params params;

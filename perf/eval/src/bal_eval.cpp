@@ -23,6 +23,9 @@ struct BalRun {
   double solve_s = 0;
   int iterations = 0;
   double final_cost = 0;
+  // Ceres gave no usable solution, or the cost ended non-finite or above
+  // where it started: reported as a failed run, never averaged silently.
+  bool diverged = false;
 };
 
 struct BalProblem {
@@ -106,6 +109,8 @@ BalRun solve(const BalProblem& p, const std::vector<char>& use, int max_iteratio
   run.solve_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   run.iterations = static_cast<int>(summary.iterations.size());
   run.final_cost = summary.final_cost;
+  run.diverged = !summary.IsSolutionUsable() || !std::isfinite(summary.final_cost) ||
+                 summary.final_cost > summary.initial_cost;
   return run;
 }
 
@@ -136,6 +141,7 @@ RunRecord record_of(const BalRun& b, const std::string& variant, std::int64_t M,
   r.kfs = cameras;
   r.observations = b.observations;
   r.ba_s = r.total_s = b.solve_s;
+  r.diverged = b.diverged;
   return r;
 }
 
@@ -194,9 +200,11 @@ bool run_bal(const std::string& path, const BalOptions& o, Comparison* out, std:
     }
   }
   std::vector<char> keep(p.npoints, 0), evaluated(p.npoints, 0);
+  // A kept fraction is a keep budget over the evaluated points (no M).
   auto sparsify = [&](std::int64_t M) {
     core::Params params;
-    params.pair_capacity = M;
+    params.pair_capacity = std::max<std::int64_t>(M, 1);
+    if (std::isfinite(o.target_fraction)) params.budget = {core::BudgetKind::kFraction, 0, o.target_fraction};
     core::Sparsifier sparsifier(caps, params);
     if (sparsifier.run(window) != core::Status::kOk) return false;
     const core::PointDecision* d = sparsifier.decisions();
@@ -206,19 +214,7 @@ bool run_bal(const std::string& path, const BalOptions& o, Comparison* out, std:
     }
     return true;
   };
-  auto kept_share = [&]() { return double(std::count(keep.begin(), keep.end(), 1)) / double(p.npoints); };
-  std::int64_t M = o.M;
-  if (std::isfinite(o.target_fraction)) {
-    // Bisection over M on the kept share (sparsifying alone is cheap here).
-    std::int64_t lo = 1, hi = 1 << 16;
-    while (lo < hi) {
-      const std::int64_t mid = lo + (hi - lo) / 2;
-      if (!sparsify(mid)) break;
-      if (kept_share() < o.target_fraction) lo = mid + 1;
-      else hi = mid;
-    }
-    M = lo;
-  }
+  const std::int64_t M = std::isfinite(o.target_fraction) ? 0 : o.M;
   if (!sparsify(M)) {
     *error = path + ": keepless solve failed";
     return false;

@@ -50,13 +50,13 @@ const char* kUsage =
     "  --images, --rgbd    the real VO (perf/eval/vo) on a KITTI-layout (--calib, --poses follow it) or 7-Scenes\n"
     "                      RGB-D sequence, frames A..B inclusive (--frames; default all, --quick 0:59)\n"
     "  --image-tracks      the synthetic back end on ORB tracks of KITTI-layout images\n"
-    "  --kept-fraction F   per input, the M (found on the first seed) at which keepless keeps F of the original's\n"
-    "                      map points (default 0.3); --M gives M directly instead\n"
+    "  --kept-fraction F   a keep budget: every selector keeps floor(F x E + 0.5) of the E evaluated points of\n"
+    "                      each window (default 0.3; a list sweeps); --M gives keepless M directly instead\n"
     "  --seeds N           seeds FIRST .. FIRST+N-1 (default 5, --quick 2); tables show mean +- sd over them\n"
     "  --error-floor       ATE added in quadrature to both sides of a ratio, per group (default: the paper's\n"
     "                      published original ATE: tum=0.0183,euroc_mh=0.0658,euroc_v=0.0658,kitti=0.537)\n"
     "  --scope, --floor, --cost  keepless's decision policy and cost model (core::Params scope, coverage_floor,\n"
-    "                      cost_model); the M search and the baselines' per-window counts use the same policy\n"
+    "                      cost_model); with --kept-fraction the real VO decides the new keyframe's points\n"
     "  --window-sizes      instead of the comparison: the original run of the first seed on each --trajectory,\n"
     "                      --images and --rgbd input, and the largest window it gives (keyframes, points,\n"
     "                      observations, pair arcs, unmapped keypoints) at K = 10, 20, 40, local (the local BA's)\n"
@@ -69,7 +69,7 @@ struct TrajectoryArg {
   std::string format;  // empty: guess
 };
 
-// An operating point: a kept fraction (M searched per input) or an M.
+// An operating point: a kept fraction (a keep budget per window) or an M.
 struct OperatingPoint {
   double fraction = NAN;
   std::int64_t M = 0;
@@ -276,6 +276,7 @@ ke::RunRecord record_of(const ke::RunResult& r, std::uint64_t seed) {
   x.kfs = r.kfs;
   x.observations = r.ba_observations;
   x.ba_s = r.ba_s;
+  x.ba_cpu_s = r.ba_cpu_s;
   x.total_s = r.total_s;
   x.ate_m = r.ate_m;
   x.ate_r_deg = r.ate_r_deg;
@@ -287,15 +288,17 @@ ke::RunRecord record_of(const ke::RunResult& r, std::uint64_t seed) {
 }
 
 // `policy`: the flags' scope, floor and cost model, for every variant alike.
+// A finite `fraction` is a keep budget (M unused); NaN runs at M.
 ke::VariantSpec variant(const keepless::core::Params& policy, const std::string& name, ke::Selector sel, std::int64_t M,
-                        std::uint8_t costs = 7) {
+                        double fraction, std::uint8_t costs = 7) {
   ke::VariantSpec v;
   v.name = name;
   v.selector = sel;
   v.params.scope = policy.scope;
   v.params.coverage_floor = policy.coverage_floor;
   v.params.cost_model = policy.cost_model;
-  v.params.pair_capacity = M;
+  v.params.pair_capacity = std::isfinite(fraction) ? keepless::core::Params{}.pair_capacity : M;
+  if (std::isfinite(fraction)) v.params.budget = {keepless::core::BudgetKind::kFraction, 0, fraction};
   v.params.cost_terms = costs;
   return v;
 }
@@ -308,40 +311,6 @@ ke::RunResult run(const ke::Scenario& sc, const ke::VariantSpec& spec, const ke:
             << r.mps << "/" << r.mps_created << " culled " << r.selector_culled << " kfs " << r.kfs << " lost "
             << r.track_failures << " ate " << r.ate_m << " m, ba " << r.ba_s << " s, total " << r.total_s << " s\n";
   return r;
-}
-
-// The M at which keepless keeps `fraction` of the original's points on this
-// scenario: bisection over M on the kept share, each step at the linear
-// interpolation of the bracket clamped to its middle half (the share can
-// jump steeply with M once the pair capacity stops binding).
-std::int64_t find_M(const ke::Scenario& sc, const keepless::core::Params& policy, const ke::SimOptions& o,
-                    std::uint64_t seed, double original_mps, double fraction, int max_runs) {
-  std::vector<std::pair<std::int64_t, double>> tried;  // (M, share)
-  std::int64_t M = 100;
-  for (int i = 0; i < max_runs; ++i) {
-    const ke::RunResult r = run(sc, variant(policy, "search", ke::Selector::kKeepless, M), o, seed);
-    tried.emplace_back(M, original_mps > 0 ? r.mps / original_mps : 0);
-    if (std::abs(tried.back().second - fraction) <= 0.015) break;
-    std::optional<std::pair<std::int64_t, double>> lo, hi;
-    for (const auto& t : tried) {
-      if (t.second < fraction && (!lo || t.first > lo->first)) lo = t;
-      if (t.second > fraction && (!hi || t.first < hi->first)) hi = t;
-    }
-    double next;
-    if (lo && hi) {
-      if (hi->first - lo->first <= 1) break;
-      const double span = double(hi->first - lo->first);
-      next = lo->first + (fraction - lo->second) * span / (hi->second - lo->second);
-      next = std::clamp(next, lo->first + 0.25 * span, hi->first - 0.25 * span);
-    } else {
-      const double share = tried.back().second;
-      next = double(M) * std::clamp(fraction / std::max(share, 1e-3), 0.25, 4.0);
-    }
-    M = std::max<std::int64_t>(1, std::llround(next));
-  }
-  return std::min_element(tried.begin(), tried.end(), [&](const auto& a, const auto& b) {
-           return std::abs(a.second - fraction) < std::abs(b.second - fraction);
-         })->first;
 }
 
 // The paper's ablation (section IV-F) besides all costs (ours): c_c, c_c + c_s, c_c + c_b.
@@ -358,30 +327,29 @@ void evaluate(const std::function<ke::Scenario(std::uint64_t)>& make, const ke::
     const ke::Scenario sc = make(seed);
     ke::SimOptions so = o;
     so.snapshot_frame = static_cast<int>(sc.frames.size() / 2);
-    const ke::RunResult original = run(sc, variant(a.policy, "original", ke::Selector::kNone, 0), so, seed);
+    const ke::RunResult original = run(sc, variant(a.policy, "original", ke::Selector::kNone, 0, NAN), so, seed);
     for (std::size_t p = 0; p < a.ops.size(); ++p) {
       if (si == 0) {
         ke::Comparison c;
         c.info = info;
         c.target_fraction = a.ops[p].fraction;
-        c.M = std::isfinite(c.target_fraction) ? find_M(sc, a.policy, so, seed, original.mps, c.target_fraction, a.quick ? 3 : 6)
-                                               : a.ops[p].M;
+        c.M = std::isfinite(c.target_fraction) ? 0 : a.ops[p].M;  // a fraction is a keep budget
         summary->comparisons.push_back(c);
       }
       ke::Comparison& c = summary->comparisons[first + p];
       c.original.push_back(record_of(original, seed));
-      const ke::RunResult ours = run(sc, variant(a.policy, "ours", ke::Selector::kKeepless, c.M), so, seed);
+      const ke::RunResult ours = run(sc, variant(a.policy, "ours", ke::Selector::kKeepless, c.M, c.target_fraction), so, seed);
       c.ours.push_back(record_of(ours, seed));
       if (a.baselines) {
-        const ke::RunResult anms = run(sc, variant(a.policy, "anms", ke::Selector::kAnms, c.M), so, seed);
-        c.random.push_back(record_of(run(sc, variant(a.policy, "random", ke::Selector::kRandom, c.M), so, seed), seed));
-        c.longest_track.push_back(record_of(run(sc, variant(a.policy, "longest_track", ke::Selector::kLongestTrack, c.M), so, seed), seed));
+        const ke::RunResult anms = run(sc, variant(a.policy, "anms", ke::Selector::kAnms, c.M, c.target_fraction), so, seed);
+        c.random.push_back(record_of(run(sc, variant(a.policy, "random", ke::Selector::kRandom, c.M, c.target_fraction), so, seed), seed));
+        c.longest_track.push_back(record_of(run(sc, variant(a.policy, "longest_track", ke::Selector::kLongestTrack, c.M, c.target_fraction), so, seed), seed));
         c.anms.push_back(record_of(anms, seed));
         if (si == 0 && p == 0) summary->snapshots.push_back(ke::Snapshot{info.name, info.kind, sc.cam.width, sc.cam.height, c.M, ours.snapshot, anms.snapshot});
       }
       if (ablate && p == 0)
         for (const auto& [costs, terms] : kAblation)
-          c.ablation.push_back(record_of(run(sc, variant(a.policy, costs, ke::Selector::kKeepless, c.M, terms), so, seed), seed));
+          c.ablation.push_back(record_of(run(sc, variant(a.policy, costs, ke::Selector::kKeepless, c.M, c.target_fraction, terms), so, seed), seed));
     }
   }
 }
@@ -481,7 +449,7 @@ int main(int argc, char** argv) {
     if (a.window_sizes) {
       ke::SimOptions so = sim;
       so.measure_windows = true;
-      const ke::RunResult r = run(make(a.first_seed), variant(a.policy, "original", ke::Selector::kNone, 0), so, a.first_seed);
+      const ke::RunResult r = run(make(a.first_seed), variant(a.policy, "original", ke::Selector::kNone, 0, NAN), so, a.first_seed);
       sizes.emplace_back(info.name, r.window_sizes);
       group_sizes[info.group].max_with(r.window_sizes);
       continue;

@@ -1,6 +1,7 @@
 #include "report.hpp"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -14,7 +15,8 @@ namespace {
 
 constexpr const char* kCsvHeader =
     "input,name,group,kind,alignment,variant,seed,M,target_fraction,compared_M,mps,kfs,observations,ba_s,total_s,"
-    "ate_m,ate_r_deg,C,F,S,frames,frames_tracked,windows,floor_keyframes,floor_promoted,floor_short";
+    "ate_m,ate_r_deg,C,F,S,frames,frames_tracked,windows,floor_keyframes,floor_promoted,floor_short,ba_cpu_s,"
+    "diverged,failed";
 
 std::string f(double v, int prec) {
   if (!std::isfinite(v)) return "–";
@@ -30,6 +32,10 @@ std::string pm(const Stat& s, int prec) {
 int ate_digits(double v) { return v >= 1 ? 3 : v >= 0.1 ? 4 : v >= 0.01 ? 5 : 6; }
 std::string ate_pm(const Stat& s) { return pm(s, ate_digits(s.mean)); }
 std::string bold_if(bool b, const std::string& s) { return b ? "**" + s + "**" : s; }
+// A mean that includes failed runs says so beside it.
+std::string with_failed(const std::string& cell, int failed) {
+  return failed > 0 ? cell + " (" + std::to_string(failed) + " failed)" : cell;
+}
 std::string op_label(const ContractRun& r) {
   return std::isfinite(r.target_fraction) ? "F = " + f(r.target_fraction, 2) : "M = " + std::to_string(r.M);
 }
@@ -182,6 +188,149 @@ std::string svg_ate_vs_kept(const EvalSummary& s) {
   return svg.str();
 }
 
+
+// ---- Budget sweep: per input, every kept fraction, every method ----
+struct SweepPoint {
+  double fraction = NAN;
+  Stat ate, observations, ba_cpu_s, mps, kfs, tracked;
+  int failed = 0, seeds = 0;
+};
+struct SweepSeries {
+  std::string method;
+  std::vector<SweepPoint> points;  // by ascending fraction
+};
+
+SweepPoint sweep_point(double fraction, const std::vector<RunRecord>& v) {
+  SweepPoint p;
+  p.fraction = fraction;
+  p.seeds = static_cast<int>(v.size());
+  p.ate = stat_by(v, [](const RunRecord& r) { return r.ate_m; });
+  p.observations = stat_by(v, [](const RunRecord& r) { return double(r.observations); });
+  p.ba_cpu_s = stat_by(v, [](const RunRecord& r) { return r.ba_cpu_s; });
+  p.mps = stat_by(v, [](const RunRecord& r) { return double(r.mps); });
+  p.kfs = stat_by(v, [](const RunRecord& r) { return double(r.kfs); });
+  p.tracked = stat_by(v, [](const RunRecord& r) { return double(r.frames_tracked); });
+  for (const RunRecord& r : v) p.failed += r.failed() ? 1 : 0;
+  return p;
+}
+
+// The inputs run at two or more kept fractions, in the order first run.
+std::vector<std::string> swept_inputs(const EvalSummary& s) {
+  std::vector<std::string> inputs;
+  for (const Comparison& c : s.comparisons) {
+    if (!std::isfinite(c.target_fraction)) continue;
+    if (std::find(inputs.begin(), inputs.end(), c.info.input) != inputs.end()) continue;
+    int n = 0;
+    for (const Comparison& d : s.comparisons) n += d.info.input == c.info.input && std::isfinite(d.target_fraction);
+    if (n >= 2) inputs.push_back(c.info.input);
+  }
+  return inputs;
+}
+
+// The original (one point: every fraction's original runs are the same
+// runs, so the first comparison's) and each method's curve over F.
+std::vector<SweepSeries> sweep_of(const EvalSummary& s, const std::string& input, std::string* name) {
+  std::vector<const Comparison*> cs;
+  for (const Comparison& c : s.comparisons)
+    if (c.info.input == input && std::isfinite(c.target_fraction)) cs.push_back(&c);
+  std::sort(cs.begin(), cs.end(), [](const Comparison* a, const Comparison* b) { return a->target_fraction < b->target_fraction; });
+  std::vector<SweepSeries> out = {{"original", {}}, {"ours", {}}, {"random", {}}, {"longest track", {}}, {"ANMS (SSC)", {}}};
+  if (cs.empty()) return out;
+  *name = cs.front()->info.name;
+  out[0].points.push_back(sweep_point(1.0, cs.front()->original));
+  for (const Comparison* c : cs) {
+    const std::vector<RunRecord>* v[] = {&c->ours, &c->random, &c->longest_track, &c->anms};
+    for (int m = 0; m < 4; ++m)
+      if (!v[m]->empty()) out[static_cast<std::size_t>(m + 1)].points.push_back(sweep_point(c->target_fraction, *v[m]));
+  }
+  return out;
+}
+
+std::string sweep_tables(const EvalSummary& s) {
+  std::ostringstream o;
+  for (const std::string& input : swept_inputs(s)) {
+    std::string name;
+    const std::vector<SweepSeries> series = sweep_of(s, input, &name);
+    o << "\n#### Budget sweep: " << name << " (every method keeps floor(F × E + 0.5) of each window's E evaluated "
+         "points; mean ± sd over seeds, failed runs included and counted)\n\n"
+         "| F | method | failed | frames tracked | ATE (m) | local-BA observations | local-BA CPU (s) | map points | "
+         "keyframes |\n|---:|---|---:|---:|---:|---:|---:|---:|---:|\n";
+    for (const SweepSeries& se : series)
+      for (const SweepPoint& p : se.points)
+        o << "| " << (se.method == "original" ? std::string("–") : f(p.fraction, 2)) << " | " << se.method << " | "
+          << p.failed << " / " << p.seeds << " | " << f(p.tracked.mean, 1) << " | " << ate_pm(p.ate) << " | "
+          << f(p.observations.mean, 0) << " | " << pm(p.ba_cpu_s, 2) << " | " << f(p.mps.mean, 0) << " | "
+          << f(p.kfs.mean, 0) << " |\n";
+    o << "\nSmallest F at which every seed ran without failure:";
+    for (std::size_t m = 1; m < series.size(); ++m) {
+      if (series[m].points.empty()) continue;
+      double smallest = NAN;
+      for (auto it = series[m].points.rbegin(); it != series[m].points.rend() && it->failed == 0; ++it) smallest = it->fraction;
+      o << (m > 1 ? "," : "") << " " << series[m].method << " "
+        << (std::isfinite(smallest) ? f(smallest, 2) : std::string("none of those run"));
+    }
+    o << " (each from the largest F down to its first failure).\n";
+  }
+  return o.str();
+}
+
+// ATE against local-BA observations, one curve per method over F, a failed
+// point drawn as a ring with its count of failed seeds.
+std::string svg_sweep(const EvalSummary& s, const std::string& input) {
+  std::string name;
+  const std::vector<SweepSeries> series = sweep_of(s, input, &name);
+  // ATE on a log scale: a lost run's error is orders above a tracked one's.
+  double xmax = 1, lo = INFINITY, hi = -INFINITY;
+  for (const SweepSeries& se : series)
+    for (const SweepPoint& p : se.points) {
+      if (std::isfinite(p.observations.mean)) xmax = std::max(xmax, p.observations.mean);
+      if (std::isfinite(p.ate.mean) && p.ate.mean > 0) {
+        lo = std::min(lo, std::log10(p.ate.mean));
+        hi = std::max(hi, std::log10(p.ate.mean));
+      }
+    }
+  if (!std::isfinite(lo)) lo = -1, hi = 0;
+  lo = std::floor(lo);
+  hi = std::max(std::ceil(hi), lo + 1);
+  const auto log_ate = [](double v) { return v > 0 ? std::log10(v) : NAN; };
+  Svg svg(800, 500);
+  Axes ax{90, 40, 540, 380, 0, xmax * 1.05, lo, hi};
+  ax.draw(svg, "local-BA observations (sum over the run, mean over seeds)", "log10 RMS ATE (m)",
+          name + ": ATE against local-BA size over the kept fraction F");
+  const char* colours[] = {"#000000", "#1f77b4", "#7f7f7f", "#2ca02c", "#d62728"};
+  double ly = 60;
+  for (std::size_t m = 0; m < series.size(); ++m) {
+    const char* c = colours[m];
+    const auto& pts = series[m].points;
+    for (std::size_t i = 0; i < pts.size(); ++i) {
+      const SweepPoint& p = pts[i];
+      if (!std::isfinite(p.observations.mean) || !std::isfinite(log_ate(p.ate.mean))) continue;
+      const double x = ax.X(p.observations.mean), y = ax.Y(log_ate(p.ate.mean));
+      if (i > 0 && std::isfinite(log_ate(pts[i - 1].ate.mean)) && std::isfinite(pts[i - 1].observations.mean))
+        svg.line(ax.X(pts[i - 1].observations.mean), ax.Y(log_ate(pts[i - 1].ate.mean)), x, y, c, 1.5);
+      svg.circle(x, y, 4, c);
+      if (m > 0) svg.text(x + 6, y - 6, "F " + f(p.fraction, 2), "start", 9);
+      if (p.failed > 0) {
+        svg.o << "<circle cx=\"" << f(x, 1) << "\" cy=\"" << f(y, 1) << "\" r=\"9\" fill=\"none\" stroke=\"#d00\" "
+              << "stroke-width=\"2\"/>\n";
+        svg.text(x + 6, y + 14, std::to_string(p.failed) + "/" + std::to_string(p.seeds) + " failed", "start", 9);
+      }
+    }
+    svg.circle(650, ly, 4, c);
+    svg.text(660, ly + 4, series[m].method);
+    ly += 20;
+  }
+  svg.o << "<circle cx=\"650\" cy=\"" << f(ly, 1) << "\" r=\"7\" fill=\"none\" stroke=\"#d00\" stroke-width=\"2\"/>\n";
+  svg.text(660, ly + 4, "failed seeds (lost tracking)");
+  return svg.str();
+}
+
+std::string file_name_of(const std::string& name) {
+  std::string o;
+  for (char c : name) o += std::isalnum(static_cast<unsigned char>(c)) ? c : '_';
+  return o;
+}
+
 std::string svg_keypoints(const Snapshot& sn) {
   const double scale = std::min(1.0, 700.0 / std::max(sn.width, 1));
   const double w = sn.width * scale, h = sn.height * scale;
@@ -231,7 +380,8 @@ std::string markdown_tables(const EvalSummary& s) {
       if (op_label(r) != label) continue;
       o << "| " << r.info.name << " | " << r.info.kind << " | " << (r.info.sim3 ? "Sim(3)" : "SE(3)") << " | " << r.seeds
         << " | " << r.M << " | " << pm(r.mp_percent, 1) << " | " << pm(r.kf_percent, 1) << " | "
-        << pm(r.ba_time_percent, 1) << " | " << ate_pm(r.ate_original) << " | " << ate_pm(r.ate_ours) << " | "
+        << pm(r.ba_time_percent, 1) << " | " << with_failed(ate_pm(r.ate_original), r.failed.original) << " | "
+        << with_failed(ate_pm(r.ate_ours), r.failed.ours) << " | "
         << bold_if(r.ate_ratio <= 1.0, f(r.ate_ratio, 2)) << " | " << f(r.sqrt_obs_ratio, 2) << " | "
         << (r.info.error_floor_m > 0 ? f(r.info.error_floor_m, 4) : "–") << " | " << f(r.ate_ratio_floored, 3) << " | "
         << r.better_seeds << " / " << r.worse_seeds << " |\n";
@@ -246,14 +396,17 @@ std::string markdown_tables(const EvalSummary& s) {
       double best = r.ate_ours.mean;
       for (const Stat* a : {&r.ate_random, &r.ate_longest_track, &r.ate_anms})
         if (a->n > 0) best = std::min(best, a->mean);
-      auto cell = [&](const Stat& a) { return a.n == 0 ? std::string("–") : bold_if(a.mean == best, ate_pm(a)); };
+      auto cell = [&](const Stat& a, int failed) {
+        return a.n == 0 ? std::string("–") : with_failed(bold_if(a.mean == best, ate_pm(a)), failed);
+      };
       auto below = [&](const Stat& a, int n) { return a.n == 0 ? std::string("–") : std::to_string(n) + " / " + std::to_string(r.seeds); };
       auto quad = [](double a, double b, double c, double d, int prec) {
         return f(a, prec) + " / " + f(b, prec) + " / " + f(c, prec) + " / " + f(d, prec);
       };
       auto rq = [&](const Stat& a, double sq) { return f(ratio(a, r.ate_original), 2) + " (" + f(sq, 2) + ")"; };
-      o << "| " << r.info.name << " | " << cell(r.ate_ours) << " | " << cell(r.ate_random) << " | "
-        << cell(r.ate_longest_track) << " | " << cell(r.ate_anms) << " | "
+      o << "| " << r.info.name << " | " << cell(r.ate_ours, r.failed.ours) << " | "
+        << cell(r.ate_random, r.failed.random) << " | " << cell(r.ate_longest_track, r.failed.longest_track) << " | "
+        << cell(r.ate_anms, r.failed.anms) << " | "
         << quad(r.mp_percent.mean, r.mp_percent_random.mean, r.mp_percent_longest_track.mean, r.mp_percent_anms.mean, 1) << " | "
         << quad(r.kf_percent.mean, r.kf_percent_random.mean, r.kf_percent_longest_track.mean, r.kf_percent_anms.mean, 0) << " | "
         << rq(r.ate_ours, r.sqrt_obs_ratio) << " / " << rq(r.ate_random, r.sqrt_obs_ratio_random) << " / "
@@ -273,6 +426,19 @@ std::string markdown_tables(const EvalSummary& s) {
         << f(r.frames_tracked.mean, 1) << " | " << f(r.frames_tracked_random.mean, 1) << " | "
         << f(r.frames_tracked_longest_track.mean, 1) << " | " << f(r.frames_tracked_anms.mean, 1) << " |\n";
     }
+    // Failures, per method: every table's means include them (marked).
+    o << "\n#### Failures (" << label << "; runs that lost tracking, frames tracked < frames, or whose BA diverged; "
+         "n / seeds)\n\n| Input | original | ours | random | longest track | ANMS (SSC) |\n|---|---:|---:|---:|---:|---:|\n";
+    for (const ContractRun& r : s.runs) {
+      if (op_label(r) != label) continue;
+      auto n = [&](int failed, const Stat& ran) {
+        return ran.n == 0 ? std::string("–") : std::to_string(failed) + " / " + std::to_string(ran.n);
+      };
+      o << "| " << r.info.name << " | " << n(r.failed.original, r.ate_original) << " | " << n(r.failed.ours, r.ate_ours)
+        << " | " << n(r.failed.random, r.ate_random) << " | " << n(r.failed.longest_track, r.ate_longest_track) << " | "
+        << n(r.failed.anms, r.ate_anms) << " |\n";
+    }
+    o << "\n";
     // The coverage floor: how often it bound on ours's windows (only when it ever did or was asked for).
     bool floor_header = false;
     for (const ContractRun& r : s.runs) {
@@ -367,6 +533,7 @@ std::string markdown_tables(const EvalSummary& s) {
             << yes(r.ate_ours.mean < a->mean && 2 * below > r.seeds) << " |\n";
     }
   }
+  o << sweep_tables(s);
   return o.str();
 }
 
@@ -395,13 +562,19 @@ bool write_outputs(const EvalSummary& s, const std::string& out_dir, std::string
             << "," << f(r.ba_s, 4) << "," << f(r.total_s, 4) << "," << json_number(r.ate_m, 9) << ","
             << json_number(r.ate_r_deg, 6) << "," << json_number(r.C, 4) << "," << json_number(r.F, 4) << ","
             << json_number(r.S, 4) << "," << r.frames << "," << r.frames_tracked << "," << r.selector.windows << ","
-            << r.selector.floor_keyframes << "," << r.selector.floor_promoted << "," << r.selector.floor_short << "\n";
+            << r.selector.floor_keyframes << "," << r.selector.floor_promoted << "," << r.selector.floor_short << ","
+            << json_number(r.ba_cpu_s, 4) << "," << (r.diverged ? 1 : 0) << "," << (r.failed() ? 1 : 0) << "\n";
   bool ok = write("runs.csv", csv.str());
   std::string meta = s.command + "\n" + s.mode + "\n" + s.settings + "\n" + json_number(s.elapsed_s, 1) + "\n";
   for (const std::string& i : s.settings_inputs) meta += i + "\n";
   ok = ok && write("meta.txt", meta);
   ok = ok && write("tables.md", "`" + s.command + "` (" + s.mode + ", " + f(s.elapsed_s / 60.0, 1) + " min)\n\n" + markdown_tables(s));
   if (!s.runs.empty()) ok = ok && write("ate_vs_kept.svg", svg_ate_vs_kept(s));
+  for (const std::string& input : swept_inputs(s)) {
+    std::string name;
+    (void)sweep_of(s, input, &name);
+    ok = ok && write("sweep_" + file_name_of(name) + ".svg", svg_sweep(s, input));
+  }
   // One frame's keypoints: a real image if there is one.
   const Snapshot* pick = nullptr;
   for (const Snapshot& sn : s.snapshots)
@@ -442,7 +615,6 @@ std::string json_summary(const EvalSummary& s) {
 }
 
 bool read_outputs(const std::string& out_dir, EvalSummary* s, std::string* error) {
-  const std::size_t before = s->comparisons.size();
   namespace fsys = std::filesystem;
   const std::string csv_path = (fsys::path(out_dir) / "runs.csv").string();
   std::ifstream csv(csv_path);
@@ -480,7 +652,12 @@ bool read_outputs(const std::string& out_dir, EvalSummary* s, std::string* error
       *error = csv_path + ":1: no column " + need;
       return false;
     }
+  // One comparison per input and operating point across every directory
+  // read: a directory holding other seeds of the same point (the sweep's
+  // one process per seed) adds its records to the same comparison.
   std::vector<std::string> keys;
+  for (const Comparison& c : s->comparisons)
+    keys.push_back(c.info.input + "|" + json_number(c.target_fraction, 3) + "|" + std::to_string(c.M));
   int lineno = 1;
   while (std::getline(csv, line)) {
     ++lineno;
@@ -517,6 +694,8 @@ bool read_outputs(const std::string& out_dir, EvalSummary* s, std::string* error
     r.selector.floor_keyframes = count("floor_keyframes");
     r.selector.floor_promoted = count("floor_promoted");
     r.selector.floor_short = count("floor_short");
+    r.ba_cpu_s = col("ba_cpu_s") < 0 ? NAN : num("ba_cpu_s");
+    r.diverged = count("diverged") != 0;
     // One comparison per input and operating point (compared_M tells --M points apart).
     const std::string key = str("input") + "|" + str("target_fraction") + "|" + str("compared_M");
     auto it = std::find(keys.begin(), keys.end(), key);
@@ -533,7 +712,7 @@ bool read_outputs(const std::string& out_dir, EvalSummary* s, std::string* error
       s->comparisons.push_back(c);
       it = keys.end() - 1;
     }
-    Comparison& c = s->comparisons[before + static_cast<std::size_t>(it - keys.begin())];
+    Comparison& c = s->comparisons[static_cast<std::size_t>(it - keys.begin())];
     if (r.variant != "original" && col("compared_M") < 0) c.M = r.M;
     std::vector<RunRecord>* to = &c.ablation;
     if (r.variant == "original") to = &c.original;

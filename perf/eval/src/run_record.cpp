@@ -105,6 +105,12 @@ ContractRun summarize(const Comparison& c) {
   r.sqrt_obs_ratio_anms = sqrt_obs(c.anms);
   const double f2 = c.info.error_floor_m * c.info.error_floor_m;
   if (c.info.error_floor_m > 0) r.ate_ratio_floored = std::sqrt(an * an + f2) / std::sqrt(ao * ao + f2);
+  auto failures = [](const std::vector<RunRecord>& v) {
+    int n = 0;
+    for (const RunRecord& x : v) n += x.failed() ? 1 : 0;
+    return n;
+  };
+  r.failed = {failures(g), failures(c.ours), failures(c.random), failures(c.longest_track), failures(c.anms)};
   r.frames = g.empty() ? 0 : g.front().frames;
   auto tracked = [](const RunRecord& a) { return double(a.frames_tracked); };
   r.frames_tracked = stat_over(c.ours, tracked);
@@ -179,9 +185,12 @@ std::string run_json(const ContractRun& r) {
   field(o, "floor_keyframes", json_number(r.floor_keyframes.mean, 1));
   field(o, "floor_promoted", json_number(r.floor_promoted.mean, 1));
   field(o, "floor_short", json_number(r.floor_short.mean, 1));
+  o << ",\"failed_seeds\":{\"original\":" << r.failed.original << ",\"ours\":" << r.failed.ours
+    << ",\"random\":" << r.failed.random << ",\"longest_track\":" << r.failed.longest_track
+    << ",\"anms\":" << r.failed.anms << "}";
+  field(o, "frames", std::to_string(r.frames));
+  field(o, "frames_tracked", r.frames > 0 ? json_number(r.frames_tracked.mean, 2) : "0");
   if (r.frames > 0) {
-    field(o, "frames", std::to_string(r.frames));
-    field(o, "frames_tracked", json_number(r.frames_tracked.mean, 2));
     field(o, "frames_tracked_original", json_number(r.frames_tracked_original.mean, 2));
     field(o, "frames_tracked_random", json_number(r.frames_tracked_random.mean, 2));
     field(o, "frames_tracked_longest_track", json_number(r.frames_tracked_longest_track.mean, 2));

@@ -10,7 +10,10 @@
 //              "ba_time_percent", "ate_original_m", "ate_ours_m", "ate_ours_sd_m",
 //              "ate_random_m", "ate_longest_track_m", "ate_anms_m", "better_seeds",
 //              "worse_seeds", "sqrt_obs_ratio", ...}, ...], ...}
-// plus, for the real VO (kind images / rgbd), "frames" and "frames_tracked[_VARIANT]".
+// plus "failed_seeds" {"original", "ours", "random", "longest_track", "anms"}
+// (runs that lost tracking or whose BA diverged), "frames" and
+// "frames_tracked" (0 where not a real VO), and, for the real VO (kind
+// images / rgbd), "frames_tracked_VARIANT".
 
 #include <cmath>
 #include <cstdint>
@@ -48,6 +51,11 @@ struct RunRecord {
   double C = NAN, F = NAN, S = NAN;  // section IV-F: observations per point, keyframe span, grid occupancy %
   int frames = 0, frames_tracked = 0;  // real VO (kind images / rgbd): frames given and tracked; 0 elsewhere
   SelectorCounts selector;
+  double ba_cpu_s = NAN;  // local BAs' thread CPU time (real VO), unmoved by the machine's load
+  bool diverged = false;  // a BA that did not converge (BAL)
+  // A failure: tracking lost (frames tracked < frames) or a BA diverged.
+  // Its ATE still counts every frame (untracked ones at the last tracked pose).
+  bool failed() const { return (frames > 0 && frames_tracked < frames) || diverged; }
 };
 
 struct InputInfo {
@@ -96,6 +104,11 @@ struct ContractRun {
   double ate_ratio_floored = NAN;  // with error_floor_m added in quadrature to both
   Stat floor_keyframes, floor_promoted, floor_short;  // ours, per run (summed over its windows)
   double windows = NAN;                                // ours, mean selector windows per run
+  // Failed runs (RunRecord::failed) per method; every mean above includes them.
+  struct Failed {
+    int original = 0, ours = 0, random = 0, longest_track = 0, anms = 0;
+    int total() const { return original + ours + random + longest_track + anms; }
+  } failed;
   // Real VO only (frames > 0): frames given, mean frames tracked per variant.
   int frames = 0;
   Stat frames_tracked, frames_tracked_original, frames_tracked_random, frames_tracked_longest_track,

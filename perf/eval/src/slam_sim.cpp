@@ -1,5 +1,7 @@
 #include "slam_sim.hpp"
 
+#include <time.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -19,6 +21,13 @@ namespace keepless::eval {
 namespace {
 
 using Clock = std::chrono::steady_clock;
+// This thread's CPU time: what a solve costs whatever else the machine runs.
+double thread_cpu_seconds() {
+  timespec ts{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
+}
+
 double seconds_since(Clock::time_point t0) {
   return std::chrono::duration<double>(Clock::now() - t0).count();
 }
@@ -389,8 +398,14 @@ class Engine {
       }
     // Baselines keep exactly as many of the evaluated points as keepless
     // keeps on this same window, by their own rule.
+    // With a kept fraction (a keep budget) the count is the budget's,
+    // floor(F x E + 0.5) of this window's E evaluated points, never one
+    // copied from another run.
     if (spec_.selector != Selector::kKeepless) {
-      const auto keep = static_cast<std::uint32_t>(std::count(kept.begin(), kept.end(), 1));
+      const core::KeepBudget& budget = spec_.params.budget;
+      const auto keep = budget.kind == core::BudgetKind::kFraction
+                            ? static_cast<std::uint32_t>(std::floor(budget.fraction * double(evaluated.size()) + 0.5))
+                            : static_cast<std::uint32_t>(std::count(kept.begin(), kept.end(), 1));
       std::fill(kept.begin(), kept.end(), 0);
       if (spec_.selector == Selector::kAnms) anms_keep(window, evaluated, keep, &kept);
       else priority_keep(evaluated, keep, &kept);
@@ -495,7 +510,9 @@ class Engine {
         refs.emplace_back(local[j], o);
       }
     }
+    const double cpu0 = thread_cpu_seconds();
     const BaResult res = solve_local_ba(s_.cam, in, o_.ba_robust_iterations, o_.ba_iterations);
+    r->ba_cpu_s += thread_cpu_seconds() - cpu0;
     r->ba_s += res.seconds;
     r->ba_observations += in.observations.size();
     ++r->ba_calls;

@@ -67,6 +67,7 @@ struct RunResult {
   std::uint64_t ba_observations = 0;  // residuals over every local BA (the information used)
   std::uint32_t track_failures = 0;   // keyframes left at the odometry prior (< 10 inliers)
   double ba_s = 0, select_s = 0, total_s = 0;
+  double ba_cpu_s = 0;  // local BAs' thread CPU time
   std::uint64_t selector_culled = 0;
   std::uint32_t selector_errors = 0;  // keepless status != ok (window kept whole)
   SelectorCounts selector;

@@ -14,7 +14,7 @@ namespace keepless::eval::vo {
 struct Candidate {
   core::PointId id = 0;
   float u = 0, v = 0, response = 0;  // its keypoint in the new keyframe
-  int track_length = 0;              // observations in the whole map
+  int track_length = 0;              // observations so far: the online map when the window is decided
 };
 
 // The ids (ascending) of exactly min(cull, candidates) candidates that

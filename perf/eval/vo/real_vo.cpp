@@ -1,5 +1,7 @@
 #include "real_vo.hpp"
 
+#include <time.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -35,6 +37,13 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+// This thread's CPU time: what a solve costs whatever else the machine runs.
+double thread_cpu_seconds() {
+  timespec ts{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
+}
 
 // ORB-SLAM2's tracking thresholds.
 constexpr int kMinTrackedInliers = 30;
@@ -119,12 +128,6 @@ class Vo {
         sparsifier_(window_capacities(), vo_params(o.params, s.camera)) {
     K_ << cam_.fx, 0, cam_.cx, 0, cam_.fy, cam_.cy, 0, 0, 1;
     cv::eigen2cv(K_, Kcv_);
-    for (std::int64_t M : o.calibrate_M) {
-      core::Params p = vo_params(o.params, s.camera);
-      p.pair_capacity = M;
-      calibration_.push_back(std::make_unique<core::Sparsifier>(window_capacities(), p));
-    }
-    calibration_sum_.assign(o.calibrate_M.size(), 0.0);
   }
 
   RealRunResult run();
@@ -179,8 +182,6 @@ class Vo {
   opencv::KeyframeAdapter adapter_;
   core::Window window_;
   core::Sparsifier sparsifier_;
-  std::vector<std::unique_ptr<core::Sparsifier>> calibration_;
-  std::vector<double> calibration_sum_;
   double kept_fraction_sum_ = 0;
   std::unique_ptr<Replay> replay_local_, replay_sliding_;  // measure_windows with replay_capacities
   std::size_t marked_culls_ = 0;
@@ -690,14 +691,13 @@ void Vo::select_points(int kf, const std::vector<int>& local) {
       own_culls.push_back(id);
     }
   }
-  for (std::size_t m = 0; m < calibration_.size(); ++m) {
-    std::size_t c = 0;
-    if (calibration_[m]->run(window_) == core::Status::kOk) {
-      std::vector<core::PointId> culled;
-      opencv::culled_points(*calibration_[m], &culled);
-      for (const Candidate& cand : candidates) c += std::binary_search(culled.begin(), culled.end(), cand.id) ? 1 : 0;
-    }
-    calibration_sum_[m] += candidates.empty() ? 1.0 : 1.0 - double(c) / double(candidates.size());
+  // With a kept fraction every selector keeps K = floor(F x E + 0.5) of the
+  // E candidates, computed on its own window (core::KeepBudget's rounding);
+  // keepless's budget does exactly that (its floor may promote on top).
+  if (opt_.params.budget.kind == core::BudgetKind::kFraction && opt_.selector != Selector::kKeepless) {
+    const auto keep = static_cast<std::size_t>(
+        std::floor(opt_.params.budget.fraction * static_cast<double>(candidates.size()) + 0.5));
+    cull = candidates.size() - std::min(keep, candidates.size());
   }
   kept_fraction_sum_ += candidates.empty() ? 1.0 : 1.0 - double(cull) / double(candidates.size());
   std::vector<core::PointId> culls;
@@ -755,7 +755,10 @@ void Vo::local_ba(const std::vector<int>& local, bool fix_first) {
       obs_of.emplace_back(points[pi], k);
     }
   }
+  result_.local_ba_observations += static_cast<std::int64_t>(problem.observations.size());
+  const double cpu0 = thread_cpu_seconds();
   const std::vector<bool> outlier = solve_local_ba(cam_, &problem);
+  result_.local_ba_cpu_seconds += thread_cpu_seconds() - cpu0;
   for (std::size_t q = 0; q < problem.poses.size(); ++q) {
     if (!problem.pose_fixed[q]) map_.kfs[static_cast<std::size_t>(kf_of_pose[q])].Tcw = from_block(problem.poses[q]);
   }
@@ -802,7 +805,7 @@ void Vo::local_mapping(int kf) {
   search_in_neighbours(kf);
   const std::vector<int> local = local_keyframes(kf, opt_.max_local_keyframes);
   if (opt_.measure_windows) measure_windows(kf);
-  if (opt_.selector != Selector::kOriginal || !calibration_.empty()) select_points(kf, local);
+  if (opt_.selector != Selector::kOriginal) select_points(kf, local);
   local_ba(local, false);
   keyframe_culling(kf);
 }
@@ -1052,8 +1055,11 @@ RealRunResult Vo::run() {
       ++result_.frames_tracked;
       const int ref = reference_kf_;
       records_.push_back({i, ref, cur.Tcw * map_.kfs[static_cast<std::size_t>(ref)].Tcw.inverse()});
-    } else if (was_tracked) {
-      ++result_.tracking_losses;
+    } else {
+      if (was_tracked) ++result_.tracking_losses;
+      // Scored at the last tracked pose: a lost run cannot look better than
+      // it is (frames before the first tracked one have no pose to hold).
+      if (!records_.empty()) records_.push_back({i, records_.back().ref_kf, records_.back().T_cr});
     }
     was_tracked = tracked;
     if (opt_.verbose && (i % 50 == 0 || i + 1 == result_.frames)) {
@@ -1070,7 +1076,6 @@ RealRunResult Vo::run() {
   }
   const double windows = static_cast<double>(result_.selector.windows);
   result_.mean_kept_fraction = windows > 0 ? kept_fraction_sum_ / windows : 1.0;
-  for (double s : calibration_sum_) result_.calibration_kept_fraction.push_back(windows > 0 ? s / windows : 1.0);
   std::vector<Pose> estimate, truth;
   for (const FrameRecord& r : records_) {
     const Eigen::Isometry3d Twc = (r.T_cr * final_pose(r.ref_kf)).inverse();

@@ -17,7 +17,9 @@ namespace keepless::eval::vo {
 
 // What decides before each local BA. kOriginal: nothing (ORB-SLAM2's own
 // culling only). The baselines cull exactly as many of the new keyframe's
-// evaluated points as keepless culls on the same window.
+// evaluated points as keepless culls on the same window; with a kept
+// fraction (params.budget) every selector keeps floor(F x E + 0.5) of the E
+// evaluated points of the new keyframe, counted on its own window.
 enum class Selector : std::uint8_t { kOriginal, kKeepless, kRandom, kLongestTrack, kAnms };
 const char* to_string(Selector s);
 
@@ -29,7 +31,6 @@ struct RealVoOptions {
   // the eval's --scope/--floor/--cost). image_width/height are the camera's.
   core::Params params;
   int max_local_keyframes = 20;      // local BA / keepless window: the new keyframe and its best covisibles
-  std::vector<std::int64_t> calibrate_M;  // original runs: mean kept fraction per M, on every window
   bool measure_windows = false;  // fill RealRunResult::window_sizes (window_sizes.hpp)
   // With measure_windows: replay the K = 20 windows at these capacities
   // (max_keyframes 0: no replay).
@@ -56,9 +57,12 @@ struct RealRunResult {
   int window_rejections = 0;  // windows the adapter or Sparsifier refused (nothing culled there)
   SelectorCounts selector;  // windows the selector decided, its Sparsifier's floor counts over them
   double local_ba_seconds = 0, selector_seconds = 0, total_seconds = 0;
-  double ate_m = 0, ate_r_deg = 0;  // RMS over tracked frames, SE(3) for RGB-D, Sim(3) monocular
+  std::int64_t local_ba_observations = 0;  // residuals over every local BA
+  double local_ba_cpu_seconds = 0;          // the local BAs' thread CPU time
+  // RMS over every frame from the first tracked one, an untracked frame at
+  // the last tracked pose; SE(3) for RGB-D, Sim(3) monocular.
+  double ate_m = 0, ate_r_deg = 0;
   double mean_kept_fraction = 1;    // of the new keyframes' evaluated points (>= 2 views in the window), over windows
-  std::vector<double> calibration_kept_fraction;  // per calibrate_M
   std::vector<Pose> estimate, ground_truth;       // tracked frames, aligned estimate
   std::vector<KeypointMark> marks;                // one keyframe's keypoints (the window with most culls)
   int marked_frame = -1;

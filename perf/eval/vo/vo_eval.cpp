@@ -10,10 +10,6 @@
 namespace keepless::eval::vo {
 namespace {
 
-// --kept-fraction: the M of this ladder whose mean kept fraction of the new
-// keyframes' evaluated points, on the first seed's original windows, is nearest.
-const std::vector<std::int64_t> kLadder = {5, 10, 20, 30, 50, 75, 100, 150, 200, 300};
-
 RunRecord record_of(const RealRunResult& r, const char* variant, std::uint64_t seed, std::int64_t M) {
   RunRecord x;
   x.variant = variant;
@@ -21,8 +17,9 @@ RunRecord record_of(const RealRunResult& r, const char* variant, std::uint64_t s
   x.M = M;
   x.mps = static_cast<std::uint64_t>(r.map_points);
   x.kfs = static_cast<std::uint64_t>(r.keyframes);
-  x.observations = static_cast<std::uint64_t>(r.observations);
+  x.observations = static_cast<std::uint64_t>(r.local_ba_observations);
   x.ba_s = r.local_ba_seconds;
+  x.ba_cpu_s = r.local_ba_cpu_seconds;
   x.total_s = r.total_seconds;
   x.ate_m = r.ate_m;
   x.ate_r_deg = r.ate_r_deg;
@@ -77,29 +74,25 @@ bool evaluate_real_vo(const VoInput& in, const VoEvalOptions& o, std::vector<Com
     vo.params.cost_model = o.policy.cost_model;
     vo.seed = o.seeds[si];
     vo.selector = Selector::kOriginal;
-    if (si == 0) vo.calibrate_M = kLadder;
     const RealRunResult original = run_real_vo(seq, vo);
     if (!original.error.empty()) {
       *error = original.error;
       return false;
     }
-    vo.calibrate_M.clear();
     for (std::size_t p = 0; p < o.ops.size(); ++p) {
       Comparison& c = (*out)[first + p];
-      if (si == 0 && std::isfinite(c.target_fraction)) {
-        std::size_t best = 0;
-        for (std::size_t m = 0; m < kLadder.size(); ++m)
-          if (std::abs(original.calibration_kept_fraction[m] - c.target_fraction) <
-              std::abs(original.calibration_kept_fraction[best] - c.target_fraction))
-            best = m;
-        c.M = kLadder[best];
-        std::fprintf(stderr, "  %s: kept fraction %.2f -> M %lld (keeps %.3f of the evaluated points)\n",
-                     seq.name.c_str(), c.target_fraction, static_cast<long long>(c.M),
-                     original.calibration_kept_fraction[best]);
-      }
       c.original.push_back(record_of(original, "original", vo.seed, 0));
       if (p == 0) log_run(seq, c.original.back(), original);
-      vo.params.pair_capacity = c.M;
+      // A kept fraction is a keep budget on the new keyframe's points (the
+      // ones the VO culls): exact per window, no M.
+      if (std::isfinite(c.target_fraction)) {
+        vo.params.budget = core::KeepBudget{core::BudgetKind::kFraction, 0, c.target_fraction};
+        vo.params.scope = core::Scope::kNewest;
+      } else {
+        vo.params.budget = core::KeepBudget{};
+        vo.params.scope = o.policy.scope;
+        vo.params.pair_capacity = c.M;
+      }
       const std::pair<Selector, std::vector<RunRecord>*> runs[] = {
           {Selector::kKeepless, &c.ours}, {Selector::kRandom, &c.random},
           {Selector::kLongestTrack, &c.longest_track}, {Selector::kAnms, &c.anms}};
@@ -117,10 +110,12 @@ bool evaluate_real_vo(const VoInput& in, const VoEvalOptions& o, std::vector<Com
   if (!o.out.empty() && !o.ops.empty() && !o.seeds.empty()) {
     std::filesystem::create_directories(o.out);
     const std::string base = o.out + "/" + seq.name;
-    const std::string M = std::to_string((*out)[first].M);
-    if (!write_trajectory_svg(base + "_trajectory.svg", seq.name + ", seed " + std::to_string(o.seeds[0]) + ", M " + M,
+    const Comparison& c0 = (*out)[first];
+    const std::string M = std::isfinite(c0.target_fraction) ? "F " + std::to_string(c0.target_fraction).substr(0, 4)
+                                                            : "M " + std::to_string(c0.M);
+    if (!write_trajectory_svg(base + "_trajectory.svg", seq.name + ", seed " + std::to_string(o.seeds[0]) + ", " + M,
                               first_original, first_ours) ||
-        !write_keypoints_svg(base + "_keypoints.svg", seq.name + " keepless M " + M, first_ours, seq.camera.width,
+        !write_keypoints_svg(base + "_keypoints.svg", seq.name + " keepless " + M, first_ours, seq.camera.width,
                              seq.camera.height)) {
       *error = "cannot write " + base + "_*.svg";
       return false;

@@ -26,7 +26,8 @@ struct VoEvalOptions {
   std::vector<std::pair<double, std::int64_t>> ops;  // (kept fraction, NaN for a given M; M)
   bool baselines = true;
   // --scope, --floor, --cost: only scope, coverage_floor and cost_model are
-  // read, for keepless, the baselines' counts and the M calibration alike.
+  // read. A kept fraction runs keepless with that keep budget over the new
+  // keyframe's points (scope newest: the points the VO culls).
   core::Params policy;
   std::string out;  // non-empty: NAME_trajectory.svg and NAME_keypoints.svg there
 };

@@ -61,10 +61,19 @@ struct Options {
   std::string profile;         // keepless_node's --profile whose memory is reported
 };
 
+// A JSON number, or null when not measured.
+std::string json_or_null(double v) {
+  if (!std::isfinite(v)) return "null";
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.4f", v);
+  return buf;
+}
+
 // The policy is the paper's method as the library defaults it.
 bool is_reference(const core::Params& p) {
   const core::Params paper;
-  return p.scope == paper.scope && p.coverage_floor == paper.coverage_floor && p.cost_model == paper.cost_model;
+  return p.scope == paper.scope && p.coverage_floor == paper.coverage_floor && p.cost_model == paper.cost_model &&
+         p.budget.kind == core::BudgetKind::kNone;
 }
 
 void usage() {
@@ -74,10 +83,13 @@ void usage() {
                "         [--budget-fraction F] [--compare WINDOWS] [--reps R] [--lcm] [--log FILE]\n"
                "         [--scope window|newest] [--floor L] [--cost paper|authors|information]\n"
                "         [--unmapped N] [--profile small|default|large]\n"
+               "         [--keep-points K | --keep-fraction F | --keep-observations B]\n"
                "  --keyframes N       decisions measured after warm-up (default: 1000; map: 3)\n"
                "  --scope, --floor, --cost  the decision policy (keepless_node's flags); other than\n"
                "                      the defaults (window, 0, paper), the same stream is replayed\n"
                "                      again with them as the reference of the *_ratio_to_paper figures\n"
+               "  --keep-points K, --keep-fraction F, --keep-observations B  a keep budget instead of\n"
+               "                      M (keepless_node's flags); the paper's M = 100 is the reference\n"
                "  --unmapped N        unmapped keypoints per keyframe (default: half the workload's\n"
                "                      observations per keyframe with --cost authors, else 0)\n"
                "  --budget-ms MS      latency target per decision, from keyframe arrival; the\n"
@@ -130,6 +142,22 @@ bool parse(int argc, char** argv, Options* o) {
         std::fprintf(stderr, "keepless_latency: bad --cost '%s' (paper, authors or information)\n", v);
         return false;
       }
+    } else if (a == "--keep-fraction") {
+      const double x = std::strtod(v, &end);
+      if (end == v || *end != '\0' || !(x >= 0 && x <= 1) || o->params.budget.kind != core::BudgetKind::kNone) {
+        std::fprintf(stderr, "keepless_latency: bad %s '%s' (one keep budget, F in [0, 1])\n", a.c_str(), v);
+        return false;
+      }
+      o->params.budget = core::KeepBudget{core::BudgetKind::kFraction, 0, x};
+    } else if (a == "--keep-points" || a == "--keep-observations") {
+      const unsigned long long x = std::strtoull(v, &end, 10);
+      if (end == v || *end != '\0' || v[0] == '-' || x > 0xffffffffull ||
+          o->params.budget.kind != core::BudgetKind::kNone) {
+        std::fprintf(stderr, "keepless_latency: bad %s '%s' (one keep budget, an integer)\n", a.c_str(), v);
+        return false;
+      }
+      o->params.budget = core::KeepBudget{
+          a == "--keep-points" ? core::BudgetKind::kPoints : core::BudgetKind::kObservations, x, 0.0};
     } else if (a == "--budget-ms" || a == "--budget-fraction") {
       const double x = std::strtod(v, &end);
       if (end == v || *end != '\0' || !std::isfinite(x) || x < 0) {
@@ -375,8 +403,10 @@ bool replay(const KeyframeStream& stream, std::uint32_t warmup, std::uint64_t bu
   core::Params unpolicied = params;
   unpolicied.scope = core::Scope::kWindow;
   unpolicied.coverage_floor = 0;
+  unpolicied.budget = core::KeepBudget{};  // the solvers are compared at M
   std::unique_ptr<core::Sparsifier> raw;
-  if (params.scope != core::Scope::kWindow || params.coverage_floor > 0) {
+  if (params.scope != core::Scope::kWindow || params.coverage_floor > 0 ||
+      params.budget.kind != core::BudgetKind::kNone) {
     raw = std::make_unique<core::Sparsifier>(caps, unpolicied, core::SolveMode::kFromScratch,
                                              core::Start::kZeroFlow);
   }
@@ -570,6 +600,11 @@ int main(int argc, char** argv) {
     camera = stream.keyframes[k].fx > 0;
     for (const core::Observation& ob : stream.observations[k]) camera = camera && ob.depth > 0;
   }
+  std::printf("keep budget: %s", core::to_string(o.params.budget.kind));
+  if (o.params.budget.kind == core::BudgetKind::kFraction) std::printf(" %.3f", o.params.budget.fraction);
+  if (o.params.budget.kind == core::BudgetKind::kPoints || o.params.budget.kind == core::BudgetKind::kObservations)
+    std::printf(" %llu", static_cast<unsigned long long>(o.params.budget.count));
+  std::printf("\n");
   std::printf("policy: scope %s, floor %u, cost %s; stream: intrinsics and depths %s, %u unmapped keypoints"
               " per keyframe; reference: %s\n",
               core::to_string(o.params.scope), o.params.coverage_floor, core::to_string(o.params.cost_model),
@@ -640,11 +675,25 @@ int main(int argc, char** argv) {
               " per decision\n",
               r.floor_bound, static_cast<unsigned long long>(r.floor_promoted),
               r.decisions > 0 ? static_cast<double>(r.out_of_scope) / r.decisions : 0.0);
+  double budget_share_p50 = NAN, budget_share_p99 = NAN;
   if (with_reference) {
     std::printf("reference (paper, replayed after): end-to-end p50 %.3f p99 %.3f ms, budget exhausted %u,"
                 " allocations %llu; this policy's p50 %.2fx, p99 %.2fx the reference's\n",
                 ref.e2e.p(0.5), ref.e2e.p(0.99), ref.exhausted, static_cast<unsigned long long>(ref.allocations),
                 ratio(r.e2e.p(0.5), ref.e2e.p(0.5)), ratio(r.e2e.p(0.99), ref.e2e.p(0.99)));
+    if (o.params.budget.kind != core::BudgetKind::kNone) {
+      // With a budget there is no solve: the decide stage computes the
+      // thresholds and selects. Its cost is the whole decision's CPU time
+      // against the reference's (M = 100, solved), as a share of the latter.
+      budget_share_p50 = ratio(r.e2e_cpu.p(0.5), ref.e2e_cpu.p(0.5)) - 1.0;
+      budget_share_p99 = ratio(r.e2e_cpu.p(0.99), ref.e2e_cpu.p(0.99)) - 1.0;
+      std::printf("keep budget's cost: decision CPU time p50 %.3f ms (reference %.3f, %+.1f %%), p99 %.3f ms"
+                  " (reference %.3f, %+.1f %%); thresholds and selection (decide stage) p50 %.3f ms in place of"
+                  " the reference's solve %.3f + decide %.3f; end-to-end p99 %.3f ms (reference %.3f)\n",
+                  r.e2e_cpu.p(0.5), ref.e2e_cpu.p(0.5), 100.0 * budget_share_p50, r.e2e_cpu.p(0.99),
+                  ref.e2e_cpu.p(0.99), 100.0 * budget_share_p99, r.decide.p(0.5), ref.solve.p(0.5),
+                  ref.decide.p(0.5), r.e2e.p(0.99), ref.e2e.p(0.99));
+    }
     for (const auto& [mine, theirs] : {std::pair{&r.ingest, &ref.ingest}, {&r.network, &ref.network},
                                        {&r.solve, &ref.solve}, {&r.decide, &ref.decide}, {&r.e2e_cpu, &ref.e2e_cpu}}) {
       std::printf("  %-10s p50 %.3f (reference %.3f, %.2fx)  p99 %.3f (reference %.3f, %.2fx)\n", mine->name,
@@ -710,6 +759,7 @@ int main(int argc, char** argv) {
   // The policy and its reference. Digests are hex strings (64 bits do not
   // survive a JSON number as a double).
   std::printf(
+      "\"keep_budget\":\"%s\",\"keep_budget_value\":%.4f,\"keep_budget_share_p50\":%s,\"keep_budget_share_p99\":%s,"
       "\"scope\":\"%s\",\"coverage_floor\":%u,\"cost_model\":\"%s\",\"intrinsics_and_depths\":%s,"
       "\"unmapped_per_kf\":%u,\"floor_bound_decisions\":%u,\"floor_promoted\":%llu,\"out_of_scope_mean\":%.1f,"
       "\"decisions_digest\":\"%016llx\",\"reference\":\"%s\",\"reference_e2e_p50_ms\":%.4f,"
@@ -718,6 +768,10 @@ int main(int argc, char** argv) {
       "\"p50_ratio_to_paper\":%.3f,\"p99_ratio_to_paper\":%.3f,"
       "\"e2e_cpu_p50_ms\":%.4f,\"e2e_cpu_p99_ms\":%.4f,\"reference_e2e_cpu_p50_ms\":%.4f,"
       "\"reference_e2e_cpu_p99_ms\":%.4f,\"cpu_p50_ratio_to_paper\":%.3f,\"cpu_p99_ratio_to_paper\":%.3f,",
+      core::to_string(o.params.budget.kind),
+      o.params.budget.kind == core::BudgetKind::kFraction ? o.params.budget.fraction
+                                                          : static_cast<double>(o.params.budget.count),
+      json_or_null(budget_share_p50).c_str(), json_or_null(budget_share_p99).c_str(),
       core::to_string(o.params.scope), o.params.coverage_floor, core::to_string(o.params.cost_model),
       camera ? "true" : "false", unmapped_per_kf, r.floor_bound,
       static_cast<unsigned long long>(r.floor_promoted),

@@ -53,6 +53,30 @@ enum class Scope : std::uint8_t { kWindow, kNewest };
 // c_c, the cost terms' mask and theta apply to every model.
 enum class CostModel : std::uint8_t { kPaper, kAuthors, kInformation };
 
+// --- Keep budgets ---------------------------------------------------------
+// A budget states how much to keep instead of the pair capacity M. With the
+// paper's capacities every evaluated point p has a keep threshold M*(p), the
+// smallest M at which it is kept (Sparsifier, "Keep budgets"); a budget
+// keeps the points with the smallest M*, ties to the smaller point id:
+//   kPoints: exactly min(count, candidates) points;
+//   kFraction: K = floor(fraction * candidates + 0.5) points, fraction in [0, 1];
+//   kObservations: the longest prefix of that order whose window
+//     observations (n per point) sum to at most `count`.
+// Candidates are the evaluated points within Params::scope. The coverage
+// floor's promotions come on top of the budget (Summary::floor_promoted).
+// With a budget, M (Params::pair_capacity) is not used for selection.
+enum class BudgetKind : std::uint8_t { kNone, kPoints, kFraction, kObservations };
+
+struct KeepBudget {
+  BudgetKind kind = BudgetKind::kNone;
+  std::uint64_t count = 0;  // kPoints: K; kObservations: B
+  double fraction = 0.0;    // kFraction: F
+};
+
+// "none", "points", "fraction", "observations".
+const char* to_string(BudgetKind kind);
+// --- end keep budgets -------------------------------------------------------
+
 // The paper's section III-B parameters, and the decision policies around them.
 struct Params {
   std::int64_t pair_capacity = 100;  // M
@@ -72,6 +96,8 @@ struct Params {
   // [0, width) x [0, height) (ORB-SLAM2's mnMinX.. mnMaxX, undistorted).
   std::int32_t image_width = 640;
   std::int32_t image_height = 480;
+  // Keep budget (see KeepBudget): when set, it replaces M in selection.
+  KeepBudget budget{};
 };
 
 // The options' names as command lines spell them: "window", "newest";

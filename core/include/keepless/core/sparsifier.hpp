@@ -20,6 +20,16 @@
 // each keyframe has L evaluated points not culled or none of its evaluated
 // points is culled (Summary::floor_*). A promoted point keeps its flow, so
 // it is the only kept point whose flow is not above theta * capacity.
+//
+// Keep budgets (Params::budget): with the paper's capacities each evaluated
+// point p has a keep threshold M*(p) (keepless/core/keep_thresholds.hpp):
+// at pair capacity M the kept points are exactly those with M*(p) <= M. A
+// budget needs no solve: the thresholds are computed from the network's
+// arcs, the scope leaves its candidates, and the budget keeps those with the
+// smallest M*, ties to the smaller point id (KeepBudget). Each decision's
+// flow is then its flow at the budget's M (Summary::budget_m, the largest M*
+// kept); the floor promotes on top, smallest M* first. kept_at(M) gives the
+// whole kept-count curve of the window from the same pass.
 
 #include <cstddef>
 #include <cstdint>
@@ -103,6 +113,13 @@ class Sparsifier {
   // One per distinct window point, ascending point id.
   std::uint32_t decision_count() const;
   const PointDecision* decisions() const;
+
+  // With a budget: the candidates (evaluated, in scope) the window keeps at
+  // pair capacity m, before the floor (0 without a budget), and each
+  // decision's M* (0: skipped; KeepThresholds::kNever: no M keeps it;
+  // null without a budget), indexed like decisions().
+  std::uint32_t kept_at(std::int64_t m) const;
+  const std::uint32_t* keep_thresholds() const;
 
   const Params& params() const;
   // After run(); before an incremental Sparsifier's first run(), an empty network.

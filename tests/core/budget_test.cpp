@@ -1,0 +1,331 @@
+// Keep budgets (Params::budget) and the keep thresholds behind them. On
+// seeded random windows full of ties, with every scope, floor and cost
+// model: the kept-count curve kept(M) equals, at every M of a sweep, what
+// the closed-form oracle (ClosedForm), the closed-form start and the
+// successive shortest paths from zero flow keep at that M; each point's
+// threshold M* says exactly at which M it is kept; a budget of K points
+// keeps exactly min(K, candidates), the set {M* <= M} wherever kept(M) == K;
+// a fraction rounds as documented; an observations budget never exceeds B;
+// and update() decides what run() does.
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <set>
+#include <vector>
+
+#include "keepless/core/closed_form.hpp"
+#include "keepless/core/keep_thresholds.hpp"
+#include "keepless/core/network.hpp"
+#include "keepless/core/sparsifier.hpp"
+#include "random_window.hpp"
+
+namespace keepless::core {
+namespace {
+
+// Small capacities: the sweep builds a sparsifier per M.
+const Capacities kCaps{16, 1024, 4096, 32768, 1024};
+
+// Evaluated points within the scope, by id (the budget's candidates).
+std::set<PointId> candidates_of(const Window& w, const Params& p) {
+  std::map<PointId, std::uint32_t> views;
+  for (std::uint32_t k = 0; k < w.keyframe_count(); ++k) {
+    for (std::uint32_t i = 0; i < w.observation_count(k); ++i) ++views[w.observations(k)[i].point];
+  }
+  std::set<PointId> newest;
+  const std::uint32_t last = w.keyframe_count() - 1;
+  for (std::uint32_t i = 0; i < w.observation_count(last); ++i) newest.insert(w.observations(last)[i].point);
+  std::set<PointId> out;
+  for (const auto& [id, n] : views) {
+    if (n >= 2 && (p.scope == Scope::kWindow || newest.count(id) > 0)) out.insert(id);
+  }
+  return out;
+}
+
+std::map<PointId, std::uint32_t> views_of(const Window& w) {
+  std::map<PointId, std::uint32_t> views;
+  for (std::uint32_t k = 0; k < w.keyframe_count(); ++k) {
+    for (std::uint32_t i = 0; i < w.observation_count(k); ++i) ++views[w.observations(k)[i].point];
+  }
+  return views;
+}
+
+// The points a sparsifier keeps, the floor's promotions aside: with the
+// floor off, simply its kept points.
+std::set<PointId> kept_of(const Sparsifier& s) {
+  std::set<PointId> kept;
+  for (std::uint32_t i = 0; i < s.decision_count(); ++i) {
+    if (s.decisions()[i].verdict == Verdict::kKeep) kept.insert(s.decisions()[i].point);
+  }
+  return kept;
+}
+
+// The oracle at pair capacity M: ClosedForm's flows, decide(), the scope.
+std::set<PointId> oracle_kept(const Window& w, Params p, std::int64_t m,
+                              const std::set<PointId>& candidates) {
+  p.pair_capacity = m;
+  PaperNetwork net(kCaps);
+  solver::MinCostFlow solver(PaperNetwork::solver_capacity(kCaps));
+  EXPECT_EQ(net.build(w, p, solver), Status::kOk);
+  ClosedForm form(kCaps);
+  form.solve(net, p);
+  std::set<PointId> kept;
+  for (std::uint32_t i = 0; i < net.point_count(); ++i) {
+    if (net.point_source_arc(i) < 0 || candidates.count(net.point_id(i)) == 0) continue;
+    const std::int64_t n = net.point_views(i);
+    if (decide(form.point_flow(i), n * (n - 1) / 2, p.theta) == Verdict::kKeep) kept.insert(net.point_id(i));
+  }
+  return kept;
+}
+
+TEST(KeepBudgets, CurveAndThresholdsMatchAnMSweep) {
+  Window window(kCaps);
+  std::uint64_t sweeps = 0, by_model[3] = {0, 0, 0}, newest = 0, never = 0;
+  for (std::uint64_t seed = 1; seed <= 120 && !HasFailure(); ++seed) {
+    test::RandomCase c = test::random_case(seed);
+    test::random_policies(c, seed);
+    ASSERT_TRUE(test::load(window, c.frames)) << "seed " << seed;
+    const std::set<PointId> candidates = candidates_of(window, c.params);
+    Params b = c.params;
+    b.coverage_floor = 0;
+    b.budget = KeepBudget{BudgetKind::kFraction, 0, 1.0};
+    Sparsifier budgeted(kCaps, b);
+    ASSERT_EQ(budgeted.run(window), Status::kOk);
+    std::map<PointId, std::uint32_t> threshold;
+    std::uint32_t top = 0;
+    for (std::uint32_t i = 0; i < budgeted.decision_count(); ++i) {
+      const PointId id = budgeted.decisions()[i].point;
+      if (candidates.count(id) == 0) continue;
+      const std::uint32_t t = budgeted.keep_thresholds()[i];
+      threshold[id] = t;
+      if (t == KeepThresholds::kNever) {
+        ++never;
+      } else {
+        top = std::max(top, t);
+      }
+    }
+    ASSERT_EQ(threshold.size(), candidates.size()) << "seed " << seed;
+    for (std::int64_t m = 1; m <= static_cast<std::int64_t>(top) + 1; ++m) {
+      std::set<PointId> by_threshold;
+      for (const auto& [id, t] : threshold) {
+        if (t <= m) by_threshold.insert(id);
+      }
+      ASSERT_EQ(budgeted.kept_at(m), by_threshold.size()) << "seed " << seed << " M " << m;
+      ASSERT_EQ(oracle_kept(window, c.params, m, candidates), by_threshold) << "seed " << seed << " M " << m;
+      Params at = c.params;  // the floor's promotions are not the curve's
+      at.pair_capacity = m;
+      at.coverage_floor = 0;
+      for (Start start : {Start::kClosedForm, Start::kZeroFlow}) {
+        Sparsifier s(kCaps, at, SolveMode::kFromScratch, start);
+        ASSERT_EQ(s.run(window), Status::kOk);
+        ASSERT_EQ(kept_of(s), by_threshold) << "seed " << seed << " M " << m << " start "
+                                            << static_cast<int>(start);
+        // With the floor on, its promotions come on top of the same set.
+        Params floored = at;
+        floored.coverage_floor = c.params.coverage_floor;
+        Sparsifier f(kCaps, floored, SolveMode::kFromScratch, start);
+        ASSERT_EQ(f.run(window), Status::kOk);
+        ASSERT_EQ(f.summary().kept - f.summary().floor_promoted, budgeted.kept_at(m));
+      }
+      ++sweeps;
+    }
+    ++by_model[static_cast<int>(c.params.cost_model)];
+    newest += c.params.scope == Scope::kNewest;
+  }
+  EXPECT_GT(sweeps, 500u);
+  for (std::uint64_t n : by_model) EXPECT_GT(n, 30u);
+  EXPECT_GT(newest, 30u);
+  EXPECT_GT(never, 0u);  // theta = 1 cases
+}
+
+TEST(KeepBudgets, BudgetsKeepExactly) {
+  Window window(kCaps);
+  std::uint64_t exact_sets = 0, floor_bound = 0, limited = 0;
+  for (std::uint64_t seed = 300; seed <= 420 && !HasFailure(); ++seed) {
+    test::RandomCase c = test::random_case(seed, 12, 120);
+    test::random_policies(c, seed);
+    ASSERT_TRUE(test::load(window, c.frames)) << "seed " << seed;
+    const std::set<PointId> candidates = candidates_of(window, c.params);
+    const auto views = views_of(window);
+    const auto e = static_cast<std::uint32_t>(candidates.size());
+    Params curve_params = c.params;
+    curve_params.coverage_floor = 0;
+    curve_params.budget = KeepBudget{BudgetKind::kPoints, 0, 0.0};
+    Sparsifier curve(kCaps, curve_params);
+    ASSERT_EQ(curve.run(window), Status::kOk);
+    ASSERT_EQ(curve.summary().kept, 0u);
+    ASSERT_EQ(curve.summary().culled, e) << "seed " << seed;
+    // Every K from 0 to past the candidates.
+    for (std::uint32_t k = 0; k <= e + 2; k += 1 + e / 12) {
+      Params p = curve_params;
+      p.budget = KeepBudget{BudgetKind::kPoints, k, 0.0};
+      Sparsifier s(kCaps, p);
+      ASSERT_EQ(s.run(window), Status::kOk);
+      const std::set<PointId> kept = kept_of(s);
+      ASSERT_EQ(kept.size(), std::min(k, e)) << "seed " << seed << " K " << k;
+      for (PointId id : kept) ASSERT_EQ(candidates.count(id), 1u);
+      // Where the curve hits K exactly, the set is the thresholds' at that M.
+      for (std::int64_t m = 1; m <= 64; ++m) {
+        if (curve.kept_at(m) != k) continue;
+        std::set<PointId> at_m;
+        for (std::uint32_t i = 0; i < curve.decision_count(); ++i) {
+          const PointId id = curve.decisions()[i].point;
+          if (candidates.count(id) > 0 && curve.keep_thresholds()[i] <= m) at_m.insert(id);
+        }
+        ASSERT_EQ(kept, at_m) << "seed " << seed << " K " << k << " M " << m;
+        ++exact_sets;
+        break;
+      }
+      // The budget's M: the largest threshold kept; flows are those at it.
+      std::int64_t top = 0;
+      for (std::uint32_t i = 0; i < s.decision_count(); ++i) {
+        if (s.decisions()[i].verdict == Verdict::kKeep) {
+          top = std::max<std::int64_t>(top, s.keep_thresholds()[i]);
+        }
+      }
+      if (top != KeepThresholds::kNever) {
+        ASSERT_EQ(s.summary().budget_m, top) << "seed " << seed << " K " << k;
+        if (top > 0) {
+          Params at = c.params;
+          at.pair_capacity = top;
+          at.coverage_floor = 0;
+          Sparsifier ref(kCaps, at);
+          ASSERT_EQ(ref.run(window), Status::kOk);
+          ASSERT_EQ(s.summary().max_flow, ref.summary().max_flow);
+          ASSERT_EQ(s.summary().total_cost, ref.summary().total_cost);
+          for (std::uint32_t i = 0; i < s.decision_count(); ++i) {
+            ASSERT_EQ(s.decisions()[i].flow, ref.decisions()[i].flow);
+          }
+        }
+      }
+      // With the floor: the budget's points, plus the floor's promotions.
+      if (c.params.coverage_floor > 0) {
+        Params f = p;
+        f.coverage_floor = c.params.coverage_floor;
+        Sparsifier floored(kCaps, f);
+        ASSERT_EQ(floored.run(window), Status::kOk);
+        ASSERT_EQ(floored.summary().kept - floored.summary().floor_promoted, std::min(k, e));
+        const std::set<PointId> with_floor = kept_of(floored);
+        ASSERT_TRUE(std::includes(with_floor.begin(), with_floor.end(), kept.begin(), kept.end()));
+        floor_bound += floored.summary().floor_promoted > 0;
+      }
+    }
+    // Fractions: K = floor(F * candidates + 0.5).
+    for (double fraction : {0.0, 0.1, 0.25, 0.3, 0.5, 0.75, 1.0}) {
+      Params p = curve_params;
+      p.budget = KeepBudget{BudgetKind::kFraction, 0, fraction};
+      Sparsifier s(kCaps, p);
+      ASSERT_EQ(s.run(window), Status::kOk);
+      ASSERT_EQ(s.summary().kept, static_cast<std::uint32_t>(std::floor(fraction * e + 0.5)))
+          << "seed " << seed << " F " << fraction;
+    }
+    // Observations: never above B, and the next point in order would be.
+    std::uint64_t total = 0;
+    for (PointId id : candidates) total += views.at(id);
+    for (std::uint64_t budget : {std::uint64_t{0}, std::uint64_t{5}, total / 3, total / 2, total, total + 9}) {
+      Params p = curve_params;
+      p.budget = KeepBudget{BudgetKind::kObservations, budget, 0.0};
+      Sparsifier s(kCaps, p);
+      ASSERT_EQ(s.run(window), Status::kOk);
+      std::uint64_t used = 0;
+      for (PointId id : kept_of(s)) used += views.at(id);
+      ASSERT_LE(used, budget) << "seed " << seed;
+      ASSERT_EQ(used, s.summary().budget_observations);
+      // The same points as the points budget of that count: a prefix.
+      Params q = curve_params;
+      q.budget = KeepBudget{BudgetKind::kPoints, s.summary().kept, 0.0};
+      Sparsifier same_count(kCaps, q);
+      ASSERT_EQ(same_count.run(window), Status::kOk);
+      ASSERT_EQ(kept_of(same_count), kept_of(s));
+      if (s.summary().kept < e) {  // the next in order would exceed B
+        Params r = curve_params;
+        r.budget = KeepBudget{BudgetKind::kPoints, s.summary().kept + 1, 0.0};
+        Sparsifier next(kCaps, r);
+        ASSERT_EQ(next.run(window), Status::kOk);
+        std::uint64_t more = 0;
+        for (PointId id : kept_of(next)) more += views.at(id);
+        ASSERT_GT(more, budget);
+        ++limited;
+      }
+    }
+  }
+  EXPECT_GT(exact_sets, 150u);
+  EXPECT_GT(floor_bound, 10u);
+  EXPECT_GT(limited, 100u);
+}
+
+::testing::AssertionResult same(const Sparsifier& a, const Sparsifier& b) {
+  if (a.decision_count() != b.decision_count()) return ::testing::AssertionFailure() << "counts";
+  for (std::uint32_t i = 0; i < a.decision_count(); ++i) {
+    const PointDecision& x = a.decisions()[i];
+    const PointDecision& y = b.decisions()[i];
+    if (x.point != y.point || x.verdict != y.verdict || x.flow != y.flow || x.capacity != y.capacity ||
+        a.keep_thresholds()[i] != b.keep_thresholds()[i]) {
+      return ::testing::AssertionFailure() << "point " << x.point << " differs";
+    }
+  }
+  const Summary& s = a.summary();
+  const Summary& t = b.summary();
+  if (s.kept != t.kept || s.culled != t.culled || s.skipped != t.skipped || s.max_flow != t.max_flow ||
+      s.total_cost != t.total_cost || s.out_of_scope != t.out_of_scope ||
+      s.floor_promoted != t.floor_promoted || s.budget_m != t.budget_m ||
+      s.budget_observations != t.budget_observations) {
+    return ::testing::AssertionFailure() << "summaries differ";
+  }
+  for (std::int64_t m = 1; m <= 40; ++m) {
+    if (a.kept_at(m) != b.kept_at(m)) return ::testing::AssertionFailure() << "curve at " << m;
+  }
+  return ::testing::AssertionSuccess();
+}
+
+TEST(KeepBudgets, UpdateMatchesRun) {
+  std::uint32_t windows = 0;
+  const KeepBudget budgets[] = {{BudgetKind::kPoints, 25, 0.0},
+                                {BudgetKind::kFraction, 0, 0.3},
+                                {BudgetKind::kObservations, 90, 0.0}};
+  for (std::uint64_t seed = 1; seed <= 36 && !HasFailure(); ++seed) {
+    test::RandomCase c = test::random_case(9000 + seed, 16, 200);
+    test::random_policies(c, 9000 + seed);
+    c.params.budget = budgets[seed % 3];
+    const std::uint32_t size = 3 + static_cast<std::uint32_t>(seed % 6);
+    Window window(kCaps);
+    Sparsifier run(kCaps, c.params);
+    Sparsifier closed(kCaps, c.params, SolveMode::kIncremental, Start::kClosedForm);
+    Sparsifier zero(kCaps, c.params, SolveMode::kIncremental, Start::kZeroFlow);
+    for (const auto& f : c.frames) {
+      if (window.keyframe_count() == size) {
+        ASSERT_EQ(window.remove_keyframe(window.keyframe(seed % 3 == 0 ? 1 : 0).id), Status::kOk);
+      }
+      ASSERT_EQ(test::add_frame(window, f), Status::kOk);
+      ASSERT_EQ(run.run(window), Status::kOk);
+      ASSERT_EQ(closed.update(window), Status::kOk);
+      ASSERT_EQ(zero.update(window), Status::kOk);
+      ASSERT_TRUE(same(run, closed)) << "seed " << seed << " keyframe " << f.id;
+      ASSERT_TRUE(same(run, zero)) << "seed " << seed << " keyframe " << f.id;
+      ++windows;
+    }
+  }
+  EXPECT_GT(windows, 200u);
+}
+
+TEST(KeepBudgets, InvalidBudgets) {
+  Params p;
+  p.budget = KeepBudget{BudgetKind::kFraction, 0, 1.5};
+  EXPECT_EQ(Sparsifier::validate(p), Status::kInvalidArgument);
+  p.budget.fraction = -0.1;
+  EXPECT_EQ(Sparsifier::validate(p), Status::kInvalidArgument);
+  p.budget.fraction = std::nan("");
+  EXPECT_EQ(Sparsifier::validate(p), Status::kInvalidArgument);
+  p.budget.fraction = 0.4;
+  EXPECT_EQ(Sparsifier::validate(p), Status::kOk);
+  p.budget = KeepBudget{static_cast<BudgetKind>(9), 0, 0.0};
+  EXPECT_EQ(Sparsifier::validate(p), Status::kInvalidArgument);
+  EXPECT_STREQ(to_string(BudgetKind::kObservations), "observations");
+}
+
+}  // namespace
+}  // namespace keepless::core
