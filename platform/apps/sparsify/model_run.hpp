@@ -34,6 +34,8 @@ struct ModelOptions {
   // alike) sets params' image_width x image_height.
   bool image_given = false;
   core::WindowFileLimits limits;
+  std::uint64_t max_memory_mb = 2048;  // --max-memory-mb: reading and deciding, estimated first
+  bool compact = false;  // --compact (COLMAP): drop the 2D points no kept 3D point references
   bool map_flags = false;  // a flag above was given (parse_map_flag)
 };
 
