@@ -48,7 +48,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   // binary can hold (COLMAP's text reader ends a name at its first space).
   const io::ColmapFormat other = format == io::ColmapFormat::kBinary ? io::ColmapFormat::kText : io::ColmapFormat::kBinary;
   for (const io::ColmapImage& im : model.images) {
-    if (other == io::ColmapFormat::kText && im.name.find_first_of(" \t") != std::string::npos) return 0;
+    if (other == io::ColmapFormat::kText && im.name.find_first_of(" \t\v\f\r") != std::string::npos) return 0;
   }
   io::ColmapModel converted;
   KEEPLESS_FUZZ_CHECK(io::parse_colmap("fuzz", io::format_colmap(model, other), other, &converted, &error));

@@ -223,7 +223,7 @@ bool write_colmap_model(const std::string& dir, const ColmapModel& model, Colmap
   // COLMAP's text reader ends a name at its first space: such a name only survives in binary.
   if (format == ColmapFormat::kText) {
     for (const ColmapImage& im : model.images) {
-      if (im.name.find_first_of(" \t") != std::string::npos) {
+      if (im.name.find_first_of(" \t\v\f\r") != std::string::npos) {
         *error = detail::file_names(dir, format).images + ":0: image " + std::to_string(im.id) + "'s name '" +
                  im.name.substr(0, 60) + "' holds a blank, which COLMAP's text format cannot hold; write the binary format";
         return false;
