@@ -250,6 +250,11 @@ bool write_decisions(const std::string& path, const core::Sparsifier& sparsifier
   return ok;
 }
 
+int decide_window(const Options& opt, const core::WindowFile& file, const core::Capacities& caps, double need,
+                  double parse_ms, std::uint64_t t_build);
+int decide_window_unguarded(const Options& opt, const core::WindowFile& file, const core::Capacities& caps,
+                            double parse_ms, std::uint64_t t_build);
+
 int run(const Options& opt) {
   const std::uint64_t t_parse = keepless::platform::monotonic_ns();
   core::WindowFile file;
@@ -273,6 +278,27 @@ int run(const Options& opt) {
   if (caps.max_pair_arcs == 0) caps.max_pair_arcs = 1;
 
   const std::uint64_t t_build = keepless::platform::monotonic_ns();
+  return decide_window(opt, file, caps, model.bytes(caps), parse_ms, t_build);
+}
+
+// Below --max-memory-mb the allocation can still fail (ulimit -v, a small
+// machine): say so with the file and the estimate.
+int decide_window(const Options& opt, const core::WindowFile& file, const core::Capacities& caps, double need,
+                  double parse_ms, std::uint64_t t_build) {
+  try {
+    return decide_window_unguarded(opt, file, caps, parse_ms, t_build);
+  } catch (const std::bad_alloc&) {
+    std::fprintf(stderr,
+                 "%s: out of memory while deciding it (about %.0f MB needed; --max-memory-mb %llu allowed it, but the "
+                 "process got less: check `ulimit -v` and free memory)\n",
+                 opt.window.c_str(), need / 1048576.0, static_cast<unsigned long long>(opt.max_memory_mb));
+    return kExitInput;
+  }
+}
+
+int decide_window_unguarded(const Options& opt, const core::WindowFile& file, const core::Capacities& caps,
+                            double parse_ms, std::uint64_t t_build) {
+  std::string error;
   core::Window window(caps);
   core::Sparsifier sparsifier(caps, opt.params);
   for (std::size_t k = 0; k < file.keyframes.size(); ++k) {
@@ -341,9 +367,11 @@ int main(int argc, char** argv) {
       return keepless::sparsify::run_model(opt.model);
     }
     return run(opt);
-  } catch (const std::bad_alloc&) {  // below --max-memory-mb, but the machine has less
-    std::fprintf(stderr, "%s:0: cannot allocate the memory this window needs (lower --max-memory-mb)\n",
-                 opt.window.c_str());
+  } catch (const std::bad_alloc&) {  // below --max-memory-mb, but the process got less
+    std::fprintf(stderr,
+                 "%s: out of memory (--max-memory-mb %llu allowed it, but the process got less: check `ulimit -v` "
+                 "and free memory)\n",
+                 opt.model.path.c_str(), static_cast<unsigned long long>(opt.max_memory_mb));
     return kExitInput;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "keepless_sparsify: %s\n", e.what());
