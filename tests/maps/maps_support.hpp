@@ -48,8 +48,10 @@ using Result = test::ChildResult;
 class MapsTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    ASSERT_TRUE(fs::exists(fixture("sparse/images.bin")))
-        << "the shared COLMAP fixture is missing: " << fixture() << " (set KEEPLESS_MAPS_DATA_DIR)";
+    // Missing data skips, naming the path (never a parse error on a missing file).
+    if (!fs::exists(fixture("sparse/images.bin"))) {
+      GTEST_SKIP() << "no data: " << fixture("sparse/images.bin") << " is missing (set KEEPLESS_MAPS_DATA_DIR)";
+    }
     std::string pattern = ::testing::TempDir() + "keepless_maps_XXXXXX";
     ASSERT_NE(::mkdtemp(pattern.data()), nullptr);
     dir_ = pattern;
