@@ -43,6 +43,8 @@ io::ColmapModel sorted(io::ColmapModel m) {
 }
 
 TEST(ColmapFixture, EachFormatRoundTripsByteForByteThroughTheOther) {
+  KEEPLESS_MAPS_NEED(maps_test::fixture("sparse/images.bin"));
+  KEEPLESS_MAPS_NEED(maps_test::fixture("txt/images.txt"));
   const io::ColmapFiles bin = read_files(fixture("sparse"), "bin");
   const io::ColmapFiles txt = read_files(fixture("txt"), "txt");
   io::ColmapModel from_bin, from_txt;
@@ -77,6 +79,7 @@ TEST(ColmapFixture, EachFormatRoundTripsByteForByteThroughTheOther) {
 }
 
 TEST(ColmapFixture, RemovingPointsClearsTheirReferencesAndKeepsEverythingElse) {
+  KEEPLESS_MAPS_NEED(maps_test::fixture("sparse/images.bin"));
   io::ColmapModel m;
   io::ColmapFormat format;
   std::string error;

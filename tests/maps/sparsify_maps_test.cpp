@@ -75,6 +75,7 @@ std::set<core::PointId> naive_replay_culls(const core::WindowFile& f, const core
 }
 
 TEST(ReplayMode, CullsWhatANaiveFromScratchReplayCulls) {
+  KEEPLESS_MAPS_NEED(maps_test::fixture("sparse/images.bin"));
   io::ColmapModel m;
   const io::Keyframes k = fixture_keyframes(&m);
   for (const std::int64_t M : {30, 200}) {
@@ -93,6 +94,7 @@ TEST(ReplayMode, CullsWhatANaiveFromScratchReplayCulls) {
 }
 
 TEST(WholeMode, IsOneRunOverAllKeyframes) {
+  KEEPLESS_MAPS_NEED(maps_test::fixture("sparse/images.bin"));
   io::ColmapModel m;
   const io::Keyframes k = fixture_keyframes(&m);
   core::Params params;
@@ -124,6 +126,7 @@ TEST(Floor, RestoresCulledPointsMostObservedFirstUntilEveryImageHasIt) {
 class SparsifyMaps : public maps_test::MapsTest {};
 
 TEST_F(SparsifyMaps, ReplayOnTheFixtureIsDeterministicAndWritesALoadableModel) {
+  KEEPLESS_MAPS_NEED(maps_test::fixture("txt/images.txt"));
   const std::string sim = fixture("sim3_to_kitti_gt.txt");
   std::string json;
   for (int run = 0; run < 2; ++run) {
@@ -198,6 +201,7 @@ TEST_F(SparsifyMaps, WholeModeWithTheFloorKeepsEveryImageAtTheFloor) {
 }
 
 TEST_F(SparsifyMaps, BalAndWindowInputsAreWrittenBackInTheirFormat) {
+  KEEPLESS_MAPS_NEED(maps_test::bal_problem());
   const std::string bal = std::string(KEEPLESS_MAPS_DATA) + "/bal_zenslam/problem-49-7776-pre.txt";
   maps_test::Result r = sparsify({"--bal", bal, "--M", "30", "--out", path("small.bal")});
   ASSERT_EQ(r.status, 0) << r.err;
@@ -327,6 +331,7 @@ TEST_F(SparsifyMaps, ImagesLeftBelowTheFloorAreWarnedAbout) {
 // --out may not be the input folder, contain it or lie inside it, however
 // it is spelt; the input is left byte for byte as it was.
 TEST_F(SparsifyMaps, OutThatIsHoldsOrIsInsideTheInputIsRefused) {
+  KEEPLESS_MAPS_NEED(maps_test::bal_problem());
   fs::create_directories(path("m"));
   for (const char* f : {"cameras.bin", "images.bin", "points3D.bin"}) fs::copy_file(fixture("sparse/") + f, path("m/") + f);
   fs::create_directory_symlink(path("m"), path("link"));
@@ -356,6 +361,7 @@ TEST_F(SparsifyMaps, OutThatIsHoldsOrIsInsideTheInputIsRefused) {
 // --max-memory-mb is estimated before allocating, on every input path:
 // "FILE: reason" with the figure needed.
 TEST_F(SparsifyMaps, MaxMemoryIsHonouredOnEveryInputPath) {
+  KEEPLESS_MAPS_NEED(maps_test::bal_problem());
   const std::string bal = std::string(KEEPLESS_MAPS_DATA) + "/bal_zenslam/problem-49-7776-pre.txt";
   struct Case {
     std::vector<std::string> args;
