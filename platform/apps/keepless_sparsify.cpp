@@ -1,12 +1,5 @@
-// keepless_sparsify: decides one window (or a whole map) offline.
-//
-//   keepless_sparsify --window FILE [--M 100] [--theta 0.5] [--box 64x48] [--decisions OUT]
-//                     [--scope window|newest] [--floor L] [--cost paper|authors|information]
-//                     [--image 640x480] [--max-keyframes N] [--max-points N]
-//                     [--max-observations N] [--max-pair-arcs N] [--max-memory-mb N]
-//   keepless_sparsify --colmap DIR | --bal FILE [--mode replay|whole] [--K 20] [--order name|id|file]
-//                     [--out DIR|FILE] [--out-format bin|txt] [--scale S | --sim3 FILE]
-//                     [--min-obs-per-image F] (and the flags above; also with --window)
+// keepless_sparsify: decides one window (or a whole map) offline. Its flags
+// are the table kFlags below (--help prints it).
 // The map path (sparsify/model_run.hpp) runs when a map flag is given;
 // --window alone is the single-window path below, unchanged.
 //
@@ -21,8 +14,8 @@
 //   stdout: the last line is one JSON object (the summary; parse_ms reads and
 //   checks the file, build_ms sizes the Window and Sparsifier and ingests the
 //   keyframes, solve_ms is Sparsifier::run: network build, solve, decisions);
-//   bad input or flags: exit 2, one stderr line ("FILE:LINE: reason", or a
-//   usage line for flags); internal failure: exit 1.
+//   bad input or flags: exit 2, one stderr line ("FILE:LINE: reason", or
+//   the flag's problem and a pointer to --help); internal failure: exit 1.
 
 #include <cerrno>
 #include <charconv>
@@ -64,8 +57,9 @@ const std::vector<keepless::cli::Flag> kFlags = {
     {"--out", "DIR|FILE", "write the sparsified map there, in the input's format (never the input's\n"
                           "own folder or file)"},
     {"--out-format", "bin|txt", "COLMAP output format (default: the input's)"},
-    {"--compact", nullptr, "COLMAP: also drop the 2D points no kept 3D point references; the\n"
-                           "positions of those unmatched keypoints are lost (default: keep them)"},
+    {"--compact", nullptr, "COLMAP: also drop the 2D points no kept 3D point references; lost:\n"
+                           "those unmatched keypoints' positions, and 2D point indices no longer\n"
+                           "match the feature database (default: keep every 2D point)"},
     {"--mode", "replay|whole", "replay: the onboard node's sliding window; whole: one window\n"
                                "(default: replay for maps, whole for --window)"},
     {"--K", "N", "replay window in keyframes (default 20)"},
