@@ -41,7 +41,7 @@ TEST(RealVoQuick, SevenScenesSliceIsTrackedAccuratelyAndReportedInFull) {
   ASSERT_TRUE(std::filesystem::exists(bin))
       << bin << " is missing: build target keepless_eval (perf/eval; its VO needs Ceres, OpenCV, keepless::opencv)";
   if (!std::filesystem::exists(data + "/frame-000059.color.jpg")) {
-    GTEST_SKIP() << "no 7-Scenes data at " << data << " (see /work/shared/data/SOURCES.md)";
+    GTEST_SKIP() << "no 7-Scenes data at " << data << " (set KEEPLESS_EVAL_DATA_DIR)";
   }
   const std::string out = ::testing::TempDir() + "/real_vo_quick";
   std::filesystem::remove_all(out);
@@ -97,7 +97,7 @@ TEST(RealVoQuick, FramesAreSelectedByNumberWhereverTheSequenceStarts) {
   const std::string data = std::string(KEEPLESS_EVAL_DATA) + "/7scenes_redkitchen_first600";
   ASSERT_TRUE(fs::exists(bin)) << bin << " is missing: build target keepless_eval";
   if (!fs::exists(data + "/frame-000029.color.jpg")) {
-    GTEST_SKIP() << "no 7-Scenes data at " << data << " (see /work/shared/data/SOURCES.md)";
+    GTEST_SKIP() << "no 7-Scenes data at " << data << " (set KEEPLESS_EVAL_DATA_DIR)";
   }
   const std::string dir = ::testing::TempDir() + "/rgbd_from_600";
   fs::remove_all(dir);
