@@ -7,7 +7,7 @@
 #
 # Each run prints libFuzzer's final stats (executions, corpus, peak RSS).
 # A finding leaves crash-*/leak-*/timeout-* in build-fuzz/findings/<harness>/
-# and exits non-zero. Reproduce one with: build-fuzz/bin/<harness> <file>.
+# and exits non-zero. Reproduce one with: build-fuzz/tests/<harness> <file>.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 mode=${1:-short}
@@ -47,7 +47,7 @@ for h in "${harnesses[@]}"; do
   echo "fuzz: $h for ${seconds}s"
   parallel=()
   [ "${FUZZ_JOBS:-1}" -gt 1 ] && parallel=(-jobs="$FUZZ_JOBS" -workers="$FUZZ_JOBS")
-  if ! "$build/bin/$h" -max_total_time="$seconds" -print_final_stats=1 -timeout=10 -rss_limit_mb=2048 \
+  if ! "$build/tests/$h" -max_total_time="$seconds" -print_final_stats=1 -timeout=10 -rss_limit_mb=2048 \
        "${parallel[@]}" -artifact_prefix="$findings/" \
        "$corpus" "$build/tests/fuzz/corpus/${h}_seeds" 2>"$findings/log.txt"; then
     status=1

@@ -36,6 +36,7 @@
 #include <string>
 #include <vector>
 
+#include "cli/cli.hpp"
 #include "keepless/io/atomic_file.hpp"
 #include "keepless/io/colmap_model.hpp"
 #include "keepless/io/keyframes.hpp"
@@ -226,28 +227,72 @@ Stat stat(const std::vector<double>& v) {
 int main(int argc, char** argv) {
   Bench b;
   Options& opt = b.opt;
-  for (int i = 1; i + 1 < argc; i += 2) {
-    const std::string f = argv[i];
-    if (f == "--data") opt.data = argv[i + 1];
-    else if (f == "--colmap") opt.colmap = argv[i + 1];
-    else if (f == "--M") opt.Ms = parse_list(argv[i + 1]);
-    else if (f == "--keep-fraction") {
+  namespace cli = keepless::cli;
+  constexpr const char* kTool = "keepless_maps_bench";
+  const std::vector<cli::Flag> flags = {
+      {"--data", "DIR", "the data folder holding colmap_kitti06_first51 and\n"
+                        "kitti06_first51_niconielsen (default ../shared/data)"},
+      {"--colmap", "BIN", "the colmap executable (default colmap, on PATH)"},
+      {"--M", "LIST", "comma-separated pair capacities (default 30,100,200)"},
+      {"--keep-fraction", "LIST", "comma-separated keep budgets F in [0, 1] instead of --M (keepless\n"
+                                  "and every baseline keep F of each window's evaluated points)"},
+      {"--K", "N", "replay window in keyframes (default 20)"},
+      {"--seeds", "N", "seeds of the random baseline (default 5)"},
+      {"--work", "DIR", "where the models and BA runs go (default: a new /tmp/keepless_maps_bench_*)"},
+      {"--cost", "paper|authors|information", "keepless's cost model (default paper)"},
+  };
+  for (int i = 1; i < argc; ++i) {
+    const cli::Flag* flag = nullptr;
+    const char* value = nullptr;
+    std::string error;
+    switch (cli::next(flags, argc, argv, &i, &flag, &value, &error)) {
+      case cli::Arg::kHelp:
+        std::fputs(cli::usage("usage: keepless_maps_bench [options]", flags,
+                              "Sparsifies the 51-image KITTI 06 COLMAP fixture at each M (replay, whole,\n"
+                              "and baselines at replay's count), re-solves every model with `colmap\n"
+                              "bundle_adjuster` and prints accuracy per row; the last line is a JSON summary.")
+                       .c_str(),
+                   stdout);
+        return 0;
+      case cli::Arg::kVersion: return cli::print_version(kTool);
+      case cli::Arg::kError: return cli::usage_error(kTool, error);
+      case cli::Arg::kFlag: break;
+    }
+    const std::string f = flag->name;
+    std::uint64_t n = 0;
+    const auto count = [&](std::uint64_t lo, std::uint64_t hi) {
+      if (!core::parse_uint64(value, &n) || n < lo || n > hi) {
+        std::exit(cli::usage_error(kTool, "bad value for " + f + ": '" + value + "' (an integer in " +
+                                              std::to_string(lo) + ".." + std::to_string(hi) + ")"));
+      }
+      return n;
+    };
+    if (f == "--data") opt.data = value;
+    else if (f == "--colmap") opt.colmap = value;
+    else if (f == "--M") {
+      opt.Ms = parse_list(value);
+      for (const std::int64_t m : opt.Ms) {
+        if (m < 1) std::exit(cli::usage_error(kTool, std::string("bad value for --M: '") + value + "' (integers >= 1)"));
+      }
+    } else if (f == "--keep-fraction") {
       opt.fractions.clear();
-      std::stringstream in(argv[i + 1]);
+      std::stringstream in(value);
       for (std::string t; std::getline(in, t, ',');) {
         char* end = nullptr;
         const double x = std::strtod(t.c_str(), &end);
-        if (t.empty() || *end != '\0' || !(x >= 0 && x <= 1)) die("bad --keep-fraction (numbers in [0, 1])");
+        if (t.empty() || *end != '\0' || !(x >= 0 && x <= 1)) {
+          return cli::usage_error(kTool, std::string("bad value for --keep-fraction: '") + value + "' (numbers in [0, 1])");
+        }
         opt.fractions.push_back(x);
       }
-    }
-    else if (f == "--K") opt.K = static_cast<std::uint32_t>(std::atoi(argv[i + 1]));
-    else if (f == "--seeds") opt.seeds = std::atoi(argv[i + 1]);
-    else if (f == "--work") opt.work = argv[i + 1];
+    } else if (f == "--K") opt.K = static_cast<std::uint32_t>(count(1, 100000));
+    else if (f == "--seeds") opt.seeds = static_cast<int>(count(1, 1000));
+    else if (f == "--work") opt.work = value;
     else if (f == "--cost") {
-      if (!core::parse_cost_model(argv[i + 1], &opt.cost)) die("bad --cost (paper, authors or information)");
+      if (!core::parse_cost_model(value, &opt.cost)) {
+        return cli::usage_error(kTool, std::string("bad value for --cost: '") + value + "' (paper, authors or information)");
+      }
     }
-    else die("unknown flag " + f);
   }
   if (opt.work.empty()) {
     char tmpl[] = "/tmp/keepless_maps_bench_XXXXXX";

@@ -13,28 +13,60 @@
 #include <random>
 #include <string>
 
+#include <vector>
+
+#include "cli/cli.hpp"
+#include "keepless/core/window_file.hpp"
 #include "keepless/io/colmap_model.hpp"
 
 int main(int argc, char** argv) {
   namespace io = keepless::io;
+  namespace cli = keepless::cli;
+  constexpr const char* kTool = "keepless_make_colmap";
+  const std::vector<cli::Flag> flags = {
+      {"--out", "DIR", "the model directory to write (required)"},
+      {"--images", "N", "images, 2..10000000 (default 1000)"},
+      {"--points", "N", "3D points, 0..4294967295 (default 100000)"},
+      {"--seed", "S", "random seed (default 1)"},
+  };
   std::string out;
   std::uint32_t images = 1000, points = 100000;
   std::uint64_t seed = 1;
-  for (int i = 1; i + 1 < argc; i += 2) {
-    const std::string f = argv[i];
-    if (f == "--out") out = argv[i + 1];
-    else if (f == "--images") images = static_cast<std::uint32_t>(std::strtoul(argv[i + 1], nullptr, 10));
-    else if (f == "--points") points = static_cast<std::uint32_t>(std::strtoul(argv[i + 1], nullptr, 10));
-    else if (f == "--seed") seed = std::strtoull(argv[i + 1], nullptr, 10);
-    else {
-      std::fprintf(stderr, "keepless_make_colmap: unknown flag %s\n", f.c_str());
-      return 2;
+  for (int i = 1; i < argc; ++i) {
+    const cli::Flag* flag = nullptr;
+    const char* value = nullptr;
+    std::string error;
+    switch (cli::next(flags, argc, argv, &i, &flag, &value, &error)) {
+      case cli::Arg::kHelp:
+        std::fputs(cli::usage("usage: keepless_make_colmap --out DIR [options]", flags,
+                              "Writes a synthetic COLMAP binary model: a PINHOLE camera driving straight\n"
+                              "ahead, 1 m per image, tracks of mean length ~6. Deterministic for a seed.")
+                       .c_str(),
+                   stdout);
+        return 0;
+      case cli::Arg::kVersion: return cli::print_version(kTool);
+      case cli::Arg::kError: return cli::usage_error(kTool, error);
+      case cli::Arg::kFlag: break;
+    }
+    const std::string f = flag->name;
+    std::uint64_t n = 0;
+    const bool number = keepless::core::parse_uint64(value, &n);
+    const std::string bad = "bad value for " + f + ": '" + value + "'";
+    if (f == "--out") {
+      if (*value == '\0') return cli::usage_error(kTool, bad);
+      out = value;
+    } else if (f == "--images") {
+      if (!number || n < 2 || n > 10000000) return cli::usage_error(kTool, bad + " (an integer in 2..10000000)");
+      images = static_cast<std::uint32_t>(n);
+    } else if (f == "--points") {
+      if (!number || n > UINT32_MAX) return cli::usage_error(kTool, bad + " (an integer in 0..4294967295)");
+      points = static_cast<std::uint32_t>(n);
+    } else if (f == "--seed") {
+      if (!number) return cli::usage_error(kTool, bad);
+      seed = n;
     }
   }
-  if (out.empty() || images < 2) {
-    std::fprintf(stderr, "usage: keepless_make_colmap --out DIR [--images N>=2] [--points N] [--seed S]\n");
-    return 2;
-  }
+  if (out.empty()) return cli::usage_error(kTool, "--out is required");
   const double fx = 707.0912, cx = 601.8873, cy = 183.1104;
   io::ColmapModel m;
   m.cameras.push_back({1, 1, 1226, 370, {fx, fx, cx, cy}});

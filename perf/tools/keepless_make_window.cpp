@@ -12,21 +12,27 @@
 #include <limits>
 #include <string>
 #include <unordered_map>
+#include <vector>
 
+#include "cli/cli.hpp"
 #include "keepless/core/window_file.hpp"
 #include "keepless/platform/window_file_io.hpp"
 #include "synthetic_window.hpp"
 
 namespace {
 
-constexpr const char* kUsage =
-    "usage: keepless_make_window [--workload small|orbslam|large|map] [--keyframes K] "
-    "[--points P] [--obs-per-kf N] [--seed S] --out FILE";
+constexpr const char* kTool = "keepless_make_window";
 
-int usage_error(const std::string& reason) {
-  std::fprintf(stderr, "keepless_make_window: %s; %s\n", reason.c_str(), kUsage);
-  return 2;
-}
+const std::vector<keepless::cli::Flag> kFlags = {
+    {"--out", "FILE", "the window file to write (required)"},
+    {"--workload", "small|orbslam|large|map", "the preset scene (default orbslam)"},
+    {"--keyframes", "K", "keyframes (default: the preset's)"},
+    {"--points", "P", "distinct points (default: the preset's)"},
+    {"--obs-per-kf", "N", "observations per keyframe (default: the preset's)"},
+    {"--seed", "S", "random seed (default 1)"},
+};
+
+int usage_error(const std::string& reason) { return keepless::cli::usage_error(kTool, reason); }
 
 bool parse_count(const char* text, std::uint32_t* out) {
   std::uint64_t v = 0;
@@ -51,13 +57,21 @@ int main(int argc, char** argv) {
     }
   }
   for (int i = 1; i < argc; ++i) {
-    const std::string flag = argv[i];
-    if (flag == "--help" || flag == "-h") {
-      std::printf("%s\n", kUsage);
-      return 0;
+    const keepless::cli::Flag* entry = nullptr;
+    const char* value = nullptr;
+    std::string error;
+    switch (keepless::cli::next(kFlags, argc, argv, &i, &entry, &value, &error)) {
+      case keepless::cli::Arg::kHelp:
+        std::fputs(keepless::cli::usage("usage: keepless_make_window --out FILE [options]", kFlags,
+                                        "Explicit counts override the preset. Prints one JSON line with the counts.")
+                       .c_str(),
+                   stdout);
+        return 0;
+      case keepless::cli::Arg::kVersion: return keepless::cli::print_version(kTool);
+      case keepless::cli::Arg::kError: return usage_error(error);
+      case keepless::cli::Arg::kFlag: break;
     }
-    if (i + 1 >= argc) return usage_error("missing value for " + flag);
-    const char* value = argv[++i];
+    const std::string flag = entry->name;
     const std::string bad = "bad value for " + flag + ": '" + value + "'";
     if (flag == "--workload") {
       continue;  // applied above
@@ -72,7 +86,7 @@ int main(int argc, char** argv) {
     } else if (flag == "--out") {
       out = value;
     } else {
-      return usage_error("unknown flag '" + flag + "'");
+      return usage_error(keepless::cli::unknown_option(flag));
     }
   }
   if (out.empty()) return usage_error("--out is required");

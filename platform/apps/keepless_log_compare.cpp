@@ -7,6 +7,8 @@
 
 #include <lcm/lcm-cpp.hpp>
 
+#include "cli/cli.hpp"
+
 #include <cstdio>
 #include <string>
 #include <vector>
@@ -30,9 +32,24 @@ bool read_channel(const std::string& path, const std::string& channel, std::vect
 }  // namespace
 
 int main(int argc, char** argv) {
+  constexpr const char* kTool = "keepless_log_compare";
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "--help" || a == "-h") {
+      std::fputs(keepless::cli::usage("usage: keepless_log_compare LOG_A CHANNEL_A LOG_B CHANNEL_B", {},
+                                      "Compares the messages on CHANNEL_A in LOG_A with those on CHANNEL_B in\n"
+                                      "LOG_B, byte for byte and in order. Exit 0 when identical (and not empty),\n"
+                                      "1 when they differ, 2 on bad usage or an unreadable log.")
+                     .c_str(),
+                 stdout);
+      return 0;
+    }
+    if (a == "--version") return keepless::cli::print_version(kTool);
+    if (a.size() > 1 && a[0] == '-') return keepless::cli::usage_error(kTool, keepless::cli::unknown_option(a));
+  }
   if (argc != 5) {
-    std::fprintf(stderr, "usage: keepless_log_compare LOG_A CHANNEL_A LOG_B CHANNEL_B\n");
-    return 2;
+    return keepless::cli::usage_error(kTool, "expected 4 arguments (LOG_A CHANNEL_A LOG_B CHANNEL_B), got " +
+                                                 std::to_string(argc - 1));
   }
   std::vector<std::vector<std::uint8_t>> a, b;
   if (!read_channel(argv[1], argv[2], a) || !read_channel(argv[3], argv[4], b)) return 2;

@@ -12,6 +12,7 @@
 #include <new>
 #include <string>
 
+#include "cli/cli.hpp"
 #include "keepless/core/sparsifier.hpp"
 #include "keepless/platform/cpu_pinning.hpp"
 #include "keepless/platform/node.hpp"
@@ -32,9 +33,10 @@ int main(int argc, char** argv) {
     case platform::ParseResult::kHelp:
       std::fputs(platform::node_usage().c_str(), stdout);
       return 0;
+    case platform::ParseResult::kVersion:
+      return cli::print_version("keepless_node");
     case platform::ParseResult::kError:
-      std::fprintf(stderr, "keepless_node: %s\n%s", error.c_str(), platform::node_usage().c_str());
-      return 2;
+      return cli::usage_error("keepless_node", error);
     case platform::ParseResult::kOk:
       break;
   }

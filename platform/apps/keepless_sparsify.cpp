@@ -1,12 +1,5 @@
-// keepless_sparsify: decides one window (or a whole map) offline.
-//
-//   keepless_sparsify --window FILE [--M 100 | --keep-points K | --keep-fraction F | --keep-observations B] [--theta 0.5] [--box 64x48] [--decisions OUT]
-//                     [--scope window|newest] [--floor L] [--cost paper|authors|information]
-//                     [--image 640x480] [--max-keyframes N] [--max-points N]
-//                     [--max-observations N] [--max-pair-arcs N] [--max-memory-mb N]
-//   keepless_sparsify --colmap DIR | --bal FILE [--mode replay|whole] [--K 20] [--order name|id|file]
-//                     [--out DIR|FILE] [--out-format bin|txt] [--scale S | --sim3 FILE]
-//                     [--min-obs-per-image F] (and the flags above; also with --window)
+// keepless_sparsify: decides one window (or a whole map) offline. Its flags
+// are the table kFlags below (--help prints it).
 // The map path (sparsify/model_run.hpp) runs when a map flag is given;
 // --window alone is the single-window path below, unchanged.
 //
@@ -21,8 +14,8 @@
 //   stdout: the last line is one JSON object (the summary; parse_ms reads and
 //   checks the file, build_ms sizes the Window and Sparsifier and ingests the
 //   keyframes, solve_ms is Sparsifier::run: network build, solve, decisions);
-//   bad input or flags: exit 2, one stderr line ("FILE:LINE: reason", or a
-//   usage line for flags); internal failure: exit 1.
+//   bad input or flags: exit 2, one stderr line ("FILE:LINE: reason", or
+//   the flag's problem and a pointer to --help); internal failure: exit 1.
 
 #include <cerrno>
 #include <charconv>
@@ -34,7 +27,9 @@
 #include <limits>
 #include <new>
 #include <string>
+#include <vector>
 
+#include "cli/cli.hpp"
 #include "keepless/core/config.hpp"
 #include "keepless/core/decision.hpp"
 #include "keepless/core/sparsifier.hpp"
@@ -53,14 +48,52 @@ namespace core = keepless::core;
 constexpr int kExitInput = 2;
 constexpr int kExitInternal = 1;
 
-constexpr const char* kUsage =
-    "usage: keepless_sparsify --window FILE [--M 100 | --keep-points K | --keep-fraction F | "
-    "--keep-observations B] [--theta 0.5] [--box 64x48] "
-    "[--decisions OUT] [--scope window|newest] [--floor 0] [--cost paper|authors|information] "
-    "[--image 640x480] [--max-keyframes 10000] [--max-points 2000000] "
-    "[--max-observations 10000000] [--max-pair-arcs 50000000] [--max-memory-mb 2048]; or --colmap DIR | --bal FILE "
-    "(or --window FILE) [--mode replay|whole] [--K 20] [--order name|id|file] [--out DIR|FILE] "
-    "[--out-format bin|txt] [--scale S | --sim3 FILE] [--min-obs-per-image 30]";
+constexpr const char* kTool = "keepless_sparsify";
+
+const std::vector<keepless::cli::Flag> kFlags = {
+    {"--window", "FILE", "a window file: decide it as one window (see the window file format)"},
+    {"--colmap", "DIR", "a COLMAP model (cameras, images, points3D as .bin or .txt): sparsify it"},
+    {"--bal", "FILE", "a BAL problem: sparsify it"},
+    {"--out", "DIR|FILE", "write the sparsified map there, in the input's format (never the input's\n"
+                          "own folder or file)"},
+    {"--out-format", "bin|txt", "COLMAP output format (default: the input's)"},
+    {"--compact", nullptr, "COLMAP: also drop the 2D points no kept 3D point references; lost:\n"
+                           "those unmatched keypoints' positions, and 2D point indices no longer\n"
+                           "match the feature database (default: keep every 2D point)"},
+    {"--mode", "replay|whole", "replay: the onboard node's sliding window; whole: one window\n"
+                               "(default: replay for maps, whole for --window)"},
+    {"--K", "N", "replay window in keyframes (default 20)"},
+    {"--order", "name|id|file", "replay order of the keyframes (default: name for COLMAP, else file)"},
+    {"--scale", "S", "multiply camera centres by S to get metres (default 1)"},
+    {"--sim3", "FILE", "a similarity to metres: s, R row-major, t (13 numbers)"},
+    {"--min-obs-per-image", "F", "give culled points back until every image has F observations\n"
+                                 "(default 30 for COLMAP and BAL, 0 for a window file)"},
+    {"--decisions", "OUT", "write '<point_id> <keep|cull|skip> <flow> <capacity>' a line"},
+    {"--M", "N", "pair -> sink capacity, 1..2147483647 (default 100)"},
+    {"--keep-points", "K", "instead of --M: keep exactly K of the evaluated points (or all)"},
+    {"--keep-fraction", "F", "instead of --M: keep the share F in [0, 1] of the evaluated points"},
+    {"--keep-observations", "B", "instead of --M: keep points while their observations sum to <= B"},
+    {"--theta", "X", "keep iff flow > X * n(n-1)/2, in [0, 1] (default 0.5)"},
+    {"--box", "WxH", "spatial-diversity box in pixels (default 64x48)"},
+    {"--scope", "window|newest", "decide every point, or only the newest keyframe's (default window)"},
+    {"--floor", "L", "every keyframe keeps >= L of its evaluated points (default 0: off)"},
+    {"--cost", "paper|authors|information", "point -> pair costs (default paper)"},
+    {"--image", "WxH", "the image the authors' grid covers (default 640x480; COLMAP: its cameras')"},
+    {"--max-keyframes", "N", "refuse an input with more keyframes (default 10000)"},
+    {"--max-points", "N", "refuse an input with more points (default 2000000)"},
+    {"--max-observations", "N", "refuse an input with more observations (default 10000000)"},
+    {"--max-pair-arcs", "N", "refuse a window with more pair arcs (default 50000000)"},
+    {"--max-memory-mb", "N", "refuse an input whose decision would need more memory (default 2048)"},
+};
+
+std::string usage() {
+  return keepless::cli::usage(
+      "usage: keepless_sparsify --window FILE [options]\n"
+      "       keepless_sparsify --colmap DIR | --bal FILE [--out DIR|FILE] [options]",
+      kFlags,
+      "Exit 0 on success, 2 on bad input or flags (one stderr line: FILE:LINE-or-OFFSET: reason),\n"
+      "1 on an internal failure. The last stdout line is a JSON summary.");
+}
 
 struct Options {
   std::string window;
@@ -71,10 +104,7 @@ struct Options {
   std::uint64_t max_memory_mb = 2048;
 };
 
-int usage_error(const std::string& reason) {
-  std::fprintf(stderr, "keepless_sparsify: %s; %s\n", reason.c_str(), kUsage);
-  return kExitInput;
-}
+int usage_error(const std::string& reason) { return keepless::cli::usage_error(kTool, reason); }
 
 bool parse_limit(const char* text, std::uint32_t* out) {
   std::uint64_t v = 0;
@@ -86,16 +116,24 @@ bool parse_limit(const char* text, std::uint32_t* out) {
 }
 
 // Returns -1 on success, else the exit status (after printing).
-int parse_args(int argc, char** argv, Options* opt, bool* help) {
+int parse_args(int argc, char** argv, Options* opt, bool* help, bool* version) {
   bool m_given = false;  // --M and a keep budget exclude each other
   for (int i = 1; i < argc; ++i) {
-    const std::string flag = argv[i];
-    if (flag == "--help" || flag == "-h") {
-      *help = true;
-      return -1;
+    const keepless::cli::Flag* entry = nullptr;
+    const char* value = nullptr;
+    std::string error;
+    switch (keepless::cli::next(kFlags, argc, argv, &i, &entry, &value, &error)) {
+      case keepless::cli::Arg::kHelp: *help = true; return -1;
+      case keepless::cli::Arg::kVersion: *version = true; return -1;
+      case keepless::cli::Arg::kError: return usage_error(error);
+      case keepless::cli::Arg::kFlag: break;
     }
-    if (i + 1 >= argc) return usage_error("missing value for " + flag);
-    const char* value = argv[++i];
+    const std::string flag = entry->name;
+    if (flag == "--compact") {
+      opt->model.compact = true;
+      opt->model.map_flags = true;
+      continue;
+    }
     const std::string bad = "bad value for " + flag + ": '" + value + "'";
     std::string map_error;
     if (flag == "--window") {
@@ -178,7 +216,7 @@ int parse_args(int argc, char** argv, Options* opt, bool* help) {
         return usage_error(bad);
       }
     } else {
-      return usage_error("unknown flag '" + flag + "'");
+      return usage_error(keepless::cli::unknown_option(flag));
     }
   }
   if (m_given && opt->params.budget.kind != core::BudgetKind::kNone) {
@@ -233,6 +271,11 @@ bool write_decisions(const std::string& path, const core::Sparsifier& sparsifier
   return ok;
 }
 
+int decide_window(const Options& opt, const core::WindowFile& file, const core::Capacities& caps, double need,
+                  double parse_ms, std::uint64_t t_build);
+int decide_window_unguarded(const Options& opt, const core::WindowFile& file, const core::Capacities& caps,
+                            double parse_ms, std::uint64_t t_build);
+
 int run(const Options& opt) {
   const std::uint64_t t_parse = keepless::platform::monotonic_ns();
   core::WindowFile file;
@@ -256,6 +299,27 @@ int run(const Options& opt) {
   if (caps.max_pair_arcs == 0) caps.max_pair_arcs = 1;
 
   const std::uint64_t t_build = keepless::platform::monotonic_ns();
+  return decide_window(opt, file, caps, model.bytes(caps), parse_ms, t_build);
+}
+
+// Below --max-memory-mb the allocation can still fail (ulimit -v, a small
+// machine): say so with the file and the estimate.
+int decide_window(const Options& opt, const core::WindowFile& file, const core::Capacities& caps, double need,
+                  double parse_ms, std::uint64_t t_build) {
+  try {
+    return decide_window_unguarded(opt, file, caps, parse_ms, t_build);
+  } catch (const std::bad_alloc&) {
+    std::fprintf(stderr,
+                 "%s: out of memory while deciding it (about %.0f MB needed; --max-memory-mb %llu allowed it, but the "
+                 "process got less: check `ulimit -v` and free memory)\n",
+                 opt.window.c_str(), need / 1048576.0, static_cast<unsigned long long>(opt.max_memory_mb));
+    return kExitInput;
+  }
+}
+
+int decide_window_unguarded(const Options& opt, const core::WindowFile& file, const core::Capacities& caps,
+                            double parse_ms, std::uint64_t t_build) {
+  std::string error;
   core::Window window(caps);
   core::Sparsifier sparsifier(caps, opt.params);
   for (std::size_t k = 0; k < file.keyframes.size(); ++k) {
@@ -317,24 +381,28 @@ int run(const Options& opt) {
 
 int main(int argc, char** argv) {
   Options opt;
-  bool help = false;
-  const int status = parse_args(argc, argv, &opt, &help);
+  bool help = false, version = false;
+  const int status = parse_args(argc, argv, &opt, &help, &version);
   if (status >= 0) return status;
   if (help) {
-    std::printf("%s\n", kUsage);
+    std::fputs(usage().c_str(), stdout);
     return 0;
   }
+  if (version) return keepless::cli::print_version(kTool);
   try {
     if (opt.model.map_flags) {
       opt.model.params = opt.params;
       opt.model.limits = opt.limits;
       opt.model.decisions = opt.decisions;
+      opt.model.max_memory_mb = opt.max_memory_mb;
       return keepless::sparsify::run_model(opt.model);
     }
     return run(opt);
-  } catch (const std::bad_alloc&) {  // below --max-memory-mb, but the machine has less
-    std::fprintf(stderr, "%s:0: cannot allocate the memory this window needs (lower --max-memory-mb)\n",
-                 opt.window.c_str());
+  } catch (const std::bad_alloc&) {  // below --max-memory-mb, but the process got less
+    std::fprintf(stderr,
+                 "%s: out of memory (--max-memory-mb %llu allowed it, but the process got less: check `ulimit -v` "
+                 "and free memory)\n",
+                 opt.model.path.c_str(), static_cast<unsigned long long>(opt.max_memory_mb));
     return kExitInput;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "keepless_sparsify: %s\n", e.what());

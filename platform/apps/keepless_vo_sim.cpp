@@ -17,6 +17,7 @@
 #include <string>
 #include <vector>
 
+#include "cli/cli.hpp"
 #include "keepless/decision_t.hpp"
 #include "keepless/decision_timing_t.hpp"
 #include "keepless/keyframe_t.hpp"
@@ -56,46 +57,52 @@ struct SimConfig {
   bool quiet = false;
 };
 
-const char* kUsage =
-    "usage: keepless_vo_sim [options]\n"
-    "  --url URL                LCM URL (default udpm://239.255.76.67:7667?ttl=0)\n"
-    "  --keyframe-channel, --event-channel, --decision-channel, --timing-channel, --status-channel NAME\n"
-    "                           as keepless_node's (defaults KEEPLESS_KEYFRAME, ..._MAP_EVENT, ..._DECISION,\n"
-    "                           ..._DECISION_TIMING, ..._STATUS)\n"
-    "  --scene street|room      built-in scene (default street)\n"
-    "  --trajectory FILE        follow a real trajectory instead (KITTI: street; TUM/EuRoC: indoor scene)\n"
-    "  --format tum|euroc|euroc-cam|kitti   its format (euroc: IMU body ground truth, cam0 mounting applied;\n"
-    "                           euroc-cam: ORB-SLAM3 EuRoC_left_cam files)\n"
-    "  --kf-distance M          new keyframe after moving M metres (default: kitti 1.0, indoor 0.1)\n"
-    "  --kf-angle DEG           ... or turning DEG degrees (default 15)\n"
-    "  --keyframes N            keyframes to publish (default 300)\n"
-    "  --seed S                 scene and noise seed (default 1)\n"
-    "  --max-keypoints N        detector budget per keyframe (default 1000)\n"
-    "  --pixel-noise SIGMA      keypoint noise in pixels (default 0.7)\n"
-    "  --retriangulate-after N  a culled feature may become a new map point N keyframes later\n"
-    "                           (default 20, the node's window; -1: never)\n"
-    "  --event-every N          every N keyframes, delete a few outliers with a map_event_t (default 25, 0: never)\n"
-    "  --decision-timeout-ms N  wait this long for each decision (default 5000)\n"
-    "  --wait-node-ms N         wait this long for the node's first status (default 10000)\n"
-    "  --report DIR             write keyframes.csv, points.csv, map_topdown.svg, keyframe_NNNN.svg, summary.txt\n"
-    "  --quiet                  no progress line\n";
+const std::vector<keepless::cli::Flag> kFlags = {
+    {"--url", "URL", "LCM URL (default udpm://239.255.76.67:7667?ttl=0)"},
+    {"--keyframe-channel", "NAME", "keyframe_t output, as keepless_node's (default KEEPLESS_KEYFRAME)"},
+    {"--event-channel", "NAME", "map_event_t output (default KEEPLESS_MAP_EVENT)"},
+    {"--decision-channel", "NAME", "decision_t input (default KEEPLESS_DECISION)"},
+    {"--timing-channel", "NAME", "decision_timing_t input (default KEEPLESS_DECISION_TIMING)"},
+    {"--status-channel", "NAME", "status_t input (default KEEPLESS_STATUS)"},
+    {"--scene", "street|room", "built-in scene (default street)"},
+    {"--trajectory", "FILE", "follow a real trajectory instead (KITTI: street; TUM/EuRoC: indoor scene)"},
+    {"--format", "tum|euroc|euroc-cam|kitti", "the trajectory's format (euroc: IMU body ground truth, cam0\n"
+                                              "mounting applied; euroc-cam: ORB-SLAM3 EuRoC_left_cam files)"},
+    {"--kf-distance", "M", "new keyframe after moving M metres (default: kitti 1.0, indoor 0.1)"},
+    {"--kf-angle", "DEG", "... or turning DEG degrees (default 15)"},
+    {"--keyframes", "N", "keyframes to publish (default 300)"},
+    {"--seed", "S", "scene and noise seed (default 1)"},
+    {"--max-keypoints", "N", "detector budget per keyframe (default 1000)"},
+    {"--pixel-noise", "SIGMA", "keypoint noise in pixels (default 0.7)"},
+    {"--retriangulate-after", "N", "a culled feature may become a new map point N keyframes later\n"
+                                   "(default 20, the node's window; -1: never)"},
+    {"--event-every", "N", "every N keyframes, delete a few outliers with a map_event_t\n"
+                           "(default 25, 0: never)"},
+    {"--decision-timeout-ms", "N", "wait this long for each decision (default 5000)"},
+    {"--wait-node-ms", "N", "wait this long for the node's first status (default 10000)"},
+    {"--report", "DIR", "write keyframes.csv, points.csv, map_topdown.svg, keyframe_NNNN.svg,\n"
+                        "summary.txt"},
+    {"--quiet", nullptr, "no progress line"},
+};
 
-bool parse_args(int argc, char** argv, SimConfig& c, std::string& error, bool& help) {
+std::string usage() { return keepless::cli::usage("usage: keepless_vo_sim [options]", kFlags); }
+
+bool parse_args(int argc, char** argv, SimConfig& c, std::string& error, bool& help, bool& version) {
   for (int i = 1; i < argc; ++i) {
-    std::string flag = argv[i];
-    if (flag == "--help" || flag == "-h") {
-      help = true;
-      return true;
+    const keepless::cli::Flag* entry = nullptr;
+    const char* arg = nullptr;
+    switch (keepless::cli::next(kFlags, argc, argv, &i, &entry, &arg, &error)) {
+      case keepless::cli::Arg::kHelp: help = true; return true;
+      case keepless::cli::Arg::kVersion: version = true; return true;
+      case keepless::cli::Arg::kError: return false;
+      case keepless::cli::Arg::kFlag: break;
     }
+    const std::string flag = entry->name;
     if (flag == "--quiet") {
       c.quiet = true;
       continue;
     }
-    if (i + 1 >= argc) {
-      error = flag + ": missing value";
-      return false;
-    }
-    const std::string value = argv[++i];
+    const std::string value = arg;
     char* end = nullptr;
     errno = 0;
     auto as_u64 = [&](std::uint64_t lo, std::uint64_t hi, std::uint64_t& out) {
@@ -138,7 +145,7 @@ bool parse_args(int argc, char** argv, SimConfig& c, std::string& error, bool& h
     else if (flag == "--wait-node-ms") ok = as_u64(0, 3600000, n) && (c.wait_node_ms = static_cast<int>(n), true);
     else if (flag == "--report") c.report = value;
     else {
-      error = "unknown option '" + flag + "'";
+      error = keepless::cli::unknown_option(flag);
       return false;
     }
     if (!ok || value.empty()) {
@@ -217,15 +224,13 @@ std::string with_commas(long long v) {
 int main(int argc, char** argv) {
   SimConfig cfg;
   std::string error;
-  bool help = false;
-  if (!parse_args(argc, argv, cfg, error, help)) {
-    std::fprintf(stderr, "keepless_vo_sim: %s\n%s", error.c_str(), kUsage);
-    return 2;
-  }
+  bool help = false, version = false;
+  if (!parse_args(argc, argv, cfg, error, help, version)) return keepless::cli::usage_error("keepless_vo_sim", error);
   if (help) {
-    std::fputs(kUsage, stdout);
+    std::fputs(usage().c_str(), stdout);
     return 0;
   }
+  if (version) return keepless::cli::print_version("keepless_vo_sim");
 
   // The camera path and the scene around it.
   std::vector<Pose> path;

@@ -265,6 +265,47 @@ RejectReason check_map_event(const keepless::map_event_t& msg) {
   return RejectReason::kNone;
 }
 
+const char* invalid_keyframe_field(const keepless::keyframe_t* m) {
+  if (m == nullptr) return "an array count (num_observations, num_depths, num_intrinsics or num_unmapped)";
+  const auto n = static_cast<std::size_t>(m->num_observations);
+  if (m->num_observations < 0 || m->point_id.size() != n || m->u.size() != n || m->v.size() != n) {
+    return "num_observations (negative or not the arrays' length)";
+  }
+  if ((m->num_depths != 0 && m->num_depths != m->num_observations) ||
+      m->depth.size() != static_cast<std::size_t>(m->num_depths)) {
+    return "num_depths (must be 0 or num_observations)";
+  }
+  if ((m->num_intrinsics != 0 && m->num_intrinsics != 4) ||
+      m->intrinsics.size() != static_cast<std::size_t>(m->num_intrinsics)) {
+    return "num_intrinsics (must be 0 or 4)";
+  }
+  if (m->num_unmapped < 0 || m->unmapped_u.size() != static_cast<std::size_t>(m->num_unmapped) ||
+      m->unmapped_v.size() != static_cast<std::size_t>(m->num_unmapped)) {
+    return "num_unmapped (negative or not the arrays' length)";
+  }
+  if (m->image_width <= 0) return "image_width (must be > 0)";
+  if (m->image_height <= 0) return "image_height (must be > 0)";
+  double norm2 = 0;
+  for (double q : m->orientation) norm2 += q * q;
+  if (std::fabs(norm2 - 1.0) > core::kQuaternionNormTolerance) return "orientation (not a unit quaternion)";
+  return "a field";
+}
+
+const char* invalid_map_event_field(const keepless::map_event_t* m) {
+  if (m == nullptr || m->num_deleted_points < 0 || m->num_merged_points < 0 || m->num_removed_keyframes < 0) {
+    return "an array count (num_deleted_points, num_merged_points or num_removed_keyframes)";
+  }
+  if (m->deleted_point_id.size() != static_cast<std::size_t>(m->num_deleted_points)) return "num_deleted_points";
+  if (m->merged_from_id.size() != static_cast<std::size_t>(m->num_merged_points) ||
+      m->merged_into_id.size() != static_cast<std::size_t>(m->num_merged_points)) {
+    return "num_merged_points";
+  }
+  if (m->removed_keyframe_id.size() != static_cast<std::size_t>(m->num_removed_keyframes)) {
+    return "num_removed_keyframes";
+  }
+  return "a field";
+}
+
 void split_map_event(const keepless::map_event_t& msg, const core::Window& window, const RecentIds* culled,
                      std::uint64_t* scratch, MapEventItems& out) {
   using A = keepless::map_event_ack_t;

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <array>
 #include <cstdio>
+#include <cstring>
 #include <ctime>
 #include <vector>
 
@@ -103,13 +104,19 @@ struct Node::Impl {
     ++counters.rejected[static_cast<std::size_t>(r)];
     if (r == RejectReason::kNotOwner) ++counters.not_owner;
     if (config.quiet) return;
+    // An invalid field is named (the decoded message's, or the counts of refused bytes).
+    const bool is_kf = std::strcmp(type, "keyframe_t") == 0;
+    const char* field = r != RejectReason::kInvalidField ? ""
+                        : is_kf ? invalid_keyframe_field(decoded ? &kf : nullptr)
+                                : invalid_map_event_field(decoded ? &event : nullptr);
+    const char* sep = *field != '\0' ? ": " : "";
     if (decoded) {
-      std::fprintf(stderr, "keepless_node: rejected %s seq %lld id %lld on %s (%u bytes): %s\n", type,
+      std::fprintf(stderr, "keepless_node: rejected %s seq %lld id %lld on %s (%u bytes): %s%s%s\n", type,
                    static_cast<long long>(sequence), static_cast<long long>(id), channel.c_str(), size,
-                   to_string(r));
+                   to_string(r), sep, field);
     } else {
-      std::fprintf(stderr, "keepless_node: rejected %s on %s (%u bytes): %s\n", type, channel.c_str(), size,
-                   to_string(r));
+      std::fprintf(stderr, "keepless_node: rejected %s on %s (%u bytes): %s%s%s\n", type, channel.c_str(), size,
+                   to_string(r), sep, field);
     }
   }
 

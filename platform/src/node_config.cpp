@@ -102,7 +102,8 @@ std::string node_usage() {
          "  --status-period-ms N      status_t period (default 1000)\n"
          "  --max-keyframes N         exit after N decisions (default 0: run until SIGINT/SIGTERM)\n"
          "  --quiet                   no log line per rejected message (they are still counted)\n"
-         "  --help\n";
+         "  --help                    print this help and exit\n"
+         "  --version                 print the version and exit\n";
 }
 
 // --profile: applied before every other flag, wherever it is, so the
@@ -121,7 +122,7 @@ ParseResult parse_profile(int argc, const char* const* argv, NodeConfig& config,
     } else if (i + 1 < argc) {
       name = argv[i + 1];
     } else {
-      error = "--profile: missing value";
+      error = "option '--profile' needs a value";
       return ParseResult::kError;
     }
     if (!apply_profile(name, config)) {
@@ -177,6 +178,12 @@ ParseResult parse_node_arguments(int argc, const char* const* argv, NodeConfig& 
       has_inline_value = true;
     }
     if (flag == "--help" || flag == "-h") return ParseResult::kHelp;
+    if (flag == "--version") return ParseResult::kVersion;
+    // A flag is known when the usage documents it (one line each).
+    if (node_usage().find("\n  " + flag + " ") == std::string::npos) {
+      error = "unknown option '" + flag + "'";
+      return ParseResult::kError;
+    }
     if (flag == "--mlock") {
       config.mlock = true;
       continue;
@@ -187,7 +194,7 @@ ParseResult parse_node_arguments(int argc, const char* const* argv, NodeConfig& 
     }
     if (!has_inline_value) {
       if (i + 1 >= argc) {
-        error = flag + ": missing value";
+        error = "option '" + flag + "' needs a value";
         return ParseResult::kError;
       }
       value = argv[++i];
@@ -305,7 +312,7 @@ ParseResult parse_node_arguments(int argc, const char* const* argv, NodeConfig& 
       if (!parse_u64(value, 0, std::numeric_limits<std::uint64_t>::max(), n)) return bad("expected an integer >= 0");
       config.max_keyframes = n;
     } else {
-      error = "unknown option '" + std::string(argv[i]) + "'";
+      error = "unknown option '" + flag + "'";
       return ParseResult::kError;
     }
   }

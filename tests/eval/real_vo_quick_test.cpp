@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -40,7 +41,7 @@ TEST(RealVoQuick, SevenScenesSliceIsTrackedAccuratelyAndReportedInFull) {
   ASSERT_TRUE(std::filesystem::exists(bin))
       << bin << " is missing: build target keepless_eval (perf/eval; its VO needs Ceres, OpenCV, keepless::opencv)";
   if (!std::filesystem::exists(data + "/frame-000059.color.jpg")) {
-    GTEST_SKIP() << "no 7-Scenes data at " << data << " (see /work/shared/data/SOURCES.md)";
+    GTEST_SKIP() << "no 7-Scenes data at " << data << " (set KEEPLESS_EVAL_DATA_DIR)";
   }
   const std::string out = ::testing::TempDir() + "/real_vo_quick";
   std::filesystem::remove_all(out);
@@ -85,6 +86,55 @@ TEST(RealVoQuick, SevenScenesSliceIsTrackedAccuratelyAndReportedInFull) {
     const std::string path = out + "/7scenes_redkitchen_first600" + svg;
     EXPECT_TRUE(std::filesystem::exists(path) && std::filesystem::file_size(path) > 200) << path;
   }
+}
+
+// --frames A:B names frame numbers wherever the sequence starts: a folder of
+// links frame-000600.* .. frame-000629.* (to the first 30 real frames) with
+// --frames 600:619 runs 20 frames; 0:19 selects none and says so.
+TEST(RealVoQuick, FramesAreSelectedByNumberWhereverTheSequenceStarts) {
+  namespace fs = std::filesystem;
+  const std::string bin = KEEPLESS_EVAL_BIN;
+  const std::string data = std::string(KEEPLESS_EVAL_DATA) + "/7scenes_redkitchen_first600";
+  ASSERT_TRUE(fs::exists(bin)) << bin << " is missing: build target keepless_eval";
+  if (!fs::exists(data + "/frame-000029.color.jpg")) {
+    GTEST_SKIP() << "no 7-Scenes data at " << data << " (set KEEPLESS_EVAL_DATA_DIR)";
+  }
+  const std::string dir = ::testing::TempDir() + "/rgbd_from_600";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  fs::create_symlink(data + "/camera-intrinsics.txt", dir + "/camera-intrinsics.txt");
+  for (int i = 0; i < 30; ++i) {
+    char from[32], to[32];
+    std::snprintf(from, sizeof from, "/frame-%06d", i);
+    std::snprintf(to, sizeof to, "/frame-%06d", 600 + i);
+    for (const char* ext : {".color.jpg", ".depth.png", ".pose.txt"}) {
+      fs::create_symlink(data + from + ext, dir + to + ext);
+    }
+  }
+  const auto run = [&](const std::string& frames, std::string* last) {
+    const std::string cmd = "'" + bin + "' --rgbd '" + dir + "' --quick --seeds 1 --M 100 --no-baselines " +
+                            "--no-ablation --frames " + frames + " 2>&1";
+    std::unique_ptr<FILE, int (*)(FILE*)> pipe(popen(cmd.c_str(), "r"), pclose);
+    std::string all;
+    char buf[4096];
+    while (pipe != nullptr && std::fgets(buf, sizeof buf, pipe.get()) != nullptr) {
+      all += buf;
+      std::string line(buf);
+      while (!line.empty() && line.back() == '\n') line.pop_back();
+      if (!line.empty()) *last = line;
+    }
+    const int status = pclose(pipe.release());
+    return std::make_pair(WIFEXITED(status) ? WEXITSTATUS(status) : -1, all);
+  };
+  std::string last;
+  const auto [status, all] = run("600:619", &last);
+  ASSERT_EQ(status, 0) << all;
+  bool present = false;
+  EXPECT_EQ(number_after(last, "frames", &present), 20.0) << last;
+  const auto [none, why] = run("0:19", &last);
+  EXPECT_EQ(none, 2) << why;
+  EXPECT_NE(why.find(dir + ": frames 0:19 select none of its frames 600..629"), std::string::npos) << why;
+  fs::remove_all(dir);
 }
 
 }  // namespace

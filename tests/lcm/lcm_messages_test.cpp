@@ -211,4 +211,27 @@ TEST(LcmMessages, DecodeRefusesOtherTypes) {
   EXPECT_LT(d.decode(bytes.data(), 0, static_cast<int>(bytes.size())), 0);
 }
 
+// A keyframe refused as "invalid field" is logged with the field at fault.
+TEST(MessageValidation, InvalidFieldNamesTheField) {
+  using keepless::platform::invalid_keyframe_field;
+  keepless::keyframe_t m = kt::make_keyframe(1, 1, {5, 6});
+  m.image_width = 0;
+  EXPECT_STREQ(invalid_keyframe_field(&m), "image_width (must be > 0)");
+  m.image_width = 640;
+  m.image_height = -1;
+  EXPECT_STREQ(invalid_keyframe_field(&m), "image_height (must be > 0)");
+  m.image_height = 480;
+  m.orientation[0] = 2;
+  EXPECT_STREQ(invalid_keyframe_field(&m), "orientation (not a unit quaternion)");
+  m.orientation[0] = 1;
+  m.num_intrinsics = 3;
+  m.intrinsics = {1, 2, 3};
+  EXPECT_STREQ(invalid_keyframe_field(&m), "num_intrinsics (must be 0 or 4)");
+  EXPECT_NE(std::string(invalid_keyframe_field(nullptr)).find("num_observations"), std::string::npos);
+  keepless::map_event_t e = kt::make_event(1);
+  e.num_deleted_points = -1;
+  EXPECT_NE(std::string(keepless::platform::invalid_map_event_field(&e)).find("num_deleted_points"),
+            std::string::npos);
+}
+
 }  // namespace

@@ -17,6 +17,7 @@ namespace {
 const std::string kBal = std::string(KEEPLESS_MAPS_DATA) + "/bal_zenslam/problem-49-7776-pre.txt";
 
 TEST(BalFixture, RoundTripsByteForByte) {
+  KEEPLESS_MAPS_NEED(maps_test::bal_problem());
   const std::string text = maps_test::read_all(kBal);
   ASSERT_FALSE(text.empty()) << kBal;
   io::BalProblem p;
@@ -104,6 +105,7 @@ TEST(BalKeyframes, CentresAreMinusRTransposeT) {
 }
 
 TEST(ColmapKeyframes, DuplicatesMergeIntoTheFirstAndOrderIsByNameOrId) {
+  KEEPLESS_MAPS_NEED(maps_test::fixture("sparse/images.bin"));
   io::ColmapModel m;
   io::ColmapFormat format;
   std::string error;

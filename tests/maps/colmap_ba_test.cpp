@@ -39,6 +39,7 @@ class ColmapCheck : public maps_test::MapsTest {
  protected:
   void SetUp() override {
     maps_test::MapsTest::SetUp();
+    if (IsSkipped() || HasFatalFailure()) return;
     if (const char* why = std::getenv("KEEPLESS_SKIP_COLMAP")) GTEST_SKIP() << "KEEPLESS_SKIP_COLMAP: " << why;
     colmap_ = KEEPLESS_COLMAP;
     ASSERT_FALSE(colmap_.empty()) << "colmap not found at configure time: install Debian's colmap "
@@ -125,6 +126,38 @@ TEST_F(ColmapCheck, SparsifiedFixtureLoadsAndBundleAdjustsCloseToTheFullSolution
   std::printf("kept %.0f of 14195 points; centre deviation from the full solution: max %.4f m, rms %.4f m\n", kept,
               d.max, d.rms);
   EXPECT_LT(d.max, kMaxCentreDeviation);
+}
+
+// --compact drops the 2D points no kept 3D point references: COLMAP loads
+// the result (binary and text) with the same points and observations as
+// the plain output, and bundle_adjuster converges on it.
+TEST_F(ColmapCheck, CompactModelLoadsAndBundleAdjusts) {
+  const auto analyse = [&](const std::string& dir, double* points, double* observations) {
+    const maps_test::Result a = colmap({"model_analyzer", "--path", dir});
+    ASSERT_EQ(a.status, 0) << a.err;
+    const std::string text = a.out + a.err;
+    const std::size_t p = text.find("Points: "), o = text.find("Observations: ");
+    ASSERT_NE(p, std::string::npos) << text;
+    ASSERT_NE(o, std::string::npos) << text;
+    *points = std::strtod(text.c_str() + p + 8, nullptr);
+    *observations = std::strtod(text.c_str() + o + 14, nullptr);
+    EXPECT_NE(text.find("Registered images: 51"), std::string::npos) << text;
+  };
+  ASSERT_EQ(sparsify({"--colmap", fixture("sparse"), "--M", "200", "--out", path("plain")}).status, 0);
+  double points = 0, observations = 0;
+  analyse(path("plain"), &points, &observations);
+  for (const char* format : {"bin", "txt"}) {
+    const std::string dir = path(std::string("compact_") + format);
+    const maps_test::Result r =
+        sparsify({"--colmap", fixture("sparse"), "--M", "200", "--compact", "--out", dir, "--out-format", format});
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_GT(json_number(last_line(r.out), "points2D_dropped"), 0);
+    double p = 0, o = 0;
+    analyse(dir, &p, &o);
+    EXPECT_EQ(p, points) << format;
+    EXPECT_EQ(o, observations) << format;
+  }
+  bundle_adjust(path("compact_bin"), "compact_ba");
 }
 
 }  // namespace

@@ -18,6 +18,7 @@
 namespace keepless {
 namespace {
 
+namespace fs = std::filesystem;
 using maps_test::fixture;
 using maps_test::read_all;
 
@@ -42,6 +43,8 @@ io::ColmapModel sorted(io::ColmapModel m) {
 }
 
 TEST(ColmapFixture, EachFormatRoundTripsByteForByteThroughTheOther) {
+  KEEPLESS_MAPS_NEED(maps_test::fixture("sparse/images.bin"));
+  KEEPLESS_MAPS_NEED(maps_test::fixture("txt/images.txt"));
   const io::ColmapFiles bin = read_files(fixture("sparse"), "bin");
   const io::ColmapFiles txt = read_files(fixture("txt"), "txt");
   io::ColmapModel from_bin, from_txt;
@@ -76,6 +79,7 @@ TEST(ColmapFixture, EachFormatRoundTripsByteForByteThroughTheOther) {
 }
 
 TEST(ColmapFixture, RemovingPointsClearsTheirReferencesAndKeepsEverythingElse) {
+  KEEPLESS_MAPS_NEED(maps_test::fixture("sparse/images.bin"));
   io::ColmapModel m;
   io::ColmapFormat format;
   std::string error;
@@ -496,6 +500,129 @@ TEST(ColmapText, AnImageNameWithANulByteIsRefused) {
   const std::size_t line = static_cast<std::size_t>(std::count(f.images.begin(), f.images.begin() + name, '\n')) + 1;
   f.images.insert(name, 1, '\0');
   EXPECT_EQ(error_of(f, io::ColmapFormat::kText), "D/images.txt:" + std::to_string(line) + ": NAME holds a NUL byte");
+}
+
+// The 1-based line of images.txt holding `needle`.
+std::size_t line_of(const std::string& text, const std::string& needle) {
+  const std::size_t at = text.find(needle);
+  EXPECT_NE(at, std::string::npos) << needle;
+  return static_cast<std::size_t>(std::count(text.begin(), text.begin() + static_cast<std::ptrdiff_t>(at), '\n')) + 1;
+}
+
+TEST(ColmapText, ANumberFollowedByANulIsRefused) {
+  io::ColmapFiles f = io::format_colmap(small_model(), io::ColmapFormat::kText);
+  // Image 5's CAMERA_ID "2" becomes "2\0": a C-string parse would read 2.
+  const std::string record = "\n5 ";
+  const std::size_t line = line_of(f.images, record) + 1;
+  const std::size_t name = f.images.find(" b.png");
+  ASSERT_NE(name, std::string::npos);
+  f.images.insert(name, 1, '\0');
+  EXPECT_EQ(error_of(f, io::ColmapFormat::kText),
+            "D/images.txt:" + std::to_string(line) + ": bad CAMERA_ID '2\\0' (field 9, an unsigned integer)");
+}
+
+// COLMAP's text reader ends a name at its first space: refused in text (read
+// and write), kept exactly in binary.
+TEST(ColmapText, AnImageNameWithABlankIsRefusedInTextAndKeptInBinary) {
+  io::ColmapModel m = small_model();
+  m.images[0].name = "left camera/b.png";
+  io::ColmapFiles bin = io::format_colmap(m, io::ColmapFormat::kBinary);
+  io::ColmapModel back;
+  std::string error;
+  ASSERT_TRUE(io::parse_colmap("D", bin, io::ColmapFormat::kBinary, &back, &error)) << error;
+  EXPECT_EQ(back.images[0].name, "left camera/b.png");
+  // Written as text by hand (format_colmap does not check): refused on reading.
+  io::ColmapFiles txt = io::format_colmap(m, io::ColmapFormat::kText);
+  EXPECT_EQ(error_of(txt, io::ColmapFormat::kText),
+            "D/images.txt:" + std::to_string(line_of(txt.images, "left camera")) +
+                ": NAME 'left camera/b.png' holds a blank: COLMAP would read it as 'left'");
+  // write_colmap_model refuses text and writes binary.
+  std::string dir = ::testing::TempDir() + "keepless_names_XXXXXX";
+  ASSERT_NE(::mkdtemp(dir.data()), nullptr);
+  EXPECT_FALSE(io::write_colmap_model(dir + "/t", m, io::ColmapFormat::kText, &error));
+  EXPECT_EQ(error, dir + "/t/images.txt:0: image 5's name 'left camera/b.png' holds a blank, which COLMAP's text "
+                         "format cannot hold; write the binary format");
+  EXPECT_FALSE(fs::exists(dir + "/t"));
+  EXPECT_TRUE(io::write_colmap_model(dir + "/b", m, io::ColmapFormat::kBinary, &error)) << error;
+  io::ColmapFormat format;
+  ASSERT_TRUE(io::read_colmap_model(dir + "/b", &back, &format, &error)) << error;
+  EXPECT_EQ(back.images[0].name, "left camera/b.png");
+  fs::remove_all(dir);
+}
+
+TEST(ColmapModelChecks, DuplicateImageNamesAreRefused) {
+  io::ColmapModel m = small_model();
+  m.images[2].name = "b.png";  // image 8 takes image 5's name
+  const io::ColmapFiles txt = io::format_colmap(m, io::ColmapFormat::kText);
+  EXPECT_EQ(error_of(txt, io::ColmapFormat::kText),
+            "D/images.txt:" + std::to_string(line_of(txt.images, "\n8 ") + 1) +
+                ": image 8 has the name 'b.png' of image 5 (names must be unique)");
+  const Encoder enc = encode_images(m);
+  std::size_t third = 0, seen = 0;
+  for (const Field& f : enc.fields) {
+    if (f.kind == "image_id" && ++seen == 3) third = f.offset;
+  }
+  EXPECT_EQ(error_of(io::format_colmap(m, io::ColmapFormat::kBinary), io::ColmapFormat::kBinary),
+            "D/images.bin:" + std::to_string(third) + ": image 8 has the name 'b.png' of image 5 (names must be unique)");
+}
+
+TEST(ColmapModelChecks, CameraSidesOfZeroOrBeyondIntAreRefused) {
+  for (const std::uint64_t bad : {std::uint64_t{0}, std::uint64_t{1} << 31, std::uint64_t{1} << 63}) {
+    for (const bool width : {true, false}) {
+      SCOPED_TRACE(std::to_string(bad) + (width ? " wide" : " high"));
+      io::ColmapModel m = small_model();
+      (width ? m.cameras[1].width : m.cameras[1].height) = bad;
+      const std::string size = std::to_string(m.cameras[1].width) + "x" + std::to_string(m.cameras[1].height);
+      const std::string reason = "camera 2 is " + size + " pixels (each side must be 1..2147483647)";
+      const Encoder enc = encode_cameras(m);
+      std::size_t at = 0, seen = 0;
+      for (const Field& f : enc.fields) {
+        if (f.kind == (width ? "width" : "height") && ++seen == 2) at = f.offset;
+      }
+      EXPECT_EQ(error_of(io::format_colmap(m, io::ColmapFormat::kBinary), io::ColmapFormat::kBinary),
+                "D/cameras.bin:" + std::to_string(at) + ": " + reason);
+      EXPECT_EQ(error_of(io::format_colmap(m, io::ColmapFormat::kText), io::ColmapFormat::kText),
+                "D/cameras.txt:5: " + reason);
+    }
+  }
+}
+
+TEST(ColmapModelFiles, AFolderWithoutAModelIsNamed) {
+  std::string dir = ::testing::TempDir() + "keepless_nomodel_XXXXXX";
+  ASSERT_NE(::mkdtemp(dir.data()), nullptr);
+  io::ColmapModel m;
+  io::ColmapFormat format;
+  std::string error;
+  EXPECT_FALSE(io::read_colmap_model(dir, &m, &format, &error));
+  EXPECT_EQ(error, dir + ": no COLMAP model (cameras/images/points3D .bin or .txt)");
+  EXPECT_FALSE(io::read_colmap_model(dir + "/absent", &m, &format, &error));
+  EXPECT_EQ(error, dir + "/absent: no COLMAP model (cameras/images/points3D .bin or .txt)");
+  // Some binary files: the missing one is named.
+  maps_test::write_all(dir + "/images.bin", "x");
+  EXPECT_FALSE(io::read_colmap_model(dir, &m, &format, &error));
+  EXPECT_EQ(error.rfind(dir + "/cameras.bin:0: cannot read", 0), 0u) << error;
+  fs::remove_all(dir);
+}
+
+// --compact: unmatched 2D points go, the tracks are renumbered, the model
+// stays consistent (the reader's cross-checks pass) in both formats.
+TEST(ColmapModelFiles, CompactDropsUnmatchedPoints2DAndRenumbersTracks) {
+  io::ColmapModel m = small_model();
+  io::remove_points(&m, {false, true, false});  // point 7 goes: two more 2D points become unmatched
+  const std::vector<std::uint32_t> before = io::observations_per_image(m);
+  EXPECT_EQ(io::compact_points2D(&m), 3u);  // image 5: two, image 2: one
+  EXPECT_EQ(io::observations_per_image(m), before);
+  for (const io::ColmapImage& im : m.images) {
+    for (const io::ColmapPoint2D& p : im.points2D) EXPECT_NE(p.point3D_id, io::kNoPoint3D);
+  }
+  EXPECT_EQ(m.images[0].points2D.size(), 2u);
+  EXPECT_EQ(m.images[0].points2D[1].x, 7.5);  // image 5's old 2D point 3
+  for (const io::ColmapFormat format : {io::ColmapFormat::kBinary, io::ColmapFormat::kText}) {
+    io::ColmapModel back;
+    std::string error;
+    ASSERT_TRUE(io::parse_colmap("D", io::format_colmap(m, format), format, &back, &error)) << error;
+    EXPECT_EQ(back.points[0].track[2].point2D_idx, 1u);  // point 9 in image 5: 3 -> 1
+  }
 }
 
 }  // namespace

@@ -72,6 +72,7 @@ bool differ(sparsify::Mode mode, const std::vector<core::PointDecision>& a, cons
 }
 
 TEST(ColmapBridge, GivesTheCamerasIntrinsicsAndDepthsThatReprojectEachObservation) {
+  KEEPLESS_MAPS_NEED(maps_test::fixture("sparse/images.bin"));
   const Fixture f = read_fixture();
   ASSERT_FALSE(::testing::Test::HasFailure());
   const io::Keyframes k = io::keyframes_from_colmap(f.model, io::KeyframeOrder::kName, f.sim);
@@ -168,6 +169,7 @@ TEST(ColmapBridge, OneFocalLengthOrTwoPerCameraModelAndUnmappedKeypointsOnReques
 }
 
 TEST(BalBridge, FocalLengthAndMinusZDepthReprojectTheRealProblem) {
+  KEEPLESS_MAPS_NEED(maps_test::bal_problem());
   io::BalProblem p;
   std::string error;
   ASSERT_TRUE(io::read_bal(std::string(KEEPLESS_MAPS_DATA) + "/bal_zenslam/problem-49-7776-pre.txt", &p, &error))
@@ -208,6 +210,7 @@ TEST(BalBridge, FocalLengthAndMinusZDepthReprojectTheRealProblem) {
 }
 
 TEST(CostModelsOnTheFixture, InformationUsesTheDepthsAndRepeats) {
+  KEEPLESS_MAPS_NEED(maps_test::fixture("sparse/images.bin"));
   const Fixture f = read_fixture();
   ASSERT_FALSE(::testing::Test::HasFailure());
   const io::Keyframes k = io::keyframes_from_colmap(f.model, io::KeyframeOrder::kName, f.sim);
@@ -226,6 +229,7 @@ TEST(CostModelsOnTheFixture, InformationUsesTheDepthsAndRepeats) {
 }
 
 TEST(CostModelsOnTheFixture, AuthorsCountsTheUnmappedKeypointsAndPaperIgnoresThem) {
+  KEEPLESS_MAPS_NEED(maps_test::fixture("sparse/images.bin"));
   const Fixture f = read_fixture();
   ASSERT_FALSE(::testing::Test::HasFailure());
   const io::Keyframes mapped = io::keyframes_from_colmap(f.model, io::KeyframeOrder::kName, f.sim);

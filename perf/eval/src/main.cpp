@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "bal_eval.hpp"
+#include "cli/cli.hpp"
 #include "keepless/core/config.hpp"
 #include "keepless/platform/node_config.hpp"
 #include "kitti_images.hpp"
@@ -35,34 +36,58 @@ namespace ke = keepless::eval;
 
 namespace {
 
-const char* kUsage =
-    "usage: keepless_eval [--quick] [--data-root DIR] [--trajectory FILE [--format tum|euroc|kitti]]...\n"
-    "                     [--image-tracks DIR --calib FILE --poses FILE] [--bal FILE]...\n"
-    "                     [--images DIR --calib FILE --poses FILE]... [--rgbd DIR]... [--frames A:B]\n"
-    "                     [--kept-fraction 0.3,0.4 | --M 100,200] [--seeds N] [--seed FIRST]\n"
-    "                     [--error-floor none|GROUP=METRES,...] [--out DIR] [--max-keyframes N] [--keypoints N]\n"
-    "                     [--window N] [--ba-iterations N] [--image-frames N] [--noise-free] [--no-baselines]\n"
-    "                     [--no-ablation] [--ablation-all] [--scope window|newest] [--floor L]\n"
-    "                     [--cost paper|authors|information] [--window-sizes]\n"
-    "       keepless_eval --report DIR [--report DIR]... [--error-floor ...] [--out DIR2]\n"
-    "  --data-root DIR     add the standard inputs under DIR (../shared/data layout; --quick: a small subset)\n"
-    "  --format            applies to the --trajectory just before it; without it the format is guessed\n"
-    "  --images, --rgbd    the real VO (perf/eval/vo) on a KITTI-layout (--calib, --poses follow it) or 7-Scenes\n"
-    "                      RGB-D sequence, frames A..B inclusive (--frames; default all, --quick 0:59)\n"
-    "  --image-tracks      the synthetic back end on ORB tracks of KITTI-layout images\n"
-    "  --kept-fraction F   a keep budget: every selector keeps floor(F x E + 0.5) of the E evaluated points of\n"
-    "                      each window (default 0.3; a list sweeps); --M gives keepless M directly instead\n"
-    "  --seeds N           seeds FIRST .. FIRST+N-1 (default 5, --quick 2); tables show mean +- sd over them\n"
-    "  --error-floor       ATE added in quadrature to both sides of a ratio, per group (default: the paper's\n"
-    "                      published original ATE: tum=0.0183,euroc_mh=0.0658,euroc_v=0.0658,kitti=0.537)\n"
-    "  --scope, --floor, --cost  keepless's decision policy and cost model (core::Params scope, coverage_floor,\n"
-    "                      cost_model); with --kept-fraction the real VO decides the new keyframe's points\n"
-    "  --window-sizes      instead of the comparison: the original run of the first seed on each --trajectory,\n"
-    "                      --images and --rgbd input, and the largest window it gives (keyframes, points,\n"
-    "                      observations, pair arcs, unmapped keypoints) at K = 10, 20, 40, local (the local BA's)\n"
-    "                      and sliding (the last K keyframes); a table, then {\"window_sizes\":[...]} last\n"
-    "  --report DIR        regenerate the tables and the JSON line from DIR's runs.csv (an earlier --out; repeat\n"
-    "                      to merge runs), without running anything\n";
+constexpr const char* kTool = "keepless_eval";
+namespace cli = keepless::cli;
+
+const std::vector<cli::Flag> kFlags = {
+    {"--quick", nullptr, "a small, fast subset (structure checks, never the paper's numbers)"},
+    {"--data-root", "DIR", "add the standard inputs under DIR (../shared/data layout)"},
+    {"--trajectory", "FILE", "a real trajectory (repeatable)"},
+    {"--format", "tum|euroc|kitti", "the format of the --trajectory just before it (default: guessed)"},
+    {"--image-tracks", "DIR", "the synthetic back end on ORB tracks of KITTI-layout images"},
+    {"--images", "DIR", "the real VO on a KITTI-layout sequence (--calib, --poses follow it)"},
+    {"--calib", "FILE", "calibration of the --images or --image-tracks before it"},
+    {"--poses", "FILE", "ground-truth poses of the --images or --image-tracks before it"},
+    {"--rgbd", "DIR", "the real VO on a 7-Scenes RGB-D sequence (frame-NNNNNN.*)"},
+    {"--frames", "A:B", "frames numbered A..B inclusive, wherever the sequence starts\n"
+                        "(default all; --quick: the first 60 frames)"},
+    {"--bal", "FILE", "a BAL problem (repeatable)"},
+    {"--kept-fraction", "F[,F...]", "a keep budget: every selector keeps floor(F x E + 0.5) of the E\n"
+                                    "evaluated points of each window (default 0.3; a list sweeps)"},
+    {"--M", "N[,N...]", "pair capacities directly instead of --kept-fraction"},
+    {"--seeds", "N", "seeds FIRST .. FIRST+N-1 (default 5, --quick 2); tables show mean +- sd"},
+    {"--seed", "FIRST", "the first seed (default 1)"},
+    {"--error-floor", "none|GROUP=METRES,...", "ATE added in quadrature to both sides of a ratio, per group\n"
+                                               "(default: the paper's published original ATE: tum=0.0183,\n"
+                                               "euroc_mh=0.0658,euroc_v=0.0658,kitti=0.537)"},
+    {"--out", "DIR", "write tables.md, runs.csv and SVG plots there"},
+    {"--report", "DIR", "regenerate the tables and the JSON line from DIR's runs.csv (an earlier\n"
+                        "--out; repeat to merge runs), without running anything"},
+    {"--max-keyframes", "N", "keyframes per synthetic run (default 50, --quick 40)"},
+    {"--keypoints", "N", "keypoints per frame of the synthetic back end (default 600, --quick 400)"},
+    {"--window", "N", "the simulated local-mapping window in keyframes, 2..64 (default 8, --quick 6)"},
+    {"--ba-iterations", "N", "local BA iterations (default 10, --quick 5)"},
+    {"--image-frames", "N", "frames read from --image-tracks (default all, --quick 12)"},
+    {"--noise-free", nullptr, "no synthetic pixel noise"},
+    {"--no-baselines", nullptr, "keepless only, no baselines"},
+    {"--no-ablation", nullptr, "no ablation variants"},
+    {"--ablation-all", nullptr, "every ablation variant"},
+    {"--scope", "window|newest", "keepless's decision scope (core::Params scope)"},
+    {"--floor", "L", "keepless's coverage floor (core::Params coverage_floor)"},
+    {"--cost", "paper|authors|information", "keepless's cost model; with --kept-fraction the real VO\n"
+                                            "decides the new keyframe's points"},
+    {"--window-sizes", nullptr, "instead of the comparison: the original run of the first seed on each\n"
+                                "--trajectory, --images and --rgbd input, and the largest window it\n"
+                                "gives (keyframes, points, observations, pair arcs, unmapped keypoints)\n"
+                                "at K = 10, 20, 40, local (the local BA's) and sliding (the last K\n"
+                                "keyframes); a table, then {\"window_sizes\":[...]} last"},
+};
+
+std::string usage() {
+  return cli::usage("usage: keepless_eval [--quick] [--data-root DIR] [inputs...] [options]\n"
+                    "       keepless_eval --report DIR [--report DIR]... [--error-floor ...] [--out DIR2]",
+                    kFlags, "The last stdout line is the JSON summary.");
+}
 
 struct TrajectoryArg {
   std::string path;
@@ -126,11 +151,19 @@ Args parse(int argc, char** argv) {
   Args a;
   bool by_M = false, by_fraction = false, tracks_last = false;
   for (int i = 1; i < argc; ++i) {
-    const std::string f = argv[i];
-    auto val = [&]() -> std::string {
-      if (i + 1 >= argc) fail(f + " needs a value");
-      return argv[++i];
-    };
+    const cli::Flag* flag = nullptr;
+    const char* value = nullptr;
+    std::string error;
+    switch (cli::next(kFlags, argc, argv, &i, &flag, &value, &error)) {
+      case cli::Arg::kHelp:
+        std::cout << usage();
+        std::exit(0);
+      case cli::Arg::kVersion: std::exit(cli::print_version(kTool));
+      case cli::Arg::kError: std::exit(cli::usage_error(kTool, error));
+      case cli::Arg::kFlag: break;
+    }
+    const std::string f = flag->name;
+    auto val = [&]() -> std::string { return value; };
     if (f == "--quick") a.quick = true;
     else if (f == "--data-root") a.data_root = val();
     else if (f == "--trajectory") a.trajectories.push_back({val(), ""});
@@ -196,10 +229,7 @@ Args parse(int argc, char** argv) {
       if (!keepless::core::parse_cost_model(v.c_str(), &a.policy.cost_model))
         fail("--cost: expected paper, authors or information, got '" + v + "'");
     }
-    else if (f == "--help" || f == "-h") {
-      std::cout << kUsage;
-      std::exit(0);
-    } else fail("unknown flag '" + f + "'\n" + kUsage);
+    else std::exit(cli::usage_error(kTool, cli::unknown_option(f)));
   }
   if (by_M && by_fraction) fail("--M and --kept-fraction exclude each other");
   if (!a.images.empty() && (a.calib.empty() || a.poses.empty())) fail("--image-tracks needs --calib and --poses");
@@ -395,7 +425,7 @@ int main(int argc, char** argv) {
     a.bal.clear();
   }
   if (a.trajectories.empty() && a.images.empty() && a.vo.empty() && a.bal.empty())
-    fail(std::string("no input: give --data-root, --trajectory, --images, --rgbd, --image-tracks or --bal\n") + kUsage);
+    fail("no input: give --data-root, --trajectory, --images, --rgbd, --image-tracks or --bal");
 
   ke::EvalSummary summary;
   summary.mode = a.quick ? "quick" : "full";
@@ -504,7 +534,8 @@ int main(int argc, char** argv) {
   if (!a.vo.empty()) {  // the real VO, closed loop on real images
     keepless::eval::vo::VoEvalOptions vo;
     vo.first = a.frames_first;
-    vo.last = a.frames_last != -2 ? a.frames_last : (a.quick ? 59 : -1);
+    vo.last = a.frames_last != -2 ? a.frames_last : -1;
+    vo.max_frames = a.frames_last == -2 && a.quick ? 60 : 0;  // --quick: the first 60 frames
     vo.seeds = summary.seeds;
     for (const OperatingPoint& op : a.ops) vo.ops.emplace_back(op.fraction, op.M);
     vo.baselines = a.baselines;

@@ -87,15 +87,34 @@ bool probe_size(RealSequence* s, std::string* error) {
   return true;
 }
 
-bool clip_range(std::size_t n, int first, int last, std::size_t* a, std::size_t* b, std::string* error) {
-  if (first < 0 || static_cast<std::size_t>(first) >= n || (last >= 0 && last < first)) {
-    *error = "frame range " + std::to_string(first) + ":" + std::to_string(last) + " outside 0.." +
-             std::to_string(n == 0 ? 0 : n - 1);
+// The frames numbered first..last (last < 0: to the end), at most
+// max_frames of them (0: all), as positions a..b into `numbers` (ascending,
+// non-empty): a sequence may start at any frame number.
+bool select_frames(const std::string& dir, const std::vector<long>& numbers, int first, int last, int max_frames,
+                   std::size_t* a, std::size_t* b, std::string* error) {
+  const auto lo = std::lower_bound(numbers.begin(), numbers.end(), static_cast<long>(first));
+  const auto hi = last < 0 ? numbers.end() : std::upper_bound(numbers.begin(), numbers.end(), static_cast<long>(last));
+  if (first < 0 || (last >= 0 && last < first) || lo >= hi) {
+    *error = dir + ": frames " + std::to_string(first) + ":" + (last < 0 ? std::string("end") : std::to_string(last)) +
+             " select none of its frames " + std::to_string(numbers.front()) + ".." + std::to_string(numbers.back());
     return false;
   }
-  *a = static_cast<std::size_t>(first);
-  *b = last < 0 ? n - 1 : std::min(n - 1, static_cast<std::size_t>(last));
+  *a = static_cast<std::size_t>(lo - numbers.begin());
+  *b = static_cast<std::size_t>(hi - numbers.begin()) - 1;
+  if (max_frames > 0) *b = std::min(*b, *a + static_cast<std::size_t>(max_frames) - 1);
   return true;
+}
+
+// The number in a file name's stem after `prefix` ("frame-000600.color.jpg" with
+// prefix "frame-" and suffix ".color.jpg": 600), or -1.
+long frame_number(const std::string& name, const std::string& prefix, const std::string& suffix) {
+  if (name.size() <= prefix.size() + suffix.size() || name.compare(0, prefix.size(), prefix) != 0 ||
+      name.compare(name.size() - suffix.size(), suffix.size(), suffix) != 0) {
+    return -1;
+  }
+  const std::string digits = name.substr(prefix.size(), name.size() - prefix.size() - suffix.size());
+  if (digits.empty() || digits.size() > 9 || digits.find_first_not_of("0123456789") != std::string::npos) return -1;
+  return std::stol(digits);
 }
 
 std::string name_of(const std::string& dir, bool parent) {
@@ -131,7 +150,7 @@ double RealSequence::path_length() const {
 }
 
 bool load_kitti_sequence(const std::string& image_dir, const std::string& calib_file,
-                         const std::string& poses_file, int first, int last, RealSequence* out,
+                         const std::string& poses_file, int first, int last, int max_frames, RealSequence* out,
                          std::string* error) {
   RealSequence s;
   s.input = image_dir;
@@ -170,9 +189,24 @@ bool load_kitti_sequence(const std::string& image_dir, const std::string& calib_
     }
     gt.push_back(pose);
   }
+  // Frame numbers from the names (000600.png: 600); poses pair with the
+  // sorted images line by line, as before.
   const std::size_t n = std::min(files.size(), gt.size());
+  std::vector<long> numbers;
+  for (std::size_t i = 0; i < n; ++i) {
+    const long k = frame_number(fs::path(files[i]).filename().string(), "", ".png");
+    numbers.push_back(k >= 0 ? k : static_cast<long>(i));
+  }
+  if (n == 0 || !std::is_sorted(numbers.begin(), numbers.end())) {
+    numbers.resize(n);
+    for (std::size_t i = 0; i < n; ++i) numbers[i] = static_cast<long>(i);
+  }
+  if (n == 0) {
+    *error = poses_file + ": no poses";
+    return false;
+  }
   std::size_t a = 0, b = 0;
-  if (!clip_range(n, first, last, &a, &b, error)) return false;
+  if (!select_frames(image_dir, numbers, first, last, max_frames, &a, &b, error)) return false;
   for (std::size_t i = a; i <= b; ++i) {
     s.image_files.push_back(files[i]);
     s.ground_truth.push_back(gt[i]);
@@ -182,7 +216,8 @@ bool load_kitti_sequence(const std::string& image_dir, const std::string& calib_
   return true;
 }
 
-bool load_rgbd_sequence(const std::string& dir, int first, int last, RealSequence* out, std::string* error) {
+bool load_rgbd_sequence(const std::string& dir, int first, int last, int max_frames, RealSequence* out,
+                        std::string* error) {
   RealSequence s;
   s.input = dir;
   s.name = name_of(dir, false);
@@ -200,11 +235,25 @@ bool load_rgbd_sequence(const std::string& dir, int first, int last, RealSequenc
   // these focal lengths), ThDepth = 40 baselines.
   s.camera.bf = 40.0;
   s.camera.close_depth = 40.0 * s.camera.bf / s.camera.fx;
-  for (int i = 0;; ++i) {
+  // frame-NNNNNN.color.jpg, by number: a sequence may start anywhere (a
+  // 7-Scenes slice from frame 600), and --frames names frame numbers.
+  std::vector<long> numbers;
+  std::error_code ec;
+  for (const auto& e : fs::directory_iterator(dir, ec)) {
+    const long k = frame_number(e.path().filename().string(), "frame-", ".color.jpg");
+    if (k >= 0) numbers.push_back(k);
+  }
+  if (ec || numbers.empty()) {
+    *error = dir + ": no frame-NNNNNN.color.jpg";
+    return false;
+  }
+  std::sort(numbers.begin(), numbers.end());
+  std::size_t a = 0, b = 0;
+  if (!select_frames(dir, numbers, first, last, max_frames, &a, &b, error)) return false;
+  for (std::size_t i = a; i <= b; ++i) {
     char stem[32];
-    std::snprintf(stem, sizeof stem, "/frame-%06d", i);
+    std::snprintf(stem, sizeof stem, "/frame-%06ld", numbers[i]);
     const std::string base = dir + stem;
-    if (!fs::exists(base + ".color.jpg")) break;
     std::string pose_text;
     if (!read_text(base + ".pose.txt", &pose_text, error)) return false;
     const std::vector<double> v = numbers_in(pose_text);
@@ -221,15 +270,6 @@ bool load_rgbd_sequence(const std::string& dir, int first, int last, RealSequenc
     s.depth_files.push_back(base + ".depth.png");
     s.ground_truth.push_back(pose);
   }
-  if (s.image_files.empty()) {
-    *error = dir + ": no frame-000000.color.jpg";
-    return false;
-  }
-  std::size_t a = 0, b = 0;
-  if (!clip_range(s.image_files.size(), first, last, &a, &b, error)) return false;
-  s.image_files = std::vector<std::string>(s.image_files.begin() + a, s.image_files.begin() + b + 1);
-  s.depth_files = std::vector<std::string>(s.depth_files.begin() + a, s.depth_files.begin() + b + 1);
-  s.ground_truth = std::vector<Pose>(s.ground_truth.begin() + a, s.ground_truth.begin() + b + 1);
   if (!probe_size(&s, error)) return false;
   *out = std::move(s);
   return true;

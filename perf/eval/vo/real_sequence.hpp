@@ -37,10 +37,13 @@ struct RealSequence {
   double path_length() const;
 };
 
-// first..last inclusive of the files found (last < 0: to the end).
+// The frames numbered first..last inclusive (last < 0: to the end; numbers
+// from the file names, 000600.png / frame-000600.color.jpg, wherever the
+// sequence starts), at most max_frames of them (0: all).
 bool load_kitti_sequence(const std::string& image_dir, const std::string& calib_file,
-                         const std::string& poses_file, int first, int last, RealSequence* out,
+                         const std::string& poses_file, int first, int last, int max_frames, RealSequence* out,
                          std::string* error);
-bool load_rgbd_sequence(const std::string& dir, int first, int last, RealSequence* out, std::string* error);
+bool load_rgbd_sequence(const std::string& dir, int first, int last, int max_frames, RealSequence* out,
+                        std::string* error);
 
 }  // namespace keepless::eval::vo

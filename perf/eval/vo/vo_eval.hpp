@@ -21,7 +21,8 @@ struct VoInput {
 };
 
 struct VoEvalOptions {
-  int first = 0, last = -1;                         // --frames A:B, inclusive (last < 0: to the end)
+  int first = 0, last = -1;                         // --frames A:B, frame numbers, inclusive (last < 0: to the end)
+  int max_frames = 0;                               // > 0: at most this many of them (--quick without --frames)
   std::vector<std::uint64_t> seeds;                 // RANSAC order and the random baseline's priorities
   std::vector<std::pair<double, std::int64_t>> ops;  // (kept fraction, NaN for a given M; M)
   bool baselines = true;

@@ -27,6 +27,7 @@
 #include <utility>
 #include <vector>
 
+#include "cli/cli.hpp"
 #include "compare.hpp"
 #include "counting_new.hpp"  // this binary's only inclusion
 #include "keepless/core/closed_form.hpp"
@@ -76,54 +77,64 @@ bool is_reference(const core::Params& p) {
          p.budget.kind == core::BudgetKind::kNone;
 }
 
-void usage() {
-  std::fprintf(stderr,
-               "usage: keepless_latency [--workload small|orbslam|large|map] [--keyframes N]\n"
-               "         [--warmup N] [--seed S] [--cpus LIST] [--mlock] [--budget-ms MS]\n"
-               "         [--budget-fraction F] [--compare WINDOWS] [--reps R] [--lcm] [--log FILE]\n"
-               "         [--scope window|newest] [--floor L] [--cost paper|authors|information]\n"
-               "         [--unmapped N] [--profile small|default|large]\n"
-               "         [--keep-points K | --keep-fraction F | --keep-observations B]\n"
-               "  --keyframes N       decisions measured after warm-up (default: 1000; map: 3)\n"
-               "  --scope, --floor, --cost  the decision policy (keepless_node's flags); other than\n"
-               "                      the defaults (window, 0, paper), the same stream is replayed\n"
-               "                      again with them as the reference of the *_ratio_to_paper figures\n"
-               "  --keep-points K, --keep-fraction F, --keep-observations B  a keep budget instead of\n"
-               "                      M (keepless_node's flags); the paper's M = 100 is the reference\n"
-               "  --unmapped N        unmapped keypoints per keyframe (default: half the workload's\n"
-               "                      observations per keyframe with --cost authors, else 0)\n"
-               "  --budget-ms MS      latency target per decision, from keyframe arrival; the\n"
-               "                      solver's deadline is at 90%% of it (default %.1f, the\n"
-               "                      node's; 0: none)\n"
-               "  --budget-fraction F run once without a budget, then again with F x its median\n"
-               "  --compare W         windows sampled for the from-scratch solvers (0: none)\n"
-               "  --profile NAME      also report keepless_node's fixed memory with that --profile\n"
-               "                      (predicted, counted by the node, resident-set growth) and\n"
-               "                      whether this workload's windows fit its capacities\n"
-               "  --lcm               also measure published -> received through keepless_node\n"
-               "  --log FILE          replay the keyframe_t messages of an LCM log instead\n",
-               kNodeDefaultBudgetMs);
+constexpr const char* kTool = "keepless_latency";
+
+const std::vector<cli::Flag> kFlags = {
+    {"--workload", "small|orbslam|large|map", "the synthetic keyframe stream (default orbslam)"},
+    {"--keyframes", "N", "decisions measured after warm-up (default: 1000; map: 3)"},
+    {"--warmup", "N", "decisions before measuring (default: the window's K)"},
+    {"--seed", "S", "stream seed (default 1)"},
+    {"--cpus", "LIST", "pin to these CPUs, e.g. 0,1 or 2-3 (reported if refused)"},
+    {"--mlock", nullptr, "lock memory with mlockall (reported if refused)"},
+    {"--budget-ms", "MS", "latency target per decision, from keyframe arrival; the solver's\n"
+                          "deadline is at 90% of it (default 5.0, the node's; 0: none)"},
+    {"--budget-fraction", "F", "run once without a budget, then again with F x its median"},
+    {"--compare", "W", "windows sampled for the from-scratch solvers (default 25; 0: none)"},
+    {"--reps", "R", "timing repetitions per sampled window, the minimum kept (default 3)"},
+    {"--lcm", nullptr, "also measure published -> received through keepless_node"},
+    {"--log", "FILE", "replay the keyframe_t messages of an LCM log instead"},
+    {"--scope", "window|newest", "decision scope (keepless_node's flag; default window)"},
+    {"--floor", "L", "coverage floor (keepless_node's flag; default 0)"},
+    {"--cost", "paper|authors|information", "cost model (keepless_node's flag; default paper)"},
+    {"--unmapped", "N", "unmapped keypoints per keyframe (default: half the workload's\n"
+                        "observations per keyframe with --cost authors, else 0)"},
+    {"--keep-points", "K", "a keep budget instead of M (keepless_node's flag): K points"},
+    {"--keep-fraction", "F", "a keep budget: the share F of the evaluated points"},
+    {"--keep-observations", "B", "a keep budget: points while their observations sum to <= B;\n"
+                                 "with a budget the paper's M = 100 is the reference"},
+    {"--profile", "small|default|large", "also report keepless_node's fixed memory with that --profile\n"
+                                         "(predicted, counted by the node, resident-set growth) and\n"
+                                         "whether this workload's windows fit its capacities"},
+};
+
+std::string usage() {
+  return cli::usage("usage: keepless_latency [options]", kFlags,
+                    "With --scope, --floor or --cost other than the defaults, the same stream is\n"
+                    "replayed again with the defaults as the reference of the *_ratio_to_paper\n"
+                    "figures. The last stdout line is a JSON summary.");
 }
 
-bool parse(int argc, char** argv, Options* o) {
+// Returns -1 to go on, else the exit status.
+int parse(int argc, char** argv, Options* o) {
   for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    const auto value = [&](const char** out) {
-      if (i + 1 >= argc) return false;
-      *out = argv[++i];
-      return true;
-    };
+    const cli::Flag* flag = nullptr;
     const char* v = nullptr;
+    std::string error;
+    switch (cli::next(kFlags, argc, argv, &i, &flag, &v, &error)) {
+      case cli::Arg::kHelp: std::fputs(usage().c_str(), stdout); return 0;
+      case cli::Arg::kVersion: return cli::print_version(kTool);
+      case cli::Arg::kError: return cli::usage_error(kTool, error);
+      case cli::Arg::kFlag: break;
+    }
+    const std::string a = flag->name;
     char* end = nullptr;
+    const auto bad = [&](const char* expected) {
+      return cli::usage_error(kTool, "bad value for " + a + ": '" + v + "' (" + expected + ")");
+    };
     if (a == "--mlock") {
       o->mlock = true;
     } else if (a == "--lcm") {
       o->lcm = true;
-    } else if (a == "--help" || a == "-h") {
-      return false;
-    } else if (!value(&v)) {
-      std::fprintf(stderr, "keepless_latency: %s needs a value\n", a.c_str());
-      return false;
     } else if (a == "--workload") {
       o->workload = v;
     } else if (a == "--cpus") {
@@ -133,52 +144,35 @@ bool parse(int argc, char** argv, Options* o) {
     } else if (a == "--profile") {
       o->profile = v;
     } else if (a == "--scope") {
-      if (!core::parse_scope(v, &o->params.scope)) {
-        std::fprintf(stderr, "keepless_latency: bad --scope '%s' (window or newest)\n", v);
-        return false;
-      }
+      if (!core::parse_scope(v, &o->params.scope)) return bad("window or newest");
     } else if (a == "--cost") {
-      if (!core::parse_cost_model(v, &o->params.cost_model)) {
-        std::fprintf(stderr, "keepless_latency: bad --cost '%s' (paper, authors or information)\n", v);
-        return false;
-      }
+      if (!core::parse_cost_model(v, &o->params.cost_model)) return bad("paper, authors or information");
     } else if (a == "--keep-fraction") {
       const double x = std::strtod(v, &end);
       if (end == v || *end != '\0' || !(x >= 0 && x <= 1) || o->params.budget.kind != core::BudgetKind::kNone) {
-        std::fprintf(stderr, "keepless_latency: bad %s '%s' (one keep budget, F in [0, 1])\n", a.c_str(), v);
-        return false;
+        return bad("one keep budget, F in [0, 1]");
       }
       o->params.budget = core::KeepBudget{core::BudgetKind::kFraction, 0, x};
     } else if (a == "--keep-points" || a == "--keep-observations") {
       const unsigned long long x = std::strtoull(v, &end, 10);
       if (end == v || *end != '\0' || v[0] == '-' || x > 0xffffffffull ||
           o->params.budget.kind != core::BudgetKind::kNone) {
-        std::fprintf(stderr, "keepless_latency: bad %s '%s' (one keep budget, an integer)\n", a.c_str(), v);
-        return false;
+        return bad("one keep budget, an integer");
       }
       o->params.budget = core::KeepBudget{
           a == "--keep-points" ? core::BudgetKind::kPoints : core::BudgetKind::kObservations, x, 0.0};
     } else if (a == "--budget-ms" || a == "--budget-fraction") {
       const double x = std::strtod(v, &end);
-      if (end == v || *end != '\0' || !std::isfinite(x) || x < 0) {
-        std::fprintf(stderr, "keepless_latency: bad %s '%s'\n", a.c_str(), v);
-        return false;
-      }
+      if (end == v || *end != '\0' || !std::isfinite(x) || x < 0) return bad("a number >= 0");
       (a == "--budget-ms" ? o->budget_ms : o->budget_fraction) = x;
     } else if (a == "--keyframes" || a == "--warmup" || a == "--seed" || a == "--compare" || a == "--reps" ||
                a == "--floor" || a == "--unmapped") {
       const unsigned long long x = std::strtoull(v, &end, 10);
-      if (end == v || *end != '\0' || v[0] == '-') {
-        std::fprintf(stderr, "keepless_latency: bad %s '%s'\n", a.c_str(), v);
-        return false;
-      }
+      if (end == v || *end != '\0' || v[0] == '-') return bad("an integer >= 0");
       if (a == "--seed") {
         o->seed = x;
       } else if (a == "--floor" || a == "--unmapped") {
-        if (x > 0xffffffffull) {
-          std::fprintf(stderr, "keepless_latency: bad %s '%s'\n", a.c_str(), v);
-          return false;
-        }
+        if (x > 0xffffffffull) return bad("an integer in 0..4294967295");
         if (a == "--floor") o->params.coverage_floor = static_cast<std::uint32_t>(x);
         if (a == "--unmapped") o->unmapped = static_cast<std::int64_t>(x);
       } else {
@@ -188,12 +182,9 @@ bool parse(int argc, char** argv, Options* o) {
                                               : o->reps;
         t = static_cast<std::uint32_t>(std::min<unsigned long long>(x, 1u << 30));
       }
-    } else {
-      std::fprintf(stderr, "keepless_latency: unknown flag %s\n", a.c_str());
-      return false;
     }
   }
-  return true;
+  return -1;
 }
 
 double ms(std::uint64_t ns) { return static_cast<double>(ns) * 1e-6; }
@@ -530,10 +521,7 @@ int main(int argc, char** argv) {
   using namespace keepless;
   using namespace keepless::perf;
   Options o;
-  if (!parse(argc, argv, &o)) {
-    usage();
-    return 2;
-  }
+  if (const int status = parse(argc, argv, &o); status >= 0) return status;
   // Before anything else is allocated: the resident-set growth is then the node's own pages.
   NodeMemory node_memory;
   if (!o.profile.empty()) {
@@ -570,9 +558,7 @@ int main(int argc, char** argv) {
     const std::uint32_t measured = o.keyframes > 0 ? o.keyframes : (o.workload == "map" ? 3 : 1000);
     SyntheticSpec spec;
     if (!workload_spec(o.workload, &spec)) {
-      std::fprintf(stderr, "keepless_latency: unknown workload '%s'\n", o.workload.c_str());
-      usage();
-      return 2;
+      return cli::usage_error(kTool, "unknown workload '" + o.workload + "' (small, orbslam, large or map)");
     }
     const std::uint32_t k = spec.keyframes;
     const std::uint32_t warmup = o.warmup > 0 ? o.warmup : k;

@@ -4,6 +4,8 @@
 #include <charconv>
 #include <cinttypes>
 #include <cstdio>
+#include <filesystem>
+#include <new>
 #include <numeric>
 #include <unordered_map>
 
@@ -11,11 +13,14 @@
 #include "keepless/io/bal_problem.hpp"
 #include "keepless/io/colmap_model.hpp"
 #include "keepless/platform/window_file_io.hpp"
+#include "keepless/platform/memory_estimate.hpp"
 #include "keepless/platform/monotonic_clock.hpp"
 
 namespace keepless::sparsify {
 
 namespace {
+
+namespace fs = std::filesystem;
 
 constexpr int kExitInput = 2;
 constexpr int kExitInternal = 1;
@@ -43,9 +48,16 @@ struct Loaded {
   io::Keyframes keyframes;
   std::vector<std::vector<core::PointId>> images;
   std::uint64_t model_points = 0;
+  std::uint64_t compacted = 0;  // 2D points --compact dropped
 };
 
-bool load(const ModelOptions& opt, Loaded* m, std::string* error) {
+io::ColmapFormat out_format(const ModelOptions& opt, const Loaded& m) {
+  if (opt.out_format == "bin") return io::ColmapFormat::kBinary;
+  if (opt.out_format == "txt") return io::ColmapFormat::kText;
+  return m.format;
+}
+
+bool load(const ModelOptions& opt, const core::WindowFileLimits& window_limits, Loaded* m, std::string* error) {
   io::Similarity metric;
   metric.scale = opt.scale;
   if (!opt.sim3.empty() && !io::read_similarity(opt.sim3, &metric, error)) return false;
@@ -75,7 +87,7 @@ bool load(const ModelOptions& opt, Loaded* m, std::string* error) {
       return true;
     }
     case Input::kWindow: {
-      if (!platform::read_window_file(opt.path, &m->window, error, opt.limits)) return false;
+      if (!platform::read_window_file(opt.path, &m->window, error, window_limits)) return false;
       core::WindowFile& f = m->keyframes.file;
       std::vector<std::size_t> order(m->window.keyframes.size());
       std::iota(order.begin(), order.end(), 0);
@@ -139,10 +151,8 @@ bool write_model(const ModelOptions& opt, Loaded* m, const std::vector<core::Poi
       std::vector<bool> culled(m->colmap.points.size());
       for (std::size_t i = 0; i < culled.size(); ++i) culled[i] = is_culled(decisions, m->colmap.points[i].id);
       io::remove_points(&m->colmap, culled);
-      io::ColmapFormat format = m->format;
-      if (opt.out_format == "bin") format = io::ColmapFormat::kBinary;
-      if (opt.out_format == "txt") format = io::ColmapFormat::kText;
-      return io::write_colmap_model(opt.out, m->colmap, format, error);
+      if (opt.compact) m->compacted = io::compact_points2D(&m->colmap);
+      return io::write_colmap_model(opt.out, m->colmap, out_format(opt, *m), error);
     }
     case Input::kBal: {
       std::vector<bool> culled(m->bal.num_points);
@@ -167,6 +177,118 @@ double median(std::vector<std::uint32_t> v) {
   std::sort(v.begin(), v.end());
   const std::size_t h = v.size() / 2;
   return v.size() % 2 == 1 ? v[h] : 0.5 * (static_cast<double>(v[h - 1]) + v[h]);
+}
+
+// 1,234,567
+std::string grouped(std::uint64_t v) {
+  std::string s = std::to_string(v);
+  for (int i = static_cast<int>(s.size()) - 3; i > 0; i -= 3) s.insert(static_cast<std::size_t>(i), ",");
+  return s;
+}
+
+std::uint64_t file_size(const std::string& path) {
+  std::error_code ec;
+  const std::uintmax_t n = fs::file_size(path, ec);
+  return ec ? 0 : static_cast<std::uint64_t>(n);
+}
+
+// The files a model is in: COLMAP's three (.bin when all three are there,
+// as the reader chooses), else the one file.
+std::vector<std::string> model_files(Input input, const std::string& path, const char* ext = nullptr) {
+  if (input != Input::kColmap) return {path};
+  const auto three = [&](const char* e) {
+    return std::vector<std::string>{path + "/cameras." + e, path + "/images." + e, path + "/points3D." + e};
+  };
+  if (ext != nullptr) return three(ext);
+  for (const std::string& f : three("bin")) {
+    if (!fs::exists(f)) return three("txt");
+  }
+  return three("bin");
+}
+
+std::uint64_t total_size(const std::vector<std::string>& files) {
+  std::uint64_t n = 0;
+  for (const std::string& f : files) n += file_size(f);
+  return n;
+}
+
+// a is b or lies inside it (both resolved).
+bool within(const fs::path& a, const fs::path& b) {
+  auto ai = a.begin();
+  for (auto bi = b.begin(); bi != b.end(); ++bi, ++ai) {
+    if (bi->empty()) continue;  // a trailing separator
+    if (ai == a.end() || *ai != *bi) return false;
+  }
+  return true;
+}
+
+// --out may not be the input, hold it or lie inside it (resolved: "./m",
+// "m/" and links count), so a typo never overwrites the model it reads.
+bool out_is_safe(const ModelOptions& opt, std::string* error) {
+  std::error_code ec;
+  const fs::path in = fs::weakly_canonical(opt.path, ec);
+  if (ec) return true;  // the reader names the problem
+  const fs::path out = fs::weakly_canonical(opt.out, ec);
+  if (ec) return true;
+  const char* how = out == in ? "is" : within(in, out) ? "contains" : within(out, in) ? "lies inside" : nullptr;
+  if (how == nullptr) return true;
+  *error = opt.out + ": --out " + how + " the input " + opt.path + "; write the sparsified map elsewhere";
+  return false;
+}
+
+// When memory runs out below --max-memory-mb: the address space
+// (ulimit -v) or the machine has less than the estimate.
+std::string out_of_memory(const std::string& path, const char* stage, double need_bytes, std::uint64_t limit_mb) {
+  char b[512];
+  std::snprintf(b, sizeof b,
+                "%s: out of memory while %s (about %.0f MB needed; --max-memory-mb %llu allowed it, but the process "
+                "got less: check `ulimit -v` and free memory, or lower the need with --mode replay or a smaller --K)",
+                path.c_str(), stage, need_bytes / 1048576.0, static_cast<unsigned long long>(limit_mb));
+  return b;
+}
+
+// Images that keep fewer than COLMAP's registration minimum of
+// observations (kDefaultFloor, Mapper.abs_pose_min_num_inliers = 30).
+void warn_thin_images(const Loaded& m, const std::vector<core::PointDecision>& decisions) {
+  const std::vector<std::uint32_t> now = kept_observations(m.images, decisions);
+  std::size_t thin = 0, thin_before = 0, worst = 0;
+  for (std::size_t i = 0; i < now.size(); ++i) {
+    if (now[i] >= kDefaultFloor) continue;
+    ++thin;
+    thin_before += m.images[i].size() < kDefaultFloor;
+    if (now[i] < now[worst] || now[worst] >= kDefaultFloor) worst = i;
+  }
+  if (thin == 0) return;
+  std::string image = "#" + std::to_string(worst + 1);
+  if (!m.colmap.images.empty()) {
+    const core::KeyframeId id = m.keyframes.file.keyframes[worst].id;
+    for (const io::ColmapImage& im : m.colmap.images) {
+      if (im.id == id) image = im.name;
+    }
+  }
+  std::fprintf(stderr,
+               "keepless_sparsify: warning: %zu of %zu images keep fewer than %u observations (fewest: %u, image %s)"
+               "%s; COLMAP registers an image from %u (Mapper.abs_pose_min_num_inliers): raise "
+               "--min-obs-per-image or --M\n",
+               thin, now.size(), kDefaultFloor, now[worst], image.c_str(),
+               thin_before == thin ? ", all of them had fewer already" : "", kDefaultFloor);
+}
+
+// Below the smallest M whose sparsified COLMAP model kept the full model's
+// accuracy in the evidence (the KITTI 06 fixture, perf/maps).
+void warn_low_m(std::int64_t M) {
+  std::fprintf(stderr,
+               "keepless_sparsify: warning: M = %lld is below %lld, the smallest M at which a sparsified COLMAP test "
+               "model (KITTI 06, 51 images) kept the full model's accuracy after colmap bundle_adjuster; at M = 100 "
+               "its ATE rose from 0.024 to 0.033 m and bundle_adjuster stopped at its 100-iteration limit: check the "
+               "result, and give bundle_adjuster more iterations (--BundleAdjustment.max_num_iterations)\n",
+               static_cast<long long>(M), static_cast<long long>(kEvidenceM));
+}
+
+std::string megabytes(double bytes) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%.0f MB", bytes / 1048576.0);
+  return b;
 }
 
 }  // namespace
@@ -221,18 +343,50 @@ int run_model(const ModelOptions& opt) {
     std::fprintf(stderr, "keepless_sparsify: --out-format applies to --colmap only\n");
     return kExitInput;
   }
+  if (opt.compact && (opt.input != Input::kColmap || opt.out.empty())) {
+    std::fprintf(stderr, "keepless_sparsify: --compact applies to --colmap with --out only\n");
+    return kExitInput;
+  }
+  std::string error;
+  if (!opt.out.empty() && !out_is_safe(opt, &error)) {
+    std::fprintf(stderr, "%s\n", error.c_str());
+    return kExitInput;
+  }
+  const Mode mode = opt.mode_given ? opt.mode : (opt.input == Input::kWindow ? Mode::kWhole : Mode::kReplay);
+  const std::uint32_t floor = opt.floor >= 0 ? static_cast<std::uint32_t>(opt.floor)
+                                             : (opt.input == Input::kWindow ? 0 : kDefaultFloor);
+
+  // --max-memory-mb, estimated before allocating: reading a COLMAP or BAL
+  // model holds its files and the parsed model (kReadFactor x the files);
+  // a window file is checked record by record by its reader (whole mode:
+  // with the decision's memory too; replay: after reading, below).
+  const double limit = static_cast<double>(opt.max_memory_mb) * 1048576.0;
+  const std::uint64_t input_bytes = total_size(model_files(opt.input, opt.path));
+  const double read_need = opt.input == Input::kWindow ? 0.0 : kReadFactor * static_cast<double>(input_bytes);
+  if (read_need > limit) {
+    std::fprintf(stderr, "%s: reading this model needs about %s (%.0f x its %s bytes of files), above --max-memory-mb %llu\n",
+                 opt.path.c_str(), megabytes(read_need).c_str(), kReadFactor, grouped(input_bytes).c_str(),
+                 static_cast<unsigned long long>(opt.max_memory_mb));
+    return kExitInput;
+  }
+  core::WindowFileLimits window_limits = opt.limits;
+  window_limits.max_bytes = opt.max_memory_mb << 20;
+  const platform::MemoryModel whole_model = platform::probe_memory_model(opt.params, core::SolveMode::kFromScratch, 1);
+  window_limits.solve_bytes = [&](const core::Capacities& c) { return mode == Mode::kWhole ? whole_model.bytes(c) : 0.0; };
+
   const std::uint64_t t_parse = platform::monotonic_ns();
   Loaded m;
-  std::string error;
-  if (!load(opt, &m, &error) || !check_limits(opt, m, &error)) {
-    std::fprintf(stderr, "%s\n", error.c_str());
+  try {
+    if (!load(opt, window_limits, &m, &error) || !check_limits(opt, m, &error)) {
+      std::fprintf(stderr, "%s\n", error.c_str());
+      return kExitInput;
+    }
+  } catch (const std::bad_alloc&) {
+    std::fprintf(stderr, "%s\n", out_of_memory(opt.path, "reading it", read_need, opt.max_memory_mb).c_str());
     return kExitInput;
   }
   const double parse_ms = ms_since(t_parse);
 
-  const Mode mode = opt.mode_given ? opt.mode : (opt.input == Input::kWindow ? Mode::kWhole : Mode::kReplay);
-  const std::uint32_t floor = opt.floor >= 0 ? static_cast<std::uint32_t>(opt.floor)
-                                             : (opt.input == Input::kWindow ? 0 : kDefaultFloor);
   // The authors' grid lies over the image: COLMAP's cameras give its size
   // when they all share one and --image was not given.
   core::Params params = opt.params;
@@ -246,9 +400,26 @@ int run_model(const ModelOptions& opt) {
       params.image_height = static_cast<std::int32_t>(c.height);
     }
   }
+  // The decision's windows and sparsifier, on top of the model still held.
+  const double decide_need = read_need + decision_bytes(m.keyframes.file, mode, params, opt.K);
+  if (decide_need > limit) {
+    const std::string why = mode == Mode::kWhole
+                                ? "all " + std::to_string(m.keyframes.file.keyframes.size()) +
+                                      " images in one whole-mode window; --mode replay needs far less"
+                                : "replay windows of " + std::to_string(opt.K) + " images; a smaller --K needs less";
+    std::fprintf(stderr, "%s: deciding needs about %s (%s), above --max-memory-mb %llu\n", opt.path.c_str(),
+                 megabytes(decide_need).c_str(), why.c_str(), static_cast<unsigned long long>(opt.max_memory_mb));
+    return kExitInput;
+  }
   const std::uint64_t t_solve = platform::monotonic_ns();
   ModeResult r;
-  const core::Status s = decide(m.keyframes.file, mode, params, opt.K, &r);
+  core::Status s = core::Status::kOk;
+  try {
+    s = decide(m.keyframes.file, mode, params, opt.K, &r);
+  } catch (const std::bad_alloc&) {
+    std::fprintf(stderr, "%s\n", out_of_memory(opt.path, "deciding it", decide_need, opt.max_memory_mb).c_str());
+    return kExitInput;
+  }
   const double solve_ms = ms_since(t_solve);
   if (s != core::Status::kOk) {
     std::fprintf(stderr, "keepless_sparsify: %s failed: %s\n", to_string(mode), core::to_string(s));
@@ -271,23 +442,42 @@ int run_model(const ModelOptions& opt) {
     std::fprintf(stderr, "%s\n", error.c_str());
     return kExitInput;
   }
+  // Warnings once all is written (an error stays the only stderr line).
+  warn_thin_images(m, r.decisions);
+  if (opt.input == Input::kColmap && params.pair_capacity < kEvidenceM) warn_low_m(params.pair_capacity);
 
+  // One kept figure: the points the sparsified model holds, i.e. not
+  // culled (judged and kept, plus points never judged: seen in fewer than
+  // two images of every window, which stay as they are).
   const std::uint64_t points_kept = m.model_points - culled;
+  const std::uint64_t never_judged = points_kept - kept;
+  const std::uint64_t output_bytes =
+      opt.out.empty() ? 0
+                      : total_size(model_files(opt.input, opt.out,
+                                               opt.input == Input::kColmap ? io::extension(out_format(opt, m)) : nullptr));
   const std::uint32_t min_obs = per_image.empty() ? 0 : *std::min_element(per_image.begin(), per_image.end());
   const double med_obs = median(per_image);
   const io::KeyframeOrder order =
       opt.order_given ? opt.order : (opt.input == Input::kColmap ? io::KeyframeOrder::kName : io::KeyframeOrder::kFile);
   std::printf("%s", to_string(mode));
   if (mode == Mode::kReplay) std::printf(" (K = %u, order %s)", opt.K, io::to_string(order));
-  std::printf(": kept %" PRIu64 " of %" PRIu64 " points (%.2f %%), observations per image min %u median %g, %.3f s\n",
-              points_kept, m.model_points, m.model_points ? 100.0 * points_kept / m.model_points : 100.0, min_obs,
-              med_obs, time_ms / 1e3);
+  std::printf(": kept %" PRIu64 " of %" PRIu64 " points (%.2f %%", points_kept, m.model_points,
+              m.model_points ? 100.0 * points_kept / m.model_points : 100.0);
+  if (never_judged > 0) std::printf("; %" PRIu64 " of them never judged, seen in under two images of any window", never_judged);
+  std::printf("), observations per image min %u median %g, %.3f s\n", min_obs, med_obs, time_ms / 1e3);
+  std::printf("input %s bytes", grouped(input_bytes).c_str());
+  if (!opt.out.empty()) {
+    std::printf(", output %s bytes (%.1f %%)", grouped(output_bytes).c_str(),
+                input_bytes ? 100.0 * static_cast<double>(output_bytes) / static_cast<double>(input_bytes) : 0.0);
+    if (opt.compact) std::printf(", %s unmatched 2D points dropped", grouped(m.compacted).c_str());
+  }
+  std::printf("\n");
 
   char theta[32];
   *std::to_chars(theta, theta + sizeof theta - 1, opt.params.theta).ptr = '\0';
   const core::Summary& t = r.totals;
   std::printf(
-      "{\"keyframes\":%u,\"points\":%u,\"evaluated\":%u,\"kept\":%u,\"culled\":%u,"
+      "{\"keyframes\":%u,\"points\":%u,\"evaluated\":%u,\"kept\":%" PRIu64 ",\"culled\":%u,"
       "\"skipped\":%u,\"pairs\":%u,\"arcs\":%u,\"max_flow\":%" PRId64 ",\"total_cost\":%" PRId64
       ",\"M\":%" PRId64 ",\"theta\":%s,\"box_width\":%d,\"box_height\":%d,"
       "\"parse_ms\":%.3f,\"build_ms\":0,\"solve_ms\":%.3f,\"memory_bytes\":%zu,"
@@ -296,8 +486,9 @@ int run_model(const ModelOptions& opt) {
       "\"min_obs_per_image\":%u,\"median_obs_per_image\":%g,\"obs_floor\":%u,\"floor_restored\":%u,"
       "\"duplicate_observations\":%" PRIu64 ",\"time_ms\":%.3f,"
       "\"scope\":\"%s\",\"floor\":%u,\"cost\":\"%s\",\"out_of_scope\":%u,"
-      "\"floor_keyframes\":%u,\"floor_promoted\":%u,\"floor_short\":%u}\n",
-      t.keyframes, t.points, t.evaluated, kept, culled, t.skipped, t.pairs, t.arcs, t.max_flow, t.total_cost,
+      "\"floor_keyframes\":%u,\"floor_promoted\":%u,\"floor_short\":%u,"
+      "\"input_bytes\":%" PRIu64 ",\"output_bytes\":%" PRIu64 ",\"points2D_dropped\":%" PRIu64 "}\n",
+      t.keyframes, t.points, t.evaluated, points_kept, culled, t.skipped, t.pairs, t.arcs, t.max_flow, t.total_cost,
       opt.params.pair_capacity, theta, opt.params.box_width, opt.params.box_height, parse_ms, solve_ms,
       r.memory_bytes, input_name(opt.input),
       opt.input == Input::kColmap ? io::extension(m.format) : (opt.input == Input::kBal ? "bal" : "window"),
@@ -306,7 +497,7 @@ int run_model(const ModelOptions& opt) {
       m.model_points ? static_cast<double>(points_kept) / static_cast<double>(m.model_points) : 1.0, min_obs,
       med_obs, floor, restored, m.keyframes.duplicates, time_ms, core::to_string(opt.params.scope),
       opt.params.coverage_floor, core::to_string(opt.params.cost_model), t.out_of_scope, t.floor_keyframes,
-      t.floor_promoted, t.floor_short);
+      t.floor_promoted, t.floor_short, input_bytes, output_bytes, m.compacted);
   return std::fflush(stdout) == 0 ? 0 : kExitInternal;
 }
 

@@ -34,6 +34,8 @@ struct ModelOptions {
   // alike) sets params' image_width x image_height.
   bool image_given = false;
   core::WindowFileLimits limits;
+  std::uint64_t max_memory_mb = 2048;  // --max-memory-mb: reading and deciding, estimated first
+  bool compact = false;  // --compact (COLMAP): drop the 2D points no kept 3D point references
   bool map_flags = false;  // a flag above was given (parse_map_flag)
 };
 
@@ -43,8 +45,20 @@ struct ModelOptions {
 // empty or the reason its value is bad.
 bool parse_map_flag(const std::string& flag, const char* value, ModelOptions* options, std::string* error);
 
-// The default per-image floor for COLMAP and BAL inputs.
+// The default per-image floor for COLMAP and BAL inputs, and the floor
+// below which a warning names the images left under it: COLMAP's
+// Mapper.abs_pose_min_num_inliers.
 constexpr std::uint32_t kDefaultFloor = 30;
+
+// The smallest M at which a sparsified COLMAP model kept the full model's
+// accuracy after colmap bundle_adjuster in the evidence (keepless_maps_bench
+// on the KITTI 06 fixture: M = 200); below it keepless_sparsify warns.
+constexpr std::int64_t kEvidenceM = 200;
+
+// Reading a COLMAP or BAL model holds about this many times its files'
+// bytes (the files, the parsed model and its keyframes), checked against
+// --max-memory-mb before reading.
+constexpr double kReadFactor = 4.0;
 
 // Runs it all; prints a line per mode and the JSON summary (last line) on
 // stdout. Returns the exit status: 0, 2 (bad input or flags; one stderr line

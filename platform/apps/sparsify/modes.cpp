@@ -7,6 +7,7 @@
 
 #include "keepless/core/sparsifier.hpp"
 #include "keepless/core/window.hpp"
+#include "keepless/platform/memory_estimate.hpp"
 
 namespace keepless::sparsify {
 
@@ -186,6 +187,20 @@ core::Status replay(const core::WindowFile& f, const core::Params& params, std::
 }  // namespace
 
 const char* to_string(Mode mode) { return mode == Mode::kReplay ? "replay" : "whole"; }
+
+core::Capacities decision_capacities(const core::WindowFile& keyframes, Mode mode, std::uint32_t K) {
+  return mode == Mode::kWhole ? at_least_one(keyframes.needs) : replay_capacities(keyframes, K);
+}
+
+double decision_bytes(const core::WindowFile& keyframes, Mode mode, const core::Params& params, std::uint32_t K) {
+  const platform::MemoryModel model =
+      mode == Mode::kWhole ? platform::probe_memory_model(params, core::SolveMode::kFromScratch, 1)
+                           : platform::probe_memory_model(params, core::SolveMode::kIncremental, 2);
+  // Replay also keeps one decision per distinct point of the map.
+  const double decisions =
+      mode == Mode::kReplay ? static_cast<double>(sizeof(core::PointDecision)) * keyframes.needs.max_points : 0.0;
+  return model.bytes(decision_capacities(keyframes, mode, K)) + decisions;
+}
 
 std::int64_t find_decision(const std::vector<core::PointDecision>& decisions, core::PointId point) {
   const auto it = std::lower_bound(decisions.begin(), decisions.end(), point,

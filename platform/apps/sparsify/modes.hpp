@@ -52,6 +52,14 @@ std::uint32_t apply_floor(const std::vector<std::vector<core::PointId>>& images,
 std::vector<std::uint32_t> kept_observations(const std::vector<std::vector<core::PointId>>& images,
                                              const std::vector<core::PointDecision>& decisions);
 
+// What decide() sizes its windows to: the whole map (kWhole), or the
+// largest K consecutive keyframes (kReplay).
+core::Capacities decision_capacities(const core::WindowFile& keyframes, Mode mode, std::uint32_t K);
+
+// The bytes decide() will allocate for its windows and sparsifier, before
+// allocating them (platform::MemoryModel).
+double decision_bytes(const core::WindowFile& keyframes, Mode mode, const core::Params& params, std::uint32_t K);
+
 // The index of `point` in decisions (ascending ids), or -1.
 std::int64_t find_decision(const std::vector<core::PointDecision>& decisions, core::PointId point);
 

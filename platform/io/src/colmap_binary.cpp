@@ -117,7 +117,13 @@ bool parse_cameras_binary(const std::string& name, const std::string& bytes, Col
     const CameraModelInfo* info = camera_model_by_id(model);
     if (info == nullptr) return r.fail(model_at, "unknown camera model id " + std::to_string(model));
     c.model_id = model;
+    const std::uint64_t size_at = r.offset();
     if (!r.read("width", &c.width) || !r.read("height", &c.height)) return false;
+    if (!camera_size_ok(c.width) || !camera_size_ok(c.height)) {
+      return r.fail(camera_size_ok(c.width) ? size_at + 8 : size_at,
+                    "camera " + std::to_string(c.id) + " is " + std::to_string(c.width) + "x" + std::to_string(c.height) +
+                        " pixels (each side must be 1.." + std::to_string(kMaxCameraSide) + ")");
+    }
     c.params.resize(info->num_params);
     for (double& p : c.params) {
       if (!r.finite("camera parameter", &p)) return false;

@@ -38,6 +38,7 @@ bool check_model(const detail::FileNames& names, const detail::Positions& pos, c
     return false;
   };
   std::unordered_map<std::uint32_t, std::size_t> cameras, images;
+  std::unordered_map<std::string, std::uint32_t> names_seen;  // image name -> id
   std::unordered_map<std::uint64_t, std::size_t> points;
   for (std::size_t i = 0; i < m.cameras.size(); ++i) {
     if (!cameras.emplace(m.cameras[i].id, i).second) {
@@ -60,6 +61,12 @@ bool check_model(const detail::FileNames& names, const detail::Positions& pos, c
         im.name.find_first_of("\n\r") != std::string::npos) {
       return fail(names.images, pos.image[i],
                   "image " + std::to_string(im.id) + ": a name must be non-empty, on one line, without blanks at its ends");
+    }
+    // COLMAP finds images by name (the database, image_reader): names are unique.
+    if (const auto [it, fresh] = names_seen.emplace(im.name, im.id); !fresh) {
+      return fail(names.images, pos.image[i],
+                  "image " + std::to_string(im.id) + " has the name '" + im.name.substr(0, 60) + "' of image " +
+                      std::to_string(it->second) + " (names must be unique)");
     }
     if (im.qvec[0] == 0 && im.qvec[1] == 0 && im.qvec[2] == 0 && im.qvec[3] == 0) {
       return fail(names.images, pos.image[i], "image " + std::to_string(im.id) + " has a zero quaternion");
@@ -192,8 +199,17 @@ ColmapFiles format_colmap(const ColmapModel& model, ColmapFormat format) {
 
 bool read_colmap_model(const std::string& dir, ColmapModel* out, ColmapFormat* format, std::string* error) {
   const detail::FileNames bin = detail::file_names(dir, ColmapFormat::kBinary);
-  *format = exists(bin.cameras) && exists(bin.images) && exists(bin.points3D) ? ColmapFormat::kBinary
-                                                                               : ColmapFormat::kText;
+  const detail::FileNames txt = detail::file_names(dir, ColmapFormat::kText);
+  const bool any_bin = exists(bin.cameras) || exists(bin.images) || exists(bin.points3D);
+  const bool all_bin = exists(bin.cameras) && exists(bin.images) && exists(bin.points3D);
+  const bool any_txt = exists(txt.cameras) || exists(txt.images) || exists(txt.points3D);
+  if (!any_bin && !any_txt) {
+    *error = dir + ": no COLMAP model (cameras/images/points3D .bin or .txt)";
+    return false;
+  }
+  // The binary files when all three are there (COLMAP's preference); else
+  // the format some of whose files are, so a missing one is named.
+  *format = all_bin || !any_txt ? ColmapFormat::kBinary : ColmapFormat::kText;
   const detail::FileNames names = detail::file_names(dir, *format);
   ColmapFiles files;
   if (!read_file(names.cameras, &files.cameras, error) || !read_file(names.images, &files.images, error) ||
@@ -204,6 +220,16 @@ bool read_colmap_model(const std::string& dir, ColmapModel* out, ColmapFormat* f
 }
 
 bool write_colmap_model(const std::string& dir, const ColmapModel& model, ColmapFormat format, std::string* error) {
+  // COLMAP's text reader ends a name at its first space: such a name only survives in binary.
+  if (format == ColmapFormat::kText) {
+    for (const ColmapImage& im : model.images) {
+      if (im.name.find_first_of(" \t\v\f\r") != std::string::npos) {
+        *error = detail::file_names(dir, format).images + ":0: image " + std::to_string(im.id) + "'s name '" +
+                 im.name.substr(0, 60) + "' holds a blank, which COLMAP's text format cannot hold; write the binary format";
+        return false;
+      }
+    }
+  }
   const ColmapFiles files = format_colmap(model, format);
   const std::string tmp = dir + ".tmp-" + std::to_string(::getpid());
   const detail::FileNames staged = detail::file_names(tmp, format);
@@ -264,6 +290,27 @@ void remove_points(ColmapModel* model, const std::vector<bool>& culled) {
       if (p.point3D_id != kNoPoint3D && gone.count(p.point3D_id) != 0) p.point3D_id = kNoPoint3D;
     }
   }
+}
+
+std::uint64_t compact_points2D(ColmapModel* model) {
+  std::unordered_map<std::uint32_t, std::vector<std::uint32_t>> renumber;  // image id -> new index per old one
+  std::uint64_t dropped = 0;
+  for (ColmapImage& im : model->images) {
+    std::vector<std::uint32_t>& to = renumber[im.id];
+    to.assign(im.points2D.size(), 0);
+    std::size_t kept = 0;
+    for (std::size_t k = 0; k < im.points2D.size(); ++k) {
+      if (im.points2D[k].point3D_id == kNoPoint3D) continue;
+      to[k] = static_cast<std::uint32_t>(kept);
+      im.points2D[kept++] = im.points2D[k];
+    }
+    dropped += im.points2D.size() - kept;
+    im.points2D.resize(kept);
+  }
+  for (ColmapPoint3D& p : model->points) {
+    for (ColmapTrackElement& e : p.track) e.point2D_idx = renumber[e.image_id][e.point2D_idx];
+  }
+  return dropped;
 }
 
 std::vector<std::uint32_t> observations_per_image(const ColmapModel& model) {

@@ -47,6 +47,10 @@ std::string format_text_cameras(const ColmapModel& m);
 std::string format_text_images(const ColmapModel& m);
 std::string format_text_points(const ColmapModel& m);
 
+// A camera's width or height: COLMAP keeps them as int in places, and 0 is no image.
+constexpr std::uint64_t kMaxCameraSide = 2147483647;
+inline bool camera_size_ok(std::uint64_t side) { return side >= 1 && side <= kMaxCameraSide; }
+
 // Observations (2D points with a 3D point) over all images.
 std::uint64_t count_observations(const ColmapModel& m);
 

@@ -95,7 +95,9 @@ class Fields {
                                        std::to_string(tokens_.size()) + " fields");
   }
   bool u64(std::size_t i, const char* what, std::uint64_t* out) {
-    return core::parse_uint64(tokens_[i].c_str(), out) || bad(i, what, "an unsigned integer");
+    // parse_uint64 reads a C string: a NUL inside the token would end it early.
+    return (tokens_[i].find('\0') == std::string::npos && core::parse_uint64(tokens_[i].c_str(), out)) ||
+           bad(i, what, "an unsigned integer");
   }
   template <typename T>
   bool uint(std::size_t i, const char* what, T max, T* out) {
@@ -122,7 +124,8 @@ class Fields {
 
  private:
   bool bad(std::size_t i, const char* what, const std::string& expected) {
-    std::string t = tokens_[i].substr(0, 40);
+    std::string t;
+    for (const char c : tokens_[i].substr(0, 40)) t += c == '\0' ? std::string("\\0") : std::string(1, c);
     return fail(std::string("bad ") + what + " '" + t + "' (field " + std::to_string(i + 1) + ", " +
                 expected + ")");
   }
@@ -173,6 +176,10 @@ bool parse_cameras_text(const std::string& name, const std::string& text, Colmap
     if (!f.u32(0, "CAMERA_ID", &c.id) || !f.u64(2, "WIDTH", &c.width) || !f.u64(3, "HEIGHT", &c.height)) {
       return false;
     }
+    if (!camera_size_ok(c.width) || !camera_size_ok(c.height)) {
+      return f.fail("camera " + std::to_string(c.id) + " is " + std::to_string(c.width) + "x" +
+                    std::to_string(c.height) + " pixels (each side must be 1.." + std::to_string(kMaxCameraSide) + ")");
+    }
     c.params.resize(info->num_params);
     if (!f.f64s(4, c.params.size(), "camera parameter", c.params.data())) return false;
     out->cameras.push_back(std::move(c));
@@ -192,6 +199,11 @@ bool parse_images_text(const std::string& name, const std::string& text, ColmapM
     im.name = f.rest(9);
     // images.bin ends a name at its NUL: a name holding one could not be written back.
     if (im.name.find('\0') != std::string::npos) return f.fail("NAME holds a NUL byte");
+    // COLMAP's text reader ends a name at its first space.
+    if (f.size() > 10) {
+      return f.fail("NAME '" + im.name.substr(0, 60) + "' holds a blank: COLMAP would read it as '" + f.token(9) +
+                    "'");
+    }
     pos->image.push_back(number);
     std::string_view line;
     std::uint64_t points_line = 0;

@@ -173,4 +173,11 @@ void split_map_event(const keepless::map_event_t& msg, const core::Window& windo
 // Decoded map event: counts consistent with the arrays (kInvalidField).
 RejectReason check_map_event(const keepless::map_event_t& msg);
 
+// For log lines: the field that made a message kInvalidField, e.g.
+// "orientation (not a unit quaternion)" or "image_width (must be > 0)".
+// Pass the decoded message, or nullptr when its bytes were refused before
+// decoding (the array counts are named then).
+const char* invalid_keyframe_field(const keepless::keyframe_t* decoded);
+const char* invalid_map_event_field(const keepless::map_event_t* decoded);
+
 }  // namespace keepless::platform

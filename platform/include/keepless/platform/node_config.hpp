@@ -61,7 +61,7 @@ struct NodeConfig {
   bool quiet = false;               // no per-reject log lines
 };
 
-enum class ParseResult : std::uint8_t { kOk = 0, kHelp, kError };
+enum class ParseResult : std::uint8_t { kOk = 0, kHelp, kError, kVersion };
 
 // Parses keepless_node's flags into `config` (defaults kept for absent flags).
 // On kError, `error` says which flag and why.

@@ -95,20 +95,30 @@ bool parse_colmap(const std::string& dir, const ColmapFiles& files, ColmapFormat
 ColmapFiles format_colmap(const ColmapModel& model, ColmapFormat format);
 
 // Reads DIR/{cameras,images,points3D}.bin, or the .txt files when the .bin
-// ones are absent (COLMAP's own preference).
+// ones are absent (COLMAP's own preference). A DIR holding none of the six
+// files is "DIR: no COLMAP model (...)"; one with some is read in that
+// format and the missing file named.
 bool read_colmap_model(const std::string& dir, ColmapModel* out, ColmapFormat* format,
                        std::string* error);
 
 // Writes the three files into a temporary directory beside DIR, then renames
 // it to DIR (when absent) or the files into DIR: a failure leaves no partial
 // file in DIR.
-// Refused when DIR holds a file of the other format (it would shadow ours).
+// Refused when DIR holds a file of the other format (it would shadow ours),
+// and in text when an image name holds a blank (COLMAP's text reader would
+// cut it there).
 bool write_colmap_model(const std::string& dir, const ColmapModel& model, ColmapFormat format,
                         std::string* error);
 
 // Removes the points whose `culled[i]` is set (i indexes model->points) and
 // sets every 2D point that referenced one to kNoPoint3D; all else unchanged.
 void remove_points(ColmapModel* model, const std::vector<bool>& culled);
+
+// Drops every 2D point that names no 3D point and renumbers the tracks'
+// POINT2D_IDX to match; returns how many were dropped. The dropped
+// keypoints' positions are lost, and 2D point indices no longer match the
+// feature database the model was built from.
+std::uint64_t compact_points2D(ColmapModel* model);
 
 // Observations (2D points with a 3D point) per image, in model->images order.
 std::vector<std::uint32_t> observations_per_image(const ColmapModel& model);

@@ -1,0 +1,153 @@
+// Every tool's command line behaves like the field's tools: --help on stdout
+// with exit 0, a usage line and one described line per flag; --version prints
+// "<tool> <project version>"; an unknown option or a flag without its value
+// is named on stderr, exit 2. Each flag the help documents is known to the
+// parser (a value flag alone "needs a value"; a switch followed by an unknown
+// option gets past the switch).
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <ostream>
+#include <sstream>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "child_run.hpp"
+
+namespace {
+
+namespace fs = std::filesystem;
+
+struct Tool {
+  std::string name, path;
+};
+void PrintTo(const Tool& t, std::ostream* os) { *os << t.name; }
+
+// KEEPLESS_TOOLS: "name=path|name=path|...".
+std::vector<Tool> tools() {
+  std::vector<Tool> out;
+  std::stringstream list(KEEPLESS_TOOLS);
+  for (std::string item; std::getline(list, item, '|');) {
+    const std::size_t eq = item.find('=');
+    if (eq != std::string::npos) out.push_back({item.substr(0, eq), item.substr(eq + 1)});
+  }
+  return out;
+}
+
+std::vector<std::string> lines_of(const std::string& text) {
+  std::vector<std::string> lines;
+  std::stringstream s(text);
+  for (std::string line; std::getline(s, line);) lines.push_back(line);
+  return lines;
+}
+
+// A documented flag: its name, whether it takes a value, whether it is described.
+struct Documented {
+  std::string name;
+  bool value = false;
+  bool described = false;
+};
+
+std::vector<Documented> documented_flags(const std::vector<std::string>& lines) {
+  std::vector<Documented> flags;
+  for (std::size_t i = 0; i < lines.size(); ++i) {
+    const std::string& l = lines[i];
+    if (l.rfind("  --", 0) != 0) continue;
+    Documented d;
+    std::size_t end = l.find_first_of(" ,", 2);
+    if (end == std::string::npos) end = l.size();
+    d.name = l.substr(2, end - 2);
+    // "--name VALUE ...": one blank then a word; "--name   text": a switch.
+    d.value = end + 1 < l.size() && l[end] == ' ' && l[end + 1] != ' ';
+    std::size_t rest = end;
+    if (d.value) rest = l.find(' ', end + 1);
+    const bool text_after = rest != std::string::npos && l.find_first_not_of(' ', rest) != std::string::npos;
+    const bool continued = i + 1 < lines.size() && lines[i + 1].rfind("    ", 0) == 0 &&
+                           lines[i + 1].find_first_not_of(' ') != std::string::npos;
+    d.described = text_after || continued;
+    flags.push_back(d);
+  }
+  return flags;
+}
+
+class ToolCli : public ::testing::TestWithParam<Tool> {
+ protected:
+  void SetUp() override {
+    std::string pattern = ::testing::TempDir() + "keepless_tools_cli_XXXXXX";
+    ASSERT_NE(::mkdtemp(pattern.data()), nullptr);
+    dir_ = pattern;
+    ASSERT_TRUE(fs::exists(GetParam().path)) << GetParam().path << " is missing: build target " << GetParam().name;
+  }
+  void TearDown() override {
+    std::error_code ec;
+    fs::remove_all(dir_, ec);
+  }
+  keepless::test::ChildResult run(const std::vector<std::string>& args) const {
+    return keepless::test::run_child(GetParam().path, args, dir_ + "/out.txt", dir_ + "/err.txt");
+  }
+  std::string dir_;
+};
+
+TEST_P(ToolCli, HelpPrintsAUsageLineAndOneDescribedLinePerFlag) {
+  const auto r = run({"--help"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_EQ(r.err, "");
+  const std::vector<std::string> lines = lines_of(r.out);
+  ASSERT_FALSE(lines.empty());
+  EXPECT_EQ(lines[0].rfind("usage: " + GetParam().name, 0), 0u) << lines[0];
+  const std::vector<Documented> flags = documented_flags(lines);
+  bool help = false, version = false;
+  for (const Documented& d : flags) {
+    EXPECT_TRUE(d.described) << d.name << " has no description";
+    help = help || d.name == "--help";
+    version = version || d.name == "--version";
+  }
+  EXPECT_TRUE(help);
+  EXPECT_TRUE(version);
+  EXPECT_EQ(run({"-h"}).out, r.out);
+}
+
+TEST_P(ToolCli, EveryDocumentedFlagIsKnownToTheParser) {
+  const auto help = run({"--help"});
+  ASSERT_EQ(help.status, 0);
+  for (const Documented& d : documented_flags(lines_of(help.out))) {
+    if (d.name == "--help" || d.name == "--version") continue;
+    SCOPED_TRACE(d.name);
+    if (d.value) {
+      const auto r = run({d.name});
+      EXPECT_EQ(r.status, 2);
+      EXPECT_NE(r.err.find("option '" + d.name + "' needs a value"), std::string::npos) << r.err;
+    } else {
+      const auto r = run({d.name, "--not-an-option"});
+      EXPECT_EQ(r.status, 2);
+      EXPECT_NE(r.err.find("unknown option '--not-an-option'"), std::string::npos) << r.err;
+    }
+  }
+}
+
+TEST_P(ToolCli, VersionPrintsTheProjectVersion) {
+  const auto r = run({"--version"});
+  EXPECT_EQ(r.status, 0);
+  EXPECT_EQ(r.out, GetParam().name + " " + KEEPLESS_PROJECT_VERSION + "\n");
+  EXPECT_EQ(r.err, "");
+}
+
+TEST_P(ToolCli, UnknownOptionIsNamedOnStderrWithExit2) {
+  for (const std::vector<std::string>& args :
+       {std::vector<std::string>{"--bogus"}, std::vector<std::string>{"--bogus", "1"}}) {
+    const auto r = run(args);
+    EXPECT_EQ(r.status, 2);
+    EXPECT_EQ(r.out, "");
+    EXPECT_NE(r.err.find("unknown option '--bogus'"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find(GetParam().name + " --help"), std::string::npos) << r.err;
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(Tools, ToolCli, ::testing::ValuesIn(tools()),
+                         [](const ::testing::TestParamInfo<Tool>& info) { return info.param.name; });
+
+}  // namespace
