@@ -444,7 +444,10 @@ int run_model(const ModelOptions& opt) {
   }
   // Warnings once all is written (an error stays the only stderr line).
   warn_thin_images(m, r.decisions);
-  if (opt.input == Input::kColmap && params.pair_capacity < kEvidenceM) warn_low_m(params.pair_capacity);
+  // A keep budget sets the count directly: M does not apply.
+  if (opt.input == Input::kColmap && params.budget.kind == core::BudgetKind::kNone && params.pair_capacity < kEvidenceM) {
+    warn_low_m(params.pair_capacity);
+  }
 
   // One kept figure: the points the sparsified model holds, i.e. not
   // culled (judged and kept, plus points never judged: seen in fewer than
