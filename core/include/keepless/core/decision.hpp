@@ -40,6 +40,12 @@ struct Summary {
   std::uint32_t floor_keyframes = 0;
   std::uint32_t floor_promoted = 0;
   std::uint32_t floor_short = 0;
+  // Tracking-safe culling: evaluated points skipped because they are younger
+  // than Params::maturity_keyframes, then those skipped because the newest
+  // keyframe flags them tracked (Keyframe::tracked); both counted in
+  // `skipped`, each point in one of them.
+  std::uint32_t guarded = 0;
+  std::uint32_t tracked = 0;
 };
 
 }  // namespace keepless::core
