@@ -2,6 +2,7 @@
 //
 //   keepless_sparsify --window FILE [--M 100] [--theta 0.5] [--box 64x48] [--decisions OUT]
 //                     [--scope window|newest] [--floor L] [--cost paper|authors|information]
+//                     [--maturity A]
 //                     [--image 640x480] [--max-keyframes N] [--max-points N]
 //                     [--max-observations N] [--max-pair-arcs N] [--max-memory-mb N]
 //   keepless_sparsify --colmap DIR | --bal FILE [--mode replay|whole] [--K 20] [--order name|id|file]
@@ -55,7 +56,7 @@ constexpr int kExitInternal = 1;
 
 constexpr const char* kUsage =
     "usage: keepless_sparsify --window FILE [--M 100] [--theta 0.5] [--box 64x48] "
-    "[--decisions OUT] [--scope window|newest] [--floor 0] [--cost paper|authors|information] "
+    "[--decisions OUT] [--scope window|newest] [--floor 0] [--cost paper|authors|information] [--maturity 0] "
     "[--image 640x480] [--max-keyframes 10000] [--max-points 2000000] "
     "[--max-observations 10000000] [--max-pair-arcs 50000000] [--max-memory-mb 2048]; or --colmap DIR | --bal FILE "
     "(or --window FILE) [--mode replay|whole] [--K 20] [--order name|id|file] [--out DIR|FILE] "
@@ -131,6 +132,12 @@ int parse_args(int argc, char** argv, Options* opt, bool* help) {
         return usage_error(bad + " (an integer >= 0)");
       }
       opt->params.coverage_floor = static_cast<std::uint32_t>(floor);
+    } else if (flag == "--maturity") {
+      std::uint64_t maturity = 0;
+      if (!core::parse_uint64(value, &maturity) || maturity > std::numeric_limits<std::uint32_t>::max()) {
+        return usage_error(bad + " (an integer >= 0)");
+      }
+      opt->params.maturity_keyframes = static_cast<std::uint32_t>(maturity);
     } else if (flag == "--cost") {
       if (!core::parse_cost_model(value, &opt->params.cost_model)) {
         return usage_error(bad + " (paper, authors or information)");
@@ -269,12 +276,13 @@ int run(const Options& opt) {
       ",\"theta\":%s,\"box_width\":%d,\"box_height\":%d,"
       "\"parse_ms\":%.3f,\"build_ms\":%.3f,\"solve_ms\":%.3f,\"memory_bytes\":%zu,"
       "\"scope\":\"%s\",\"floor\":%u,\"cost\":\"%s\",\"out_of_scope\":%u,"
-      "\"floor_keyframes\":%u,\"floor_promoted\":%u,\"floor_short\":%u}\n",
+      "\"floor_keyframes\":%u,\"floor_promoted\":%u,\"floor_short\":%u,"
+      "\"maturity\":%u,\"guarded\":%u}\n",
       sum.keyframes, sum.points, sum.evaluated, sum.kept, sum.culled, sum.skipped, sum.pairs,
       sum.arcs, sum.max_flow, sum.total_cost, opt.params.pair_capacity, theta, opt.params.box_width,
       opt.params.box_height, parse_ms, build_ms, solve_ms, memory, core::to_string(opt.params.scope),
       opt.params.coverage_floor, core::to_string(opt.params.cost_model), sum.out_of_scope,
-      sum.floor_keyframes, sum.floor_promoted, sum.floor_short);
+      sum.floor_keyframes, sum.floor_promoted, sum.floor_short, opt.params.maturity_keyframes, sum.guarded);
   return std::fflush(stdout) == 0 ? 0 : kExitInternal;
 }
 

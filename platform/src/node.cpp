@@ -65,7 +65,9 @@ struct Node::Impl {
     kf.intrinsics.reserve(4);
     kf.unmapped_u.reserve(c.max_unmapped);
     kf.unmapped_v.reserve(c.max_unmapped);
+    kf.tracked.reserve(c.max_observations);
     unmapped.resize(c.max_unmapped);
+    tracked.resize(c.max_observations);
     event.deleted_point_id.reserve(c.max_event_ids);
     event.merged_from_id.reserve(c.max_event_ids);
     event.merged_into_id.reserve(c.max_event_ids);
@@ -78,8 +80,8 @@ struct Node::Impl {
     ack.num_refused = static_cast<std::int32_t>(ack.refused_id.size());
     ack_out.resize(static_cast<std::size_t>(ack.getEncodedSize()));
     // The largest keyframe_t the byte checks admit: observations, the optional
-    // depths, intrinsics and unmapped keypoints, then publisher_id.
-    pending.resize(wire::kKeyframeHeaderBytes + (wire::kKeyframeBytesPerObservation + 4) * c.max_observations +
+    // depths, intrinsics and unmapped keypoints, then publisher_id and the tracked flags.
+    pending.resize(wire::kKeyframeHeaderBytes + (wire::kKeyframeBytesPerObservation + 4 + 1) * c.max_observations +
                    wire::kKeyframeOptionalCountBytes + 4 * 8 + 8 * std::size_t{c.max_unmapped} +
                    wire::kKeyframeTrailerBytes);
     max_decision = reserve_decision(decision, capacities);
@@ -154,6 +156,7 @@ struct Node::Impl {
     kf.intrinsics.clear();
     kf.unmapped_u.clear();
     kf.unmapped_v.clear();
+    kf.tracked.clear();
     if (r == RejectReason::kNone && kf.decode(data, 0, static_cast<int>(size)) < 0) r = RejectReason::kTruncated;
     if (r != RejectReason::kNone) {
       // Ids unreadable: no decision can name the request.
@@ -177,6 +180,7 @@ struct Node::Impl {
         observations[kept].u = static_cast<double>(kf.u[i]);
         observations[kept].v = static_cast<double>(kf.v[i]);
         observations[kept].depth = kf.num_depths != 0 ? static_cast<double>(kf.depth[i]) : 0.0;
+        tracked[kept] = kf.num_tracked != 0 ? static_cast<std::uint8_t>(kf.tracked[i]) : 0;
         ++kept;
       }
       counters.stale_observations += n - kept;
@@ -196,6 +200,7 @@ struct Node::Impl {
       }
       keyframe.unmapped = unmapped.data();
       keyframe.unmapped_count = m;
+      keyframe.tracked = kf.num_tracked != 0 ? tracked.data() : nullptr;
       const core::Status s = sliding.push(keyframe, observations.data(), kept);
       if (s != core::Status::kOk) r = reason_of(s);
     }
@@ -408,6 +413,7 @@ struct Node::Impl {
            observations.size() * sizeof(core::Observation) + id_scratch.size() * sizeof(std::uint64_t) +
            (kf.point_id.capacity() * 16) + kf.depth.capacity() * 4 + kf.intrinsics.capacity() * 8 +
            kf.unmapped_u.capacity() * 8 + unmapped.size() * sizeof(core::Keypoint) +
+           kf.tracked.capacity() + tracked.size() +
            (event.deleted_point_id.capacity() + event.merged_from_id.capacity() +
             event.merged_into_id.capacity() + event.removed_keyframe_id.capacity()) * 8 +
            (decision.window_keyframe_id.capacity() + decision.culled_point_id.capacity()) * 8 +
@@ -440,6 +446,7 @@ struct Node::Impl {
   keepless::status_t status{};
   std::vector<core::Observation> observations;
   std::vector<core::Keypoint> unmapped;  // [max_unmapped]
+  std::vector<std::uint8_t> tracked;     // [max_observations], the accepted observations' flags
   std::vector<std::uint64_t> id_scratch;
   std::vector<std::uint8_t> out;
   std::array<std::uint8_t, 1024> small{};

@@ -296,7 +296,8 @@ int run_model(const ModelOptions& opt) {
       "\"min_obs_per_image\":%u,\"median_obs_per_image\":%g,\"obs_floor\":%u,\"floor_restored\":%u,"
       "\"duplicate_observations\":%" PRIu64 ",\"time_ms\":%.3f,"
       "\"scope\":\"%s\",\"floor\":%u,\"cost\":\"%s\",\"out_of_scope\":%u,"
-      "\"floor_keyframes\":%u,\"floor_promoted\":%u,\"floor_short\":%u}\n",
+      "\"floor_keyframes\":%u,\"floor_promoted\":%u,\"floor_short\":%u,"
+      "\"maturity\":%u,\"guarded\":%u}\n",
       t.keyframes, t.points, t.evaluated, kept, culled, t.skipped, t.pairs, t.arcs, t.max_flow, t.total_cost,
       opt.params.pair_capacity, theta, opt.params.box_width, opt.params.box_height, parse_ms, solve_ms,
       r.memory_bytes, input_name(opt.input),
@@ -306,7 +307,7 @@ int run_model(const ModelOptions& opt) {
       m.model_points ? static_cast<double>(points_kept) / static_cast<double>(m.model_points) : 1.0, min_obs,
       med_obs, floor, restored, m.keyframes.duplicates, time_ms, core::to_string(opt.params.scope),
       opt.params.coverage_floor, core::to_string(opt.params.cost_model), t.out_of_scope, t.floor_keyframes,
-      t.floor_promoted, t.floor_short);
+      t.floor_promoted, t.floor_short, opt.params.maturity_keyframes, t.guarded);
   return std::fflush(stdout) == 0 ? 0 : kExitInternal;
 }
 
