@@ -41,7 +41,7 @@ const char* kUsage =
     "                     [--error-floor none|GROUP=METRES,...] [--out DIR] [--max-keyframes N] [--keypoints N]\n"
     "                     [--window N] [--ba-iterations N] [--image-frames N] [--noise-free] [--no-baselines]\n"
     "                     [--no-ablation] [--ablation-all] [--scope window|newest] [--floor L]\n"
-    "                     [--cost paper|authors|information]\n"
+    "                     [--cost paper|authors|information] [--maturity A] [--tracked-flags]\n"
     "       keepless_eval --report DIR [--report DIR]... [--error-floor ...] [--out DIR2]\n"
     "  --data-root DIR     add the standard inputs under DIR (../shared/data layout; --quick: a small subset)\n"
     "  --format            applies to the --trajectory just before it; without it the format is guessed\n"
@@ -55,6 +55,11 @@ const char* kUsage =
     "                      published original ATE: tum=0.0183,euroc_mh=0.0658,euroc_v=0.0658,kitti=0.537)\n"
     "  --scope, --floor, --cost  keepless's decision policy and cost model (core::Params scope, coverage_floor,\n"
     "                      cost_model); the M search and the baselines' per-window counts use the same policy\n"
+    "  --maturity A        tracking-safe culling: points first seen in the newest A window keyframes are not\n"
+    "                      decided yet (core::Params maturity_keyframes); every selector culls only what keepless\n"
+    "                      decided, so the baselines get the same guard (default 0: off)\n"
+    "  --tracked-flags     the real VO sends the new keyframe's tracked flags (the points it matched in that\n"
+    "                      frame), which keepless never culls and so neither do the baselines\n"
     "  --report DIR        regenerate the tables and the JSON line from DIR's runs.csv (an earlier --out; repeat\n"
     "                      to merge runs), without running anything\n";
 
@@ -85,7 +90,8 @@ struct Args {
   std::vector<std::string> report;
   int max_keyframes = -1, keypoints = -1, window = -1, ba_iterations = -1, image_frames = -1;
   bool noise_free = false, baselines = true, ablation = true, ablation_all = false;
-  keepless::core::Params policy;  // scope, coverage_floor, cost_model; the rest is set per variant
+  keepless::core::Params policy;  // scope, coverage_floor, cost_model, maturity_keyframes; the rest is set per variant
+  bool tracked_flags = false;     // --tracked-flags (the real VO)
 };
 
 [[noreturn]] void fail(const std::string& msg) {
@@ -183,6 +189,8 @@ Args parse(int argc, char** argv) {
       const std::string v = val();
       if (!keepless::core::parse_scope(v.c_str(), &a.policy.scope)) fail("--scope: expected window or newest, got '" + v + "'");
     } else if (f == "--floor") a.policy.coverage_floor = static_cast<std::uint32_t>(parse_int(f, val(), 0, 100000));
+    else if (f == "--maturity") a.policy.maturity_keyframes = static_cast<std::uint32_t>(parse_int(f, val(), 0, 1000));
+    else if (f == "--tracked-flags") a.tracked_flags = true;
     else if (f == "--cost") {
       const std::string v = val();
       if (!keepless::core::parse_cost_model(v.c_str(), &a.policy.cost_model))
@@ -287,6 +295,7 @@ ke::VariantSpec variant(const keepless::core::Params& policy, const std::string&
   v.params.scope = policy.scope;
   v.params.coverage_floor = policy.coverage_floor;
   v.params.cost_model = policy.cost_model;
+  v.params.maturity_keyframes = policy.maturity_keyframes;
   v.params.pair_capacity = M;
   v.params.cost_terms = costs;
   return v;
@@ -433,6 +442,8 @@ int main(int argc, char** argv) {
   summary.coverage_floor = a.policy.coverage_floor;
   summary.settings += "; keepless scope " + summary.scope + ", coverage floor " +
                       std::to_string(summary.coverage_floor) + ", cost " + summary.cost_model;
+  if (a.policy.maturity_keyframes > 0) summary.settings += ", maturity " + std::to_string(a.policy.maturity_keyframes);
+  if (a.tracked_flags) summary.settings += ", tracked flags";
 
   for (const auto& t : a.trajectories) {
     const std::string fmt = t.format.empty() ? guess_format(t.path) : t.format;
@@ -500,6 +511,7 @@ int main(int argc, char** argv) {
     for (const OperatingPoint& op : a.ops) vo.ops.emplace_back(op.fraction, op.M);
     vo.baselines = a.baselines;
     vo.policy = a.policy;
+    vo.tracked_flags = a.tracked_flags;
     vo.out = a.out;
     std::string err;
     for (const auto& in : a.vo)

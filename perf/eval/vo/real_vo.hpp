@@ -27,6 +27,9 @@ struct RealVoOptions {
   // keepless (M = params.pair_capacity; scope, coverage_floor, cost_model as
   // the eval's --scope/--floor/--cost). image_width/height are the camera's.
   core::Params params;
+  // Send the new keyframe's tracked flags (core::Keyframe::tracked: the map
+  // points the tracker matched in that frame) with its window.
+  bool tracked_flags = false;
   int max_local_keyframes = 20;      // local BA / keepless window: the new keyframe and its best covisibles
   std::vector<std::int64_t> calibrate_M;  // original runs: mean kept fraction per M, on every window
   bool verbose = false;

@@ -26,7 +26,8 @@ struct VoEvalOptions {
   bool baselines = true;
   // --scope, --floor, --cost: only scope, coverage_floor and cost_model are
   // read, for keepless, the baselines' counts and the M calibration alike.
-  core::Params policy;
+  core::Params policy;  // and maturity_keyframes
+  bool tracked_flags = false;  // RealVoOptions::tracked_flags
   std::string out;  // non-empty: NAME_trajectory.svg and NAME_keypoints.svg there
 };
 
