@@ -79,7 +79,10 @@ if [ "$REPLAY" = 1 ] && [ "$have_logger" = 1 ]; then
   "$NODE" --latency-target-ms 0 --url "$REPLAY_URL&recv_buf_size=4194304" --queue 4096 --max-keyframes "$KEYFRAMES" --quiet \
     2>"$REPORT/replay_node.log" &
   RNODE=$!; PIDS+=("$RNODE")
-  sleep 0.5
+  # The node prints its start line once it has allocated and subscribed; on a
+  # loaded machine that takes longer than the log's first keyframes.
+  for _ in $(seq 300); do [ -s "$REPORT/replay_node.log" ] && break; sleep 0.1; done
+  sleep 0.2  # the logger, too
   lcm-logplayer --lcm-url="$REPLAY_URL" --regexp="^KEEPLESS_(KEYFRAME|MAP_EVENT)$" "$REPORT/bus.lcmlog" >/dev/null
   for _ in $(seq 600); do kill -0 "$RNODE" 2>/dev/null || break; sleep 0.1; done
   stop "$RNODE"

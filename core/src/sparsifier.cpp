@@ -40,10 +40,14 @@ class RecentDuration {
 }  // namespace
 
 struct Sparsifier::Impl {
+  Capacities caps;
   Params params;
   SolveMode mode;
   Start start;
-  PaperNetwork network;
+  // run()'s network: made at construction for kFromScratch, by the first
+  // run() for kIncremental (update() never needs it, so a node that only
+  // updates never holds it).
+  std::unique_ptr<PaperNetwork> network;
   std::unique_ptr<IncrementalNetwork> incremental;  // kIncremental only
   solver::MinCostFlow solver;  // shared: run() resets it, update() keeps it
   PairwiseStart pairwise;      // Start::kClosedForm
@@ -75,10 +79,11 @@ struct Sparsifier::Impl {
   std::uint64_t now() const { return clock != nullptr ? clock->now_ns() : 0; }
 
   Impl(const Capacities& c, const Params& p, SolveMode m, Start st)
-      : params(p),
+      : caps(c),
+        params(p),
         mode(m),
         start(st),
-        network(c),
+        network(m == SolveMode::kFromScratch ? std::make_unique<PaperNetwork>(c) : nullptr),
         incremental(m == SolveMode::kIncremental ? std::make_unique<IncrementalNetwork>(c) : nullptr),
         solver(m == SolveMode::kIncremental
                    ? larger(PaperNetwork::solver_capacity(c), IncrementalNetwork::solver_capacity(c))
@@ -318,21 +323,23 @@ Status Sparsifier::run(const Window& window, const solver::Budget& budget) {
   s.summary = Summary{};
   s.deferred = false;
   if (Status v = validate(s.params); v != Status::kOk) return v;
+  if (!s.network) s.network = std::make_unique<PaperNetwork>(s.caps);  // kIncremental's first run()
+  PaperNetwork& net = *s.network;
   s.solver_incremental = false;  // build() resets the solver
   const std::uint64_t t0 = s.now();
-  if (Status b = s.network.build(window, s.params, s.solver); b != Status::kOk) return b;
+  if (Status b = net.build(window, s.params, s.solver); b != Status::kOk) return b;
   const std::uint64_t t1 = s.now();
-  const solver::NodeId source = s.network.source(), sink = s.network.sink();
+  const solver::NodeId source = net.source(), sink = net.sink();
   const Status result =
       s.start == Start::kClosedForm
-          ? s.solve_closed_form(source, sink, s.network.canonical_order(),
-                                static_cast<std::int32_t>(s.network.evaluated_count()), budget)
+          ? s.solve_closed_form(source, sink, net.canonical_order(),
+                                static_cast<std::int32_t>(net.evaluated_count()), budget)
           : from_solver(s.solver.solve(source, sink, budget));
   const std::uint64_t t2 = s.now();
   if (result != Status::kOk && result != Status::kBudgetExhausted) return result;
   s.summary.keyframes = window.keyframe_count();
-  s.decide_all(s.network, result == Status::kOk);
-  s.apply_policies(window, s.network, result == Status::kOk);
+  s.decide_all(net, result == Status::kOk);
+  s.apply_policies(window, net, result == Status::kOk);
   s.times = StageTimes{t1 - t0, t2 - t1, s.now() - t2};
   return result;
 }
@@ -439,7 +446,11 @@ const Summary& Sparsifier::summary() const { return impl_->summary; }
 std::uint32_t Sparsifier::decision_count() const { return impl_->count; }
 const PointDecision* Sparsifier::decisions() const { return impl_->decisions.data(); }
 const Params& Sparsifier::params() const { return impl_->params; }
-const PaperNetwork& Sparsifier::network() const { return impl_->network; }
+const PaperNetwork& Sparsifier::network() const {
+  if (impl_->network) return *impl_->network;
+  static const PaperNetwork none(Capacities{0, 0, 0, 0, 0});  // an incremental Sparsifier before any run()
+  return none;
+}
 const IncrementalNetwork* Sparsifier::incremental_network() const {
   return impl_->incremental.get();
 }
@@ -449,8 +460,7 @@ const solver::MinCostFlow& Sparsifier::solver() const { return impl_->solver; }
 
 std::size_t Sparsifier::memory_bytes() const {
   const Impl& s = *impl_;
-  // network.memory_bytes() already counts its own handle, held inside Impl.
-  return sizeof(Sparsifier) + sizeof(Impl) - sizeof(PaperNetwork) + s.network.memory_bytes() +
+  return sizeof(Sparsifier) + sizeof(Impl) + (s.network ? s.network->memory_bytes() : 0) +
          (s.incremental ? s.incremental->memory_bytes() : 0) + s.solver.memory_bytes() +
          s.pairwise.memory_bytes() +
          s.decisions.capacity() * sizeof(PointDecision) +

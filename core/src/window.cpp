@@ -202,6 +202,22 @@ std::uint32_t Window::observation_count(std::uint32_t slot) const { return impl_
 std::uint32_t Window::total_observations() const { return impl_->total; }
 std::uint32_t Window::total_unmapped() const { return impl_->unmapped_total; }
 std::uint32_t Window::distinct_points() const { return impl_->views.size(); }
+
+std::uint32_t Window::point_views(PointId point) const {
+  const std::uint32_t* v = impl_->views.find(point);
+  return v != nullptr ? *v : 0;
+}
+
+std::uint64_t Window::pair_arcs() const {
+  // Each observation of a point seen n times adds n - 1: n(n - 1) per point.
+  const Impl& w = *impl_;
+  std::uint64_t twice = 0;
+  for (std::uint32_t s = 0; s < w.count; ++s) {
+    const Observation* obs = w.pool.data() + w.obs_begin[s];
+    for (std::uint32_t i = 0; i < w.obs_count[s]; ++i) twice += point_views(obs[i].point) - 1;
+  }
+  return twice / 2;
+}
 std::uint64_t Window::keyframe_stamp(std::uint32_t slot) const { return impl_->stamps[slot]; }
 
 std::int32_t Window::find_keyframe(KeyframeId id) const {

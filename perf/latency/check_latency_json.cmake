@@ -25,7 +25,8 @@ function(run_latency last_var)
               scope coverage_floor cost_model intrinsics_and_depths unmapped_per_kf floor_bound_decisions
               floor_promoted out_of_scope_mean decisions_digest reference reference_e2e_p50_ms
               reference_e2e_p99_ms reference_allocations_after_warmup reference_decisions_digest
-              p50_ratio_to_paper p99_ratio_to_paper)
+              p50_ratio_to_paper p99_ratio_to_paper profile profile_fits node_memory_predicted_bytes
+              node_memory_bytes peak_rss_bytes)
     string(JSON value ERROR_VARIABLE missing GET "${last}" ${key})
     if(missing)
       message(FATAL_ERROR "key ${key} missing from: ${last}")

@@ -67,7 +67,8 @@ int main(int argc, char** argv) {
   if (need > static_cast<double>(config.max_memory_mb) * 1048576.0) {
     std::fprintf(stderr,
                  "keepless_node: these flags need about %.0f MB of fixed memory, above --max-memory-mb %llu "
-                 "(lower --window, --max-observations or --max-pair-arcs)\n",
+                 "(lower --window, --max-observations, --max-points, --max-window-observations or --max-pair-arcs, "
+                 "or use --profile small)\n",
                  need / 1048576.0, static_cast<unsigned long long>(config.max_memory_mb));
     return 2;
   }
@@ -96,11 +97,12 @@ int main(int argc, char** argv) {
   const core::Capacities caps = platform::window_capacities(config);
   std::fprintf(stderr,
                "keepless_node: %s  in %s,%s  out %s,%s,%s  window %u keyframes, %u obs/keyframe, "
-               "capacity %u points %u observations %u pair arcs, %.1f MB fixed, largest decision %zu bytes\n",
+               "capacity %u points %u observations %u pair arcs, %.1f MB fixed (%.1f MB predicted), largest decision "
+               "%zu bytes\n",
                config.url.c_str(), config.keyframe_channel.c_str(), config.event_channel.c_str(),
                config.decision_channel.c_str(), config.timing_channel.c_str(), config.status_channel.c_str(),
                config.window, config.max_observations, caps.max_points, caps.max_observations, caps.max_pair_arcs,
-               static_cast<double>(node.memory_bytes()) / 1e6, node.max_decision_bytes());
+               static_cast<double>(node.memory_bytes()) / 1e6, need / 1e6, node.max_decision_bytes());
 
   while (!g_stop && !node.finished()) {
     if (node.spin_once(100) < 0) {

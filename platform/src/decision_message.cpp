@@ -10,6 +10,7 @@ void set_request(keepless::decision_t& m, const DecisionRequest& r) {
   m.sequence = r.sequence;
   m.keyframe_id = r.keyframe_id;
   m.utime = r.utime;
+  m.publisher_id = r.publisher_id;
 }
 
 // Within the capacity reserved for max_keyframes: no allocation.

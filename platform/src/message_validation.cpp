@@ -25,6 +25,7 @@ static_assert(static_cast<int>(RejectReason::kUtimeBackwards) == S::REJECT_UTIME
 static_assert(static_cast<int>(RejectReason::kWindowCapacity) == S::REJECT_WINDOW_CAPACITY);
 static_assert(static_cast<int>(RejectReason::kSequenceJump) == S::REJECT_SEQUENCE_JUMP);
 static_assert(static_cast<int>(RejectReason::kUtimeJump) == S::REJECT_UTIME_JUMP);
+static_assert(static_cast<int>(RejectReason::kNotOwner) == S::REJECT_NOT_OWNER);
 static_assert(kRejectReasonCount == S::NUM_REJECT_REASONS);
 static_assert(kRejectReasonCount <= 16, "status_t.rejected has 16 entries");
 
@@ -43,6 +44,7 @@ const char* to_string(RejectReason r) {
     case RejectReason::kWindowCapacity: return "window capacity exceeded";
     case RejectReason::kSequenceJump: return "sequence jumped beyond the bound";
     case RejectReason::kUtimeJump: return "utime jumped beyond the bound";
+    case RejectReason::kNotOwner: return "another publisher owns the window";
     case RejectReason::kNone: return "accepted";
   }
   return "?";
@@ -148,88 +150,63 @@ RejectReason follows(std::int64_t last_sequence, std::int64_t last_utime, std::i
 
 }  // namespace
 
-RejectReason check_order(const StreamOrder& order, std::int64_t sequence, std::int64_t utime,
-                         const OrderBounds& bounds) {
-  if (!order.started) return RejectReason::kNone;
-  return follows(order.last_sequence, order.last_utime, sequence, utime, bounds);
+OrderTracker::OrderTracker(const OrderBounds& bounds) : bounds_(bounds) {}
+
+bool OrderTracker::continues_run(std::int64_t sequence, std::int64_t utime) const {
+  return run_length_ > 0 && follows(run_sequence_, run_utime_, sequence, utime, bounds_) == RejectReason::kNone;
 }
 
-OrderTracker::OrderTracker(const OrderBounds& bounds, std::uint32_t max_publishers)
-    : bounds_(bounds), slots_(std::max<std::uint32_t>(max_publishers, 1)) {}
-
-const StreamOrder* OrderTracker::find(std::int64_t publisher) const {
-  for (std::uint32_t i = 0; i < active_; ++i) {
-    if (slots_[i].publisher == publisher) return &slots_[i];
-  }
-  return nullptr;
-}
-
-StreamOrder& OrderTracker::slot(std::int64_t publisher) {
-  if (const StreamOrder* o = find(publisher)) return const_cast<StreamOrder&>(*o);
-  ++seen_;
-  std::uint32_t i = active_;
-  if (active_ < slots_.size()) {
-    ++active_;
-  } else {  // evict the least recently used publisher
-    i = 0;
-    for (std::uint32_t j = 1; j < active_; ++j) {
-      if (slots_[j].last_used < slots_[i].last_used) i = j;
-    }
-    if (last_ == &slots_[i]) last_ = nullptr;
-  }
-  slots_[i] = StreamOrder{};
-  slots_[i].publisher = publisher;
-  return slots_[i];
-}
-
-OrderTracker::Verdict OrderTracker::check(std::int64_t publisher, std::int64_t sequence, std::int64_t utime) {
-  StreamOrder& o = slot(publisher);
-  o.last_used = ++tick_;
+OrderTracker::Verdict OrderTracker::check(std::int64_t publisher, std::int64_t sequence, std::int64_t utime,
+                                          std::uint64_t now_ns, bool keyframe) const {
   Verdict v;
-  v.reason = check_order(o, sequence, utime, bounds_);
-  if (v.reason == RejectReason::kNone) return v;
-  const bool continues = o.run_length > 0 &&
-                         follows(o.run_sequence, o.run_utime, sequence, utime, bounds_) == RejectReason::kNone;
-  if (!continues) {
-    o.run_length = 0;
-    o.run_interleaved = false;
-    o.run_reported = false;
-  }
-  ++o.run_length;
-  o.run_sequence = sequence;
-  o.run_utime = utime;
-  if (o.run_length < bounds_.restart_confirm) return v;
-  if (o.run_interleaved) {
-    if (!o.run_reported) ++conflicts_;
-    o.run_reported = true;
+  if (!owned_ || publisher != owner_) {
+    const bool silent = owned_ && bounds_.owner_timeout_ns > 0 && now_ns >= last_heard_ns_ &&
+                        now_ns - last_heard_ns_ >= bounds_.owner_timeout_ns;
+    if (keyframe && (!owned_ || silent)) {
+      v.takeover = true;
+    } else {
+      v.reason = RejectReason::kNotOwner;
+    }
     return v;
   }
-  // Confirmed: the run is the publisher's order from now on.
-  v.went_back = sequence < o.last_sequence;
-  v.adopted = true;
-  v.reason = RejectReason::kNone;
-  o.last_sequence = sequence;
-  o.last_utime = utime;
-  o.run_length = 0;
-  ++restarts_;
+  v.reason = follows(last_sequence_, last_utime_, sequence, utime, bounds_);
+  if (v.reason != RejectReason::kNone && keyframe && continues_run(sequence, utime) &&
+      run_length_ + 1 >= bounds_.restart_confirm) {
+    v.reason = RejectReason::kNone;
+    v.restart = true;
+  }
   return v;
 }
 
-void OrderTracker::accept(std::int64_t publisher, std::int64_t sequence, std::int64_t utime) {
-  StreamOrder& o = slot(publisher);
-  if (o.started && sequence > o.last_sequence) {
-    gaps_ += static_cast<std::uint64_t>(sequence) - static_cast<std::uint64_t>(o.last_sequence) - 1;
+void OrderTracker::accept(const Verdict& v, std::int64_t publisher, std::int64_t sequence, std::int64_t utime,
+                          std::uint64_t now_ns) {
+  if (v.takeover || v.restart || !owned_) {
+    if (v.takeover) {
+      ++owners_seen_;
+      if (owned_) ++takeovers_;
+    }
+    if (v.restart) ++restarts_;
+    run_length_ = 0;
+  } else if (sequence > last_sequence_) {
+    gaps_ += static_cast<std::uint64_t>(sequence) - static_cast<std::uint64_t>(last_sequence_) - 1;
   }
-  o.started = true;
-  o.last_sequence = sequence;
-  o.last_utime = utime;
-  if (o.run_length > 0) o.run_interleaved = true;
-  last_ = &o;
+  owned_ = true;
+  owner_ = publisher;
+  last_sequence_ = sequence;
+  last_utime_ = utime;
+  last_heard_ns_ = now_ns;
 }
 
-void OrderTracker::clear() {
-  active_ = 0;
-  last_ = nullptr;
+bool OrderTracker::extend_restart(std::int64_t publisher, std::int64_t sequence, std::int64_t utime) {
+  if (!owned_ || publisher != owner_) return false;
+  if (!continues_run(sequence, utime)) {
+    if (sequence < 0 || sequence > kRestartMaxFirstSequence) return false;
+    run_length_ = 0;
+  }
+  ++run_length_;
+  run_sequence_ = sequence;
+  run_utime_ = utime;
+  return true;
 }
 
 RejectReason check_keyframe(const keepless::keyframe_t& msg, const core::Window& window,
@@ -321,10 +298,10 @@ void split_map_event(const keepless::map_event_t& msg, const core::Window& windo
     const std::int64_t f = msg.merged_from_id[i];
     const std::int64_t t = msg.merged_into_id[i];
     const auto source = std::equal_range(from, from + nm, static_cast<std::uint64_t>(f));
-    // A repeat: only then look back for an earlier item with this source.
+    // A repeat of a source already applied by this event (a refused earlier
+    // item, e.g. 5 -> 5, does not take the source's turn).
     const bool repeated = source.second - source.first > 1 &&
-                          std::find(msg.merged_from_id.begin(), msg.merged_from_id.begin() + static_cast<std::ptrdiff_t>(i), f) !=
-                              msg.merged_from_id.begin() + static_cast<std::ptrdiff_t>(i);
+                          std::find(out.merged_from, out.merged_from + out.merged, f) != out.merged_from + out.merged;
     if (f == t) {
       refuse(f, A::ITEM_MERGE_SELF);
     } else if (repeated) {

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <array>
 #include <cstdio>
+#include <ctime>
 #include <vector>
 
 #include "keepless/core/sparsifier.hpp"
@@ -42,7 +43,7 @@ RejectReason reason_of(core::Status s) {
 }  // namespace
 
 struct Node::Impl {
-  Impl(lcm::LCM& l, const NodeConfig& c)
+  Impl(lcm::LCM& l, const NodeConfig& c, const solver::Clock* injected)
       : lcm(l),
         config(c),
         capacities(window_capacities(c)),
@@ -50,7 +51,9 @@ struct Node::Impl {
         // Incremental: each keyframe edits the previous window's network in
         // place; the decisions are run()'s, bit for bit.
         sparsifier(capacities, c.params, core::SolveMode::kIncremental),
-        order(order_bounds(c), c.max_publishers),
+        clock(injected != nullptr ? injected : &own_clock),
+        empty_window(tiny_capacities()),
+        order(order_bounds(c)),
         culls(c.cull_memory != 0 ? c.cull_memory : capacities.max_points) {
     limits.max_observations = c.max_observations;
     limits.max_event_ids = c.max_event_ids;
@@ -79,23 +82,28 @@ struct Node::Impl {
     ack.refused_reason.resize(2 * std::size_t{c.max_event_ids});
     ack.num_refused = static_cast<std::int32_t>(ack.refused_id.size());
     ack_out.resize(static_cast<std::size_t>(ack.getEncodedSize()));
-    // The largest keyframe_t the byte checks admit: observations, the optional
-    // depths, intrinsics and unmapped keypoints, then publisher_id and the tracked flags.
-    pending.resize(wire::kKeyframeHeaderBytes + (wire::kKeyframeBytesPerObservation + 4 + 1) * c.max_observations +
-                   wire::kKeyframeOptionalCountBytes + 4 * 8 + 8 * std::size_t{c.max_unmapped} +
-                   wire::kKeyframeTrailerBytes);
+    pending_window.resize(capacities.max_keyframes);
     max_decision = reserve_decision(decision, capacities);
     observations.resize(c.max_observations);
     id_scratch.resize(std::max<std::size_t>(c.max_observations, 2 * std::size_t{c.max_event_ids}));
     out.resize(max_decision);
-    start_ns = monotonic_ns();
+    status.last_capacity = keepless::status_t::CAPACITY_NONE;
+    status.last_capacity_sequence = -1;
+    start_ns = clock->now_ns();
     next_status_ns = start_ns;
+  }
+
+  static core::Capacities tiny_capacities() {
+    core::Capacities t;
+    t.max_keyframes = t.max_points = t.max_observations = t.max_pair_arcs = 1;
+    return t;
   }
 
   void reject(const char* type, const std::string& channel, std::uint32_t size, RejectReason r,
               bool decoded, std::int64_t sequence, std::int64_t id) {
     ++counters.messages_rejected;
     ++counters.rejected[static_cast<std::size_t>(r)];
+    if (r == RejectReason::kNotOwner) ++counters.not_owner;
     if (config.quiet) return;
     if (decoded) {
       std::fprintf(stderr, "keepless_node: rejected %s seq %lld id %lld on %s (%u bytes): %s\n", type,
@@ -107,7 +115,7 @@ struct Node::Impl {
     }
   }
 
-  DecisionRequest request() const { return {kf.sequence, kf.keyframe_id, kf.utime}; }
+  DecisionRequest request() const { return {kf.sequence, kf.keyframe_id, kf.utime, kf.publisher_id}; }
 
   // Publishes `decision`; returns its encoded size (0 on encode failure).
   std::size_t publish_decision() {
@@ -122,30 +130,111 @@ struct Node::Impl {
     return static_cast<std::size_t>(len);
   }
 
-  void answer_rejected(RejectReason r) {
-    if (r == RejectReason::kWindowCapacity) ++counters.capacity_exceeded;
-    fill_rejected_decision(decision, request(), sliding.window(), r);
-    publish_decision();
+  // The keyframe in kf, decoded: its order verdict and content check, with
+  // no state changed. Content is checked against the window it would enter
+  // (empty on a takeover), so an invalid message can never adopt an order.
+  struct Checked {
+    OrderTracker::Verdict verdict;
+    RejectReason content = RejectReason::kNone;
+    RejectReason reason() const { return verdict.reason != RejectReason::kNone ? verdict.reason : content; }
+  };
+  Checked check_decoded_keyframe(std::uint64_t now) {
+    Checked c;
+    c.verdict = order.check(kf.publisher_id, kf.sequence, kf.utime, now, true);
+    c.content = check_keyframe(kf, c.verdict.takeover ? empty_window : sliding.window(), id_scratch.data());
+    return c;
   }
 
-  // A refused run of messages became the publisher's order (OrderTracker);
-  // when it went back in sequence the VO restarted: its old map is gone, so
-  // is the window and the memory of culls.
-  void on_adopted(const OrderTracker::Verdict& v, std::int64_t sequence) {
-    if (!v.adopted || !v.went_back) return;
-    sliding.clear();
-    culls.clear();
-    if (!config.quiet) {
-      std::fprintf(stderr, "keepless_node: publisher restart recognised at seq %lld: window cleared\n",
-                   static_cast<long long>(sequence));
+  // A window beyond a capacity: counted, remembered for status_t, logged
+  // with what it needed; the decision (STATUS_CAPACITY_EXCEEDED) culls nothing.
+  void note_capacity(std::int64_t sequence, std::int8_t which, std::uint64_t needed, std::uint64_t held) {
+    ++counters.capacity_exceeded;
+    status.last_capacity = which;
+    status.last_capacity_sequence = sequence;
+    status.last_capacity_needed = static_cast<std::int64_t>(needed);
+    status.last_capacity_held = static_cast<std::int64_t>(held);
+    if (config.quiet) return;
+    static const char* const kNames[] = {"points", "observations", "pair arcs", "unmapped keypoints"};
+    std::fprintf(stderr,
+                 "keepless_node: keyframe seq %lld: window beyond capacity: %s needed %llu, held %llu "
+                 "(nothing culled)\n",
+                 static_cast<long long>(sequence), kNames[which], static_cast<unsigned long long>(needed),
+                 static_cast<unsigned long long>(held));
+  }
+
+  // The window's points, observations or unmapped keypoints: the push made
+  // room by dropping older keyframes (SlidingWindow::push).
+  void note_window_overflow(std::int64_t sequence) {
+    using S = keepless::status_t;
+    const SlidingWindow::Demand& d = sliding.overflow();
+    if (d.observations > capacities.max_observations) {
+      note_capacity(sequence, S::CAPACITY_OBSERVATIONS, d.observations, capacities.max_observations);
+    } else if (d.points > capacities.max_points) {
+      note_capacity(sequence, S::CAPACITY_POINTS, d.points, capacities.max_points);
+    } else {
+      note_capacity(sequence, S::CAPACITY_UNMAPPED, d.unmapped, capacities.max_unmapped_keypoints);
     }
   }
 
-  // `decide` false: a newer keyframe is already queued, so this one enters
-  // the window and is answered STATUS_SKIPPED at once.
-  void on_keyframe(const void* data, std::uint32_t size, bool decide) {
-    const std::uint64_t t0 = monotonic_ns();
+  // The keyframe enters the window (after the clear a takeover or restart
+  // implies). Observations of points culled recently are dropped. On failure
+  // nothing changed.
+  // `evicted`: older keyframes the push dropped to make room, a window beyond
+  // capacity (counted and logged here, once, whether decided or skipped).
+  RejectReason admit_keyframe(const OrderTracker::Verdict& v, std::uint32_t* evicted) {
+    if (v.takeover || v.restart) {
+      sliding.clear();
+      culls.clear();
+      if (!config.quiet) {
+        std::fprintf(stderr, "keepless_node: %s at seq %lld (publisher %lld): window cleared\n",
+                     v.takeover ? "window taken over" : "publisher restart recognised",
+                     static_cast<long long>(kf.sequence), static_cast<long long>(kf.publisher_id));
+      }
+    }
+    const auto n = static_cast<std::uint32_t>(kf.num_observations);
+    std::uint32_t kept = 0;
+    for (std::uint32_t i = 0; i < n; ++i) {
+      const auto point = static_cast<core::PointId>(kf.point_id[i]);
+      if (culls.contains(point)) continue;
+      observations[kept].point = point;
+      observations[kept].u = static_cast<double>(kf.u[i]);
+      observations[kept].v = static_cast<double>(kf.v[i]);
+      observations[kept].depth = kf.num_depths != 0 ? static_cast<double>(kf.depth[i]) : 0.0;
+      tracked[kept] = kf.num_tracked != 0 ? static_cast<std::uint8_t>(kf.tracked[i]) : 0;
+      ++kept;
+    }
+    core::Keyframe keyframe;
+    keyframe.id = static_cast<core::KeyframeId>(kf.keyframe_id);
+    std::copy(kf.centre, kf.centre + 3, keyframe.centre);
+    std::copy(kf.orientation, kf.orientation + 4, keyframe.orientation);
+    if (kf.num_intrinsics == 4) {
+      keyframe.fx = kf.intrinsics[0];
+      keyframe.fy = kf.intrinsics[1];
+      keyframe.cx = kf.intrinsics[2];
+      keyframe.cy = kf.intrinsics[3];
+    }
+    const auto m = static_cast<std::uint32_t>(kf.num_unmapped);
+    for (std::uint32_t i = 0; i < m; ++i) {
+      unmapped[i] = {static_cast<double>(kf.unmapped_u[i]), static_cast<double>(kf.unmapped_v[i])};
+    }
+    keyframe.unmapped = unmapped.data();
+    keyframe.unmapped_count = m;
+    keyframe.tracked = kf.num_tracked != 0 ? tracked.data() : nullptr;
+    const core::Status s = sliding.push(keyframe, observations.data(), kept, evicted);
+    if (s != core::Status::kOk) return reason_of(s);
+    if (*evicted > 0) note_window_overflow(kf.sequence);
+    counters.stale_observations += n - kept;
+    return RejectReason::kNone;
+  }
+
+  // `drain` (spin_once with a latency target): an accepted keyframe waits as
+  // `pending` until the drain ends, and only a newer accepted keyframe of the
+  // same stream supersedes it (STATUS_SKIPPED). Map events, undecodable bytes
+  // and refused keyframes never do: before anything else is answered or
+  // changes the window, the pending keyframe is decided.
+  void on_keyframe(const void* data, std::uint32_t size, std::uint64_t arrival, bool drain) {
     ++counters.keyframes_received;
+    const std::uint64_t t0 = clock->now_ns();
     RejectReason r = check_keyframe_bytes(data, size, limits);
     // decode() leaves a vector untouched when its count is 0: clear first
     // (capacity stays, nothing allocates).
@@ -163,82 +252,96 @@ struct Node::Impl {
       reject("keyframe_t", config.keyframe_channel, size, r, false, 0, 0);
       return;
     }
-    const OrderTracker::Verdict v = order.check(kf.publisher_id, kf.sequence, kf.utime);
-    on_adopted(v, kf.sequence);
-    r = v.reason;
-    if (r == RejectReason::kNone) r = check_keyframe(kf, sliding.window(), id_scratch.data());
-    const std::uint64_t t1 = monotonic_ns();
+    const Checked c = check_decoded_keyframe(arrival);
+    std::uint32_t evicted = 0;  // older keyframes dropped to make room (beyond the slide)
+    r = c.reason();
     if (r == RejectReason::kNone) {
-      // Points culled by a decision the VO may not have applied yet when it
-      // sent this keyframe stay culled.
-      const auto n = static_cast<std::uint32_t>(kf.num_observations);
-      std::uint32_t kept = 0;
-      for (std::uint32_t i = 0; i < n; ++i) {
-        const auto point = static_cast<core::PointId>(kf.point_id[i]);
-        if (culls.contains(point)) continue;
-        observations[kept].point = point;
-        observations[kept].u = static_cast<double>(kf.u[i]);
-        observations[kept].v = static_cast<double>(kf.v[i]);
-        observations[kept].depth = kf.num_depths != 0 ? static_cast<double>(kf.depth[i]) : 0.0;
-        tracked[kept] = kf.num_tracked != 0 ? static_cast<std::uint8_t>(kf.tracked[i]) : 0;
-        ++kept;
-      }
-      counters.stale_observations += n - kept;
-      core::Keyframe keyframe;
-      keyframe.id = static_cast<core::KeyframeId>(kf.keyframe_id);
-      std::copy(kf.centre, kf.centre + 3, keyframe.centre);
-      std::copy(kf.orientation, kf.orientation + 4, keyframe.orientation);
-      if (kf.num_intrinsics == 4) {
-        keyframe.fx = kf.intrinsics[0];
-        keyframe.fy = kf.intrinsics[1];
-        keyframe.cx = kf.intrinsics[2];
-        keyframe.cy = kf.intrinsics[3];
-      }
-      const auto m = static_cast<std::uint32_t>(kf.num_unmapped);
-      for (std::uint32_t i = 0; i < m; ++i) {
-        unmapped[i] = {static_cast<double>(kf.unmapped_u[i]), static_cast<double>(kf.unmapped_v[i])};
-      }
-      keyframe.unmapped = unmapped.data();
-      keyframe.unmapped_count = m;
-      keyframe.tracked = kf.num_tracked != 0 ? tracked.data() : nullptr;
-      const core::Status s = sliding.push(keyframe, observations.data(), kept);
-      if (s != core::Status::kOk) r = reason_of(s);
+      // A new stream's window replaces the old one: the old one's pending
+      // keyframe is decided first, over the window it entered.
+      if (c.verdict.takeover || c.verdict.restart) decide_pending();
+      r = admit_keyframe(c.verdict, &evicted);
+    } else if (c.content == RejectReason::kNone && c.verdict.reason != RejectReason::kNotOwner) {
+      // Valid, refused by the order only: may be part of a restart.
+      (void)order.extend_restart(kf.publisher_id, kf.sequence, kf.utime);
     }
+    const std::uint64_t t1 = clock->now_ns();
     if (r != RejectReason::kNone) {
+      decide_pending();  // answers stay in arrival order
       reject("keyframe_t", config.keyframe_channel, size, r, true, kf.sequence, kf.keyframe_id);
-      answer_rejected(r);
-      finish_timing(t0, t1, t1, t1, 0, 0);
-      return;
-    }
-    order.accept(kf.publisher_id, kf.sequence, kf.utime);
-    const std::uint64_t t2 = monotonic_ns();
-    if (!decide) {
-      ++counters.keyframes_skipped;
-      fill_rejected_decision(decision, request(), sliding.window(), RejectReason::kNone);
-      decision.status = keepless::decision_t::STATUS_SKIPPED;
-      decision.reject_reason = -1;
+      if (r == RejectReason::kWindowCapacity) ++counters.capacity_exceeded;
+      fill_rejected_decision(decision, request(), sliding.window(), r);
       publish_decision();
-      finish_timing(t0, t1, t2, t2, 0, 0);
+      finish_timing(request(), arrival, t0, t1, t1, t1, 0, 0);
       return;
     }
+    order.accept(c.verdict, kf.publisher_id, kf.sequence, kf.utime, arrival);
+    skip_pending();  // superseded by this accepted keyframe of the same stream
+    if (drain) {
+      has_pending = true;
+      pending = request();
+      pending_arrival = arrival;
+      pending_t0 = t0;
+      pending_t1 = t1;
+      pending_evicted = evicted;
+      const core::Window& w = sliding.window();
+      pending_keyframes = w.keyframe_count();
+      for (std::uint32_t i = 0; i < pending_keyframes; ++i) pending_window[i] = static_cast<std::int64_t>(w.keyframe(i).id);
+      return;
+    }
+    decide(request(), arrival, t0, t1, evicted);
+  }
 
+  // Answers the pending keyframe STATUS_SKIPPED, with the window it entered.
+  void skip_pending() {
+    if (!has_pending) return;
+    has_pending = false;
+    ++counters.keyframes_skipped;
+    fill_rejected_decision(decision, pending, sliding.window(), RejectReason::kNone);
+    decision.status = keepless::decision_t::STATUS_SKIPPED;
+    decision.reject_reason = -1;
+    decision.window_keyframe_id.resize(pending_keyframes);  // within the reserve
+    std::copy_n(pending_window.begin(), pending_keyframes, decision.window_keyframe_id.begin());
+    decision.num_window_keyframes = static_cast<std::int32_t>(pending_keyframes);
+    publish_decision();
+    const std::uint64_t t = clock->now_ns();
+    finish_timing(pending, pending_arrival, pending_t0, pending_t1, t, t, 0, 0);
+  }
+  void decide_pending() {
+    if (!has_pending) return;
+    has_pending = false;
+    decide(pending, pending_arrival, pending_t0, pending_t1, pending_evicted);
+  }
+
+  // Sparsifies the window for `req` (its keyframe is the newest in it) and
+  // publishes the decision; the deadline counts from the keyframe's arrival.
+  // `evicted` > 0: the push had to drop older keyframes (noted at admission).
+  void decide(const DecisionRequest& req, std::uint64_t arrival, std::uint64_t t0, std::uint64_t t1,
+              std::uint32_t evicted) {
+    const std::uint64_t t2 = clock->now_ns();
     if (config.latency_target_ms > 0) {
-      budget.clock = &clock;
-      budget.deadline_ns = t0 + static_cast<std::uint64_t>(config.latency_target_ms * 1e6);
+      budget.clock = clock;
+      budget.deadline_ns = arrival + static_cast<std::uint64_t>(config.latency_target_ms * 1e6);
     }
     // A stop for budget culls nothing; the next keyframe's update() catches up.
-    const core::Status run = sparsifier.update(sliding.window(), budget);
-    const std::uint64_t t3 = monotonic_ns();
-    const std::uint32_t n_culled = fill_decision(decision, request(), sliding.window(), sparsifier, run);
+    // A window the push had to shorten is not decided: the keyframe is held,
+    // the next ones are decided as usual.
+    const core::Status run =
+        evicted > 0 ? core::Status::kCapacityExceeded : sparsifier.update(sliding.window(), budget);
+    const std::uint64_t t3 = clock->now_ns();
+    const std::uint32_t n_culled = fill_decision(decision, req, sliding.window(), sparsifier, run);
     if (run == core::Status::kBudgetExhausted) ++counters.budget_exhaustions;
-    if (run == core::Status::kCapacityExceeded) ++counters.capacity_exceeded;
-    if (run != core::Status::kOk && run != core::Status::kBudgetExhausted) {
+    if (evicted == 0 && run == core::Status::kCapacityExceeded) {
+      // The network's pair arcs (the window's own capacities held it).
+      note_capacity(req.sequence, keepless::status_t::CAPACITY_PAIR_ARCS, sliding.window().pair_arcs(), capacities.max_pair_arcs);
+    }
+    if (run != core::Status::kOk && run != core::Status::kBudgetExhausted && run != core::Status::kCapacityExceeded) {
       std::fprintf(stderr, "keepless_node: sparsifier failed on keyframe seq %lld: %s (nothing culled)\n",
-                   static_cast<long long>(kf.sequence), core::to_string(run));
+                   static_cast<long long>(req.sequence), core::to_string(run));
     }
     publish_decision();
     counters.points_culled += n_culled;
-    finish_timing(t0, t1, t2, t3, sparsifier.solver().stats().work_units, sparsifier.solver().stats().phases);
+    finish_timing(req, arrival, t0, t1, t2, t3, sparsifier.solver().stats().work_units,
+                  sparsifier.solver().stats().phases);
 
     // The VO deletes culled points; so does the window, off the latency path.
     // The ids are the decision's own (int64 and uint64 may alias).
@@ -252,40 +355,20 @@ struct Node::Impl {
     }
   }
 
-  // Inside spin_once's drain a keyframe waits in `pending` until the next
-  // message shows whether it is the newest.
-  void receive_keyframe(const void* data, std::uint32_t size) {
-    if (!draining || size > pending.size()) {  // oversize: refused unread, pending stays the newest
-      on_keyframe(data, size, true);
-      return;
-    }
-    skip_pending();
-    std::copy_n(static_cast<const std::uint8_t*>(data), size, pending.begin());
-    pending_size = size;
-    has_pending = true;
-  }
-  void skip_pending() {
-    if (!has_pending) return;
-    has_pending = false;
-    on_keyframe(pending.data(), pending_size, false);
-  }
-  void decide_pending() {
-    if (!has_pending) return;
-    has_pending = false;
-    on_keyframe(pending.data(), pending_size, true);
-  }
-
-  void finish_timing(std::uint64_t t0, std::uint64_t t1, std::uint64_t t2, std::uint64_t t3,
-                     std::uint64_t work, std::uint64_t phases) {
-    const std::uint64_t t4 = monotonic_ns();
-    latency.record(t4 - t0);
-    timing.sequence = kf.sequence;
-    timing.keyframe_id = kf.keyframe_id;
+  // Latency and total_ns count from `arrival`; the stages from t0 (handling
+  // began), t1 (checked), t2 (in the window), t3 (solved).
+  void finish_timing(const DecisionRequest& req, std::uint64_t arrival, std::uint64_t t0, std::uint64_t t1,
+                     std::uint64_t t2, std::uint64_t t3, std::uint64_t work, std::uint64_t phases) {
+    const std::uint64_t t4 = clock->now_ns();
+    const std::uint64_t from = std::min(arrival, t0);
+    latency.record(t4 - std::min(from, t4));
+    timing.sequence = req.sequence;
+    timing.keyframe_id = req.keyframe_id;
     timing.validate_ns = static_cast<std::int64_t>(t1 - t0);
     timing.window_ns = static_cast<std::int64_t>(t2 - t1);
     timing.sparsify_ns = static_cast<std::int64_t>(t3 - t2);
     timing.publish_ns = static_cast<std::int64_t>(t4 - t3);
-    timing.total_ns = static_cast<std::int64_t>(t4 - t0);
+    timing.total_ns = static_cast<std::int64_t>(t4 - std::min(from, t4));
     timing.solver_work_units = static_cast<std::int64_t>(work);
     timing.solver_phases = static_cast<std::int64_t>(phases);
     const int len = timing.encode(small.data(), 0, static_cast<int>(small.size()));
@@ -293,8 +376,8 @@ struct Node::Impl {
     if (config.max_keyframes > 0 && counters.decisions_published >= config.max_keyframes) finished = true;
   }
 
-  void on_map_event(const void* data, std::uint32_t size) {
-    skip_pending();  // it was queued before this event
+  void on_map_event(const void* data, std::uint32_t size, std::uint64_t arrival) {
+    decide_pending();  // it was queued before this event, which never supersedes it
     ++counters.map_events_received;
     RejectReason r = check_map_event_bytes(data, size, limits);
     event.deleted_point_id.clear();
@@ -306,8 +389,7 @@ struct Node::Impl {
       reject("map_event_t", config.event_channel, size, r, false, 0, 0);
       return;
     }
-    const OrderTracker::Verdict v = order.check(event.publisher_id, event.sequence, event.utime);
-    on_adopted(v, event.sequence);
+    const OrderTracker::Verdict v = order.check(event.publisher_id, event.sequence, event.utime, arrival, false);
     r = v.reason;
     if (r == RejectReason::kNone) r = check_map_event(event);
     MapEventItems items;
@@ -316,9 +398,12 @@ struct Node::Impl {
     items.removed = removed.data();
     items.refused_id = ack.refused_id.data();
     items.refused_reason = ack.refused_reason.data();
+    bool cleared = false;
+    std::uint32_t merges_applied = 0;
     if (r == RejectReason::kNone && event.reset) {
       sliding.clear();
       culls.clear();
+      cleared = true;
     } else if (r == RejectReason::kNone) {
       split_map_event(event, sliding.window(), &culls, id_scratch.data(), items);
       SlidingWindow::Edit e;
@@ -331,30 +416,32 @@ struct Node::Impl {
       e.removed_count = items.removed_count;
       const core::Status s = sliding.edit(e);
       if (s != core::Status::kOk) r = reason_of(s);
+      merges_applied = sliding.merges_effective();
     }
     if (r != RejectReason::kNone) {
       reject("map_event_t", config.event_channel, size, r, true, event.sequence, 0);
       items = MapEventItems{};
-      publish_ack(r, items);
+      publish_ack(r, items, false, 0);
       return;
     }
-    order.accept(event.publisher_id, event.sequence, event.utime);
+    order.accept(v, event.publisher_id, event.sequence, event.utime, arrival);
     counters.event_items_refused += items.refused;
-    publish_ack(r, items);
+    publish_ack(r, items, cleared, merges_applied);
   }
 
-  void publish_ack(RejectReason r, const MapEventItems& items) {
+  // `cleared`: this event reset the window; `merges`: merges that changed it.
+  void publish_ack(RejectReason r, const MapEventItems& items, bool cleared, std::uint32_t merges) {
     using A = keepless::map_event_ack_t;
     ack.sequence = event.sequence;
     ack.utime = event.utime;
     ack.publisher_id = event.publisher_id;
-    ack.reset = event.reset;
+    ack.reset = cleared;
     ack.status = r != RejectReason::kNone ? A::STATUS_REJECTED : items.refused > 0 ? A::STATUS_PARTIAL
                                                                                     : A::STATUS_APPLIED;
     ack.reject_reason = r != RejectReason::kNone ? static_cast<std::int8_t>(r) : std::int8_t{-1};
     const bool applied = r == RejectReason::kNone && !event.reset;
     ack.deleted_applied = applied ? event.num_deleted_points : 0;
-    ack.merged_applied = static_cast<std::int32_t>(items.merged);
+    ack.merged_applied = static_cast<std::int32_t>(merges);
     ack.removed_applied = static_cast<std::int32_t>(items.removed_count);
     std::fill(std::begin(ack.refused), std::end(ack.refused), 0);
     for (std::uint32_t i = 0; i < items.refused; ++i) ++ack.refused[static_cast<std::size_t>(ack.refused_reason[i])];
@@ -369,7 +456,7 @@ struct Node::Impl {
   }
 
   void publish_status(bool final) {
-    const std::uint64_t now = monotonic_ns();
+    const std::uint64_t now = clock->now_ns();
     status.uptime_ns = static_cast<std::int64_t>(now - start_ns);
     status.is_final = final;
     status.keyframes_received = static_cast<std::int64_t>(counters.keyframes_received);
@@ -387,9 +474,9 @@ struct Node::Impl {
     status.sequence_gaps = static_cast<std::int64_t>(order.sequence_gaps());
     status.keyframes_skipped = static_cast<std::int64_t>(counters.keyframes_skipped);
     status.stream_restarts = static_cast<std::int64_t>(order.restarts());
-    status.stream_conflicts = static_cast<std::int64_t>(order.conflicts());
-    status.publishers_seen = static_cast<std::int64_t>(order.publishers_seen());
-    status.publishers_active = static_cast<std::int32_t>(order.publishers_active());
+    status.stream_conflicts = static_cast<std::int64_t>(counters.not_owner);
+    status.publishers_seen = static_cast<std::int64_t>(order.owners_seen());
+    status.publishers_active = order.owned() ? 1 : 0;
     status.stale_observations = static_cast<std::int64_t>(counters.stale_observations);
     status.event_items_refused = static_cast<std::int64_t>(counters.event_items_refused);
     const core::Window& w = sliding.window();
@@ -399,6 +486,7 @@ struct Node::Impl {
     status.capacity_keyframes = static_cast<std::int32_t>(capacities.max_keyframes);
     status.capacity_points = static_cast<std::int32_t>(capacities.max_points);
     status.capacity_observations = static_cast<std::int32_t>(capacities.max_observations);
+    status.capacity_pair_arcs = static_cast<std::int32_t>(capacities.max_pair_arcs);
     status.memory_bytes = static_cast<std::int64_t>(memory_bytes());
     status.latency_p50_ns = static_cast<std::int64_t>(latency.quantile(0.5));
     status.latency_p99_ns = static_cast<std::int64_t>(latency.quantile(0.99));
@@ -418,14 +506,31 @@ struct Node::Impl {
             event.merged_into_id.capacity() + event.removed_keyframe_id.capacity()) * 8 +
            (decision.window_keyframe_id.capacity() + decision.culled_point_id.capacity()) * 8 +
            (merged_from.size() + merged_into.size() + removed.size()) * 8 + ack.refused_id.capacity() * 9 +
-           ack_out.size() + pending.size() + culls.memory_bytes() + order.memory_bytes();
+           ack_out.size() + pending_window.size() * 8 + culls.memory_bytes() + order.memory_bytes();
+  }
+
+  // The arrival stamp: when the handler runs, moved back by the time the
+  // message already waited in LCM's queue (LCM stamps its receipt on the wall
+  // clock: the kernel's for udpm, the publish for memq). An injected clock
+  // is the only time there is: its reading alone.
+  std::uint64_t arrival_ns(const lcm_recv_buf_t* rbuf) const {
+    const std::uint64_t now = clock->now_ns();
+    if (clock != &own_clock || rbuf->recv_utime <= 0) return now;
+    timespec wall{};
+    clock_gettime(CLOCK_REALTIME, &wall);
+    const std::int64_t wall_us = static_cast<std::int64_t>(wall.tv_sec) * 1000000 + wall.tv_nsec / 1000;
+    // A wall-clock step must not invent an hour of queueing: at most 60 s.
+    const std::int64_t waited_us = std::clamp<std::int64_t>(wall_us - rbuf->recv_utime, 0, 60 * 1000000);
+    return now - std::min<std::uint64_t>(now, static_cast<std::uint64_t>(waited_us) * 1000u);
   }
 
   static void keyframe_cb(const lcm_recv_buf_t* rbuf, const char*, void* user) {
-    static_cast<Impl*>(user)->receive_keyframe(rbuf->data, rbuf->data_size);
+    Impl& n = *static_cast<Impl*>(user);
+    n.on_keyframe(rbuf->data, rbuf->data_size, n.arrival_ns(rbuf), n.draining);
   }
   static void event_cb(const lcm_recv_buf_t* rbuf, const char*, void* user) {
-    static_cast<Impl*>(user)->on_map_event(rbuf->data, rbuf->data_size);
+    Impl& n = *static_cast<Impl*>(user);
+    n.on_map_event(rbuf->data, rbuf->data_size, n.arrival_ns(rbuf));
   }
 
   lcm::LCM& lcm;
@@ -434,10 +539,13 @@ struct Node::Impl {
   MessageLimits limits;
   SlidingWindow sliding;
   core::Sparsifier sparsifier;
-  // The solver reads the deadline on the node's own clock (CLOCK_MONOTONIC).
+  // Arrival stamps, deadlines and latencies: CLOCK_MONOTONIC unless a clock
+  // was injected.
   struct MonotonicClock final : solver::Clock {
     std::uint64_t now_ns() const override { return monotonic_ns(); }
-  } clock;
+  } own_clock;
+  const solver::Clock* clock;
+  core::Window empty_window;  // what a keyframe taking the window over is checked against
   solver::Budget budget;
   keepless::keyframe_t kf{};
   keepless::map_event_t event{};
@@ -456,9 +564,12 @@ struct Node::Impl {
   keepless::map_event_ack_t ack{};
   std::vector<std::uint8_t> ack_out;
   std::vector<std::int64_t> merged_from, merged_into, removed;  // a map event's items to apply
-  // spin_once's drain: the newest keyframe waits here (raw bytes).
-  std::vector<std::uint8_t> pending;
-  std::uint32_t pending_size = 0;
+  // spin_once's drain: the newest accepted keyframe, in the window, undecided.
+  DecisionRequest pending;
+  std::uint64_t pending_arrival = 0, pending_t0 = 0, pending_t1 = 0;
+  std::uint32_t pending_evicted = 0;
+  std::vector<std::int64_t> pending_window;  // the window's keyframe ids after it entered
+  std::uint32_t pending_keyframes = 0;
   bool has_pending = false;
   bool draining = false;
   NodeCounters counters;
@@ -470,7 +581,8 @@ struct Node::Impl {
   lcm_subscription_t* event_sub = nullptr;
 };
 
-Node::Node(lcm::LCM& lcm, const NodeConfig& config) : impl_(std::make_unique<Impl>(lcm, config)) {}
+Node::Node(lcm::LCM& lcm, const NodeConfig& config, const solver::Clock* clock)
+    : impl_(std::make_unique<Impl>(lcm, config, clock)) {}
 
 Node::~Node() {
   lcm_t* l = impl_->lcm.getUnderlyingLCM();
@@ -494,14 +606,15 @@ bool Node::start() {
 
 int Node::spin_once(int timeout_ms) {
   Impl& n = *impl_;
-  const std::uint64_t now = monotonic_ns();
+  const std::uint64_t now = n.clock->now_ns();
   if (now >= n.next_status_ns) n.publish_status(false);
   const std::uint64_t until_status_ms = (n.next_status_ns - std::min(n.next_status_ns, now)) / 1000000ull;
   const int wait = static_cast<int>(std::min<std::uint64_t>(static_cast<std::uint64_t>(std::max(timeout_ms, 0)),
                                                             until_status_ms));
-  // With a latency target, drain what is queued before deciding: only the
-  // newest keyframe is decided, the older ones are answered SKIPPED at once.
-  // (Without one, replays stay byte-for-byte: every keyframe is decided.)
+  // With a latency target, drain what is queued before deciding: of
+  // consecutive accepted keyframes only the newest is decided, the older
+  // ones are answered SKIPPED. (Without one, replays stay byte-for-byte:
+  // every keyframe is decided.)
   n.draining = n.config.latency_target_ms > 0;
   const int got = n.lcm.handleTimeout(wait);
   lcm_t* l = n.lcm.getUnderlyingLCM();
@@ -515,12 +628,17 @@ int Node::spin_once(int timeout_ms) {
 
 void Node::publish_status(bool final) { impl_->publish_status(final); }
 bool Node::finished() const { return impl_->finished; }
-void Node::handle_keyframe(const void* data, std::uint32_t size) { impl_->on_keyframe(data, size, true); }
-void Node::handle_map_event(const void* data, std::uint32_t size) { impl_->on_map_event(data, size); }
+void Node::handle_keyframe(const void* data, std::uint32_t size) {
+  impl_->on_keyframe(data, size, impl_->clock->now_ns(), false);
+}
+void Node::handle_map_event(const void* data, std::uint32_t size) {
+  impl_->on_map_event(data, size, impl_->clock->now_ns());
+}
 const core::Window& Node::window() const { return impl_->sliding.window(); }
 const NodeCounters& Node::counters() const { return impl_->counters; }
 const LatencyHistogram& Node::latency() const { return impl_->latency; }
 const OrderTracker& Node::order() const { return impl_->order; }
+const RecentIds& Node::cull_memory() const { return impl_->culls; }
 std::size_t Node::memory_bytes() const { return impl_->memory_bytes(); }
 std::size_t Node::max_decision_bytes() const { return impl_->max_decision; }
 

@@ -1,9 +1,11 @@
 #include "keepless/platform/node_config.hpp"
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
+#include <utility>
 
 #include "keepless/platform/memory_estimate.hpp"
 
@@ -60,14 +62,22 @@ std::string node_usage() {
          "  --max-event-ids N         ids per list of a map_event_t accepted (default 1024)\n"
          "  --max-unmapped N          unmapped keypoints per keyframe_t accepted (default 0; --cost authors\n"
          "                            counts them)\n"
-         "  --max-pair-arcs N         solver pair-arc capacity (default 0: worst case K*N*(K-1)/2;\n"
-         "                            less saves memory, a window beyond it is answered 'capacity exceeded')\n"
+         "  --profile NAME            a set of the capacities above and below, applied before the other flags:\n"
+         "                            small (K 10, N 1000, 2000 points, 4500 observations, 7000 pair arcs;\n"
+         "                            3.8 MB), default (K 20, N 2000, 5800, 17000, 45000; 15.6 MB),\n"
+         "                            large (K 40, N 2000, 8100, 37000, 117000; 33.2 MB)\n"
+         "  --max-points N            distinct points the window holds (default 5800; 0: K*N)\n"
+         "  --max-window-observations N  observations the window holds (default 17000; 0: K*N)\n"
+         "  --max-pair-arcs N         point -> pair arcs of the window's network, sum of n(n-1)/2 over its points\n"
+         "                            (default 45000; 0: worst case K*N*(K-1)/2). A window beyond a capacity is\n"
+         "                            answered 'capacity exceeded' (status_t says which, needed and held)\n"
          "  --max-memory-mb N         refuse to start when the fixed memory would exceed N MB (default 1024)\n"
          "  --max-sequence-jump N     refuse a sequence more than N above the publisher's last (default 1000000)\n"
          "  --max-utime-jump-s X      refuse a utime more than X s above the publisher's last (default 600)\n"
-         "  --restart-confirm N       N consecutive refused messages in order among themselves become the\n"
-         "                            publisher's new order: a restart or a poisoned order (default 3, 2..64)\n"
-         "  --max-publishers N        publisher ids tracked, each with its own order (default 4)\n"
+         "  --restart-confirm N       N valid keyframes of the window's publisher that start again near\n"
+         "                            sequence 0, in order among themselves, are a restart (default 3, 2..64)\n"
+         "  --owner-timeout-s X       another publisher id takes the window over only after its owner has\n"
+         "                            been silent X s (default 1; 0 = never)\n"
          "  --cull-memory N           culled point ids remembered against in-flight keyframes\n"
          "                            (default 0: the window's point capacity)\n"
          "  --M N                     pair -> sink capacity (default 100)\n"
@@ -92,10 +102,69 @@ std::string node_usage() {
          "  --help\n";
 }
 
+// --profile: applied before every other flag, wherever it is, so the
+// others refine it.
+namespace {
+
+bool is_profile_flag(const std::string& arg) { return arg == "--profile" || arg.rfind("--profile=", 0) == 0; }
+
+ParseResult parse_profile(int argc, const char* const* argv, NodeConfig& config, std::string& error) {
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    if (!is_profile_flag(arg)) continue;
+    std::string name;
+    if (arg.size() > 9) {
+      name = arg.substr(10);
+    } else if (i + 1 < argc) {
+      name = argv[i + 1];
+    } else {
+      error = "--profile: missing value";
+      return ParseResult::kError;
+    }
+    if (!apply_profile(name, config)) {
+      error = "--profile '" + name + "': expected small, default or large";
+      return ParseResult::kError;
+    }
+  }
+  return ParseResult::kOk;
+}
+
+}  // namespace
+
+bool apply_profile(const std::string& name, NodeConfig& config) {
+  // Sized from the largest windows of the real sequences (7-Scenes, KITTI 00
+  // and 06) at that K: default about 1.75x them within 16 MB, large 2x,
+  // small what fits 4 MB. NodeConfig's defaults are "default".
+  struct Profile {
+    const char* name;
+    std::uint32_t window, max_observations, max_points, max_window_observations, max_pair_arcs;
+  };
+  static const Profile kProfiles[] = {
+      {"small", 10, 1000, 2000, 4500, 7000},
+      {"default", 20, 2000, 5800, 17000, 45000},
+      {"large", 40, 2000, 8100, 37000, 117000},
+  };
+  for (const Profile& p : kProfiles) {
+    if (name != p.name) continue;
+    config.window = p.window;
+    config.max_observations = p.max_observations;
+    config.max_points = p.max_points;
+    config.max_window_observations = p.max_window_observations;
+    config.max_pair_arcs = p.max_pair_arcs;
+    return true;
+  }
+  return false;
+}
+
 ParseResult parse_node_arguments(int argc, const char* const* argv, NodeConfig& config,
                                  std::string& error) {
+  if (ParseResult r = parse_profile(argc, argv, config, error); r != ParseResult::kOk) return r;
   for (int i = 1; i < argc; ++i) {
     std::string flag = argv[i];
+    if (is_profile_flag(flag)) {  // applied above
+      if (flag == "--profile") ++i;
+      continue;
+    }
     std::string value;
     bool has_inline_value = false;
     if (const auto eq = flag.find('='); flag.rfind("--", 0) == 0 && eq != std::string::npos) {
@@ -152,6 +221,9 @@ ParseResult parse_node_arguments(int argc, const char* const* argv, NodeConfig& 
     } else if (flag == "--max-pair-arcs") {
       if (!parse_u64(value, 0, 1u << 28, n)) return bad("expected an integer in 0..2^28");
       config.max_pair_arcs = static_cast<std::uint32_t>(n);
+    } else if (flag == "--max-points" || flag == "--max-window-observations") {
+      if (!parse_u64(value, 0, 1u << 26, n)) return bad("expected an integer in 0..2^26");
+      (flag == "--max-points" ? config.max_points : config.max_window_observations) = static_cast<std::uint32_t>(n);
     } else if (flag == "--max-memory-mb") {
       if (!parse_u64(value, 1, 1u << 24, n)) return bad("expected an integer in 1..16777216");
       config.max_memory_mb = n;
@@ -165,9 +237,10 @@ ParseResult parse_node_arguments(int argc, const char* const* argv, NodeConfig& 
     } else if (flag == "--restart-confirm") {
       if (!parse_u64(value, 2, 64, n)) return bad("expected an integer in 2..64");
       config.restart_confirm = static_cast<std::uint32_t>(n);
-    } else if (flag == "--max-publishers") {
-      if (!parse_u64(value, 1, 64, n)) return bad("expected an integer in 1..64");
-      config.max_publishers = static_cast<std::uint32_t>(n);
+    } else if (flag == "--owner-timeout-s") {
+      double t = 0;
+      if (!parse_double(value, t) || t < 0 || t > 1e6) return bad("expected seconds in [0, 1e6]");
+      config.owner_timeout_s = t;
     } else if (flag == "--cull-memory") {
       if (!parse_u64(value, 0, 1u << 26, n)) return bad("expected an integer in 0..2^26");
       config.cull_memory = static_cast<std::uint32_t>(n);
@@ -223,6 +296,15 @@ ParseResult parse_node_arguments(int argc, const char* const* argv, NodeConfig& 
       return ParseResult::kError;
     }
   }
+  // One keyframe_t within the limits always fits the window on its own.
+  for (const auto& [name, value] : {std::pair<const char*, std::uint32_t>{"--max-points", config.max_points},
+                                    {"--max-window-observations", config.max_window_observations}}) {
+    if (value != 0 && value < config.max_observations) {
+      error = std::string(name) + " " + std::to_string(value) + " is below --max-observations " +
+              std::to_string(config.max_observations) + ": one keyframe would not fit the window";
+      return ParseResult::kError;
+    }
+  }
   // The worst-case window must stay addressable by the solver's int32 arc ids.
   const std::uint64_t arcs = static_cast<std::uint64_t>(config.window) * config.max_observations *
                              (config.window - 1) / 2;
@@ -240,20 +322,25 @@ OrderBounds order_bounds(const NodeConfig& config) {
   b.max_sequence_jump = config.max_sequence_jump;
   b.max_utime_jump_us = static_cast<std::uint64_t>(config.max_utime_jump_s * 1e6);
   b.restart_confirm = config.restart_confirm;
+  b.owner_timeout_ns = static_cast<std::uint64_t>(config.owner_timeout_s * 1e9);
   return b;
 }
 
 core::Capacities window_capacities(const NodeConfig& config) {
   core::Capacities c;
   const std::uint64_t k = config.window;
-  const std::uint64_t obs = k * config.max_observations;
+  const std::uint64_t worst = k * config.max_observations;  // K full keyframes
+  const auto capped = [worst](std::uint32_t value) {
+    return static_cast<std::uint32_t>(value != 0 ? std::min<std::uint64_t>(value, worst) : worst);
+  };
   c.max_keyframes = config.window;
-  c.max_observations = static_cast<std::uint32_t>(obs);
-  c.max_points = static_cast<std::uint32_t>(obs);
-  // Sum over points of n(n-1)/2 with sum n <= obs and n <= K.
+  c.max_observations = capped(config.max_window_observations);
+  c.max_points = capped(config.max_points);
   c.max_unmapped_keypoints = static_cast<std::uint32_t>(k * config.max_unmapped);
-  c.max_pair_arcs = config.max_pair_arcs != 0 ? config.max_pair_arcs
-                                               : static_cast<std::uint32_t>(obs * (k - 1) / 2);
+  // Sum over points of n(n-1)/2 with sum n <= observations and n <= K.
+  const std::uint64_t worst_arcs = std::uint64_t{c.max_observations} * (k - 1) / 2;
+  c.max_pair_arcs = static_cast<std::uint32_t>(
+      config.max_pair_arcs != 0 ? std::min<std::uint64_t>(config.max_pair_arcs, worst_arcs) : worst_arcs);
   return c;
 }
 
@@ -266,7 +353,7 @@ double estimate_node_bytes(const NodeConfig& config) {
   const MemoryModel model = probe_memory_model(config.params, core::SolveMode::kIncremental, 2);
   const double ids = config.cull_memory != 0 ? config.cull_memory : caps.max_points;
   // Sliding-window scratch, message objects and buffers, decision arrays, cull memory.
-  const double messages = 80.0 * config.max_observations + 60.0 * config.max_event_ids +
+  const double messages = 110.0 * config.max_observations + 124.0 * config.max_event_ids +
                           16.0 * (caps.max_points + caps.max_keyframes) + 8.0 * caps.max_points;
   return model.bytes(caps) + messages + 40.0 * ids;
 }

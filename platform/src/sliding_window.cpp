@@ -28,14 +28,64 @@ std::size_t SlidingWindow::memory_bytes() const {
 }
 
 core::Status SlidingWindow::push(const core::Keyframe& keyframe, const core::Observation* observations,
-                                 std::uint32_t count) {
+                                 std::uint32_t count, std::uint32_t* evicted) {
+  if (evicted != nullptr) *evicted = 0;
   if (count > obs_scratch_.size()) return core::Status::kCapacityExceeded;
-  if (active_->keyframe_count() < capacities_.max_keyframes) {
-    return active_->add_keyframe(keyframe, observations, count);  // atomic by contract
-  }
-  // Full: the new keyframe replaces the oldest, in the spare window.
+  const std::uint32_t slide = active_->keyframe_count() < capacities_.max_keyframes ? 0 : 1;
   if (active_->find_keyframe(keyframe.id) >= 0) return core::Status::kDuplicateKeyframe;
-  return rebuild(1, nullptr, 0, 0, 0, &keyframe, observations, count);
+  // Full: the new keyframe replaces the oldest, in the spare window.
+  core::Status s = slide == 0 ? active_->add_keyframe(keyframe, observations, count)  // atomic by contract
+                              : rebuild(1, nullptr, 0, 0, 0, &keyframe, observations, count);
+  if (s != core::Status::kCapacityExceeded) return s;
+  // Beyond the window's points, observations or unmapped keypoints: older
+  // keyframes make room (at most every one), unless it cannot fit alone.
+  if (count > capacities_.max_observations || count > capacities_.max_points ||
+      keyframe.unmapped_count > capacities_.max_unmapped_keypoints) {
+    return s;
+  }
+  const Demand need = demand(slide, keyframe, observations, count);
+  const std::uint32_t held = active_->keyframe_count();
+  for (std::uint32_t skip = slide + 1; skip <= held && s == core::Status::kCapacityExceeded; ++skip) {
+    s = rebuild(skip, nullptr, 0, 0, 0, &keyframe, observations, count);
+    if (s == core::Status::kOk) {
+      overflow_ = need;
+      if (evicted != nullptr) *evicted = skip - slide;
+    }
+  }
+  return s;
+}
+
+SlidingWindow::Demand SlidingWindow::demand(std::uint32_t skip_front, const core::Keyframe& keyframe,
+                                            const core::Observation* observations, std::uint32_t count) {
+  const core::Window& w = *active_;
+  Demand d;
+  d.keyframes = w.keyframe_count() - skip_front + 1;
+  d.observations = w.total_observations() + std::uint64_t{count};
+  d.unmapped = w.total_unmapped() + std::uint64_t{keyframe.unmapped_count};
+  d.points = w.distinct_points();
+  // The slid-out keyframe's points seen by it alone leave; the new
+  // keyframe's points not in what stays come.
+  const core::Observation* old = skip_front > 0 ? w.observations(0) : nullptr;
+  const std::uint32_t old_count = skip_front > 0 ? w.observation_count(0) : 0;
+  if (skip_front > 0) {
+    d.observations -= old_count;
+    d.unmapped -= w.keyframe(0).unmapped_count;
+  }
+  const bool sorted = old_count <= drop_table_.size();
+  for (std::uint32_t i = 0; i < old_count; ++i) {
+    if (w.point_views(old[i].point) == 1) --d.points;
+    if (sorted) drop_table_[i] = old[i].point;
+  }
+  if (sorted) std::sort(drop_table_.begin(), drop_table_.begin() + old_count);
+  const auto in_old = [&](core::PointId p) {
+    if (sorted) return std::binary_search(drop_table_.begin(), drop_table_.begin() + old_count, p);
+    return std::any_of(old, old + old_count, [p](const core::Observation& o) { return o.point == p; });
+  };
+  for (std::uint32_t i = 0; i < count; ++i) {
+    const std::uint32_t views = w.point_views(observations[i].point);
+    if (views == 0 || (views == 1 && old_count > 0 && in_old(observations[i].point))) ++d.points;
+  }
+  return d;
 }
 
 core::Status SlidingWindow::drop_points(const core::PointId* points, std::uint32_t count) {
@@ -50,13 +100,18 @@ core::Status SlidingWindow::edit(const Edit& e) {
   if (e.deleted_count > drop_table_.size() || e.merged_count > merge_table_.size()) {
     return core::Status::kCapacityExceeded;
   }
+  merges_effective_ = 0;
   if (e.deleted_count == 0 && e.merged_count == 0 && e.removed_count == 0) return core::Status::kOk;
   std::copy(e.deleted, e.deleted + e.deleted_count, drop_table_.begin());
   std::sort(drop_table_.begin(), drop_table_.begin() + e.deleted_count);
-  for (std::uint32_t i = 0; i < e.merged_count; ++i) merge_table_[i] = {e.merged_from[i], e.merged_into[i]};
+  for (std::uint32_t i = 0; i < e.merged_count; ++i) merge_table_[i] = {e.merged_from[i], e.merged_into[i], false};
   std::sort(merge_table_.begin(), merge_table_.begin() + e.merged_count,
             [](const Merge& x, const Merge& y) { return x.from < y.from; });
-  return rebuild(0, e.removed, e.removed_count, e.deleted_count, e.merged_count, nullptr, nullptr, 0);
+  const core::Status s = rebuild(0, e.removed, e.removed_count, e.deleted_count, e.merged_count, nullptr, nullptr, 0);
+  if (s == core::Status::kOk) {
+    for (std::uint32_t i = 0; i < e.merged_count; ++i) merges_effective_ += merge_table_[i].used ? 1 : 0;
+  }
+  return s;
 }
 
 core::Status SlidingWindow::rebuild(std::uint32_t skip_front, const core::KeyframeId* removed,
@@ -95,6 +150,7 @@ core::Status SlidingWindow::rebuild(std::uint32_t skip_front, const core::Keyfra
                                          [](const Merge& m, core::PointId p) { return m.from < p; });
         if (it != merge_end && it->from == o.point) {
           o.point = it->into;
+          it->used = true;
           merged = true;
         }
       }

@@ -332,6 +332,34 @@ TEST(Incremental, RunInBetweenRestartsTheIncrementalPath) {
   }
 }
 
+// An incremental Sparsifier does not hold run()'s network until a run()
+// needs it: updates never make it, the first run() does, and decides as a
+// from-scratch Sparsifier does.
+TEST(Incremental, RunsNetworkIsMadeOnlyByTheFirstRun) {
+  const Capacities caps{10, 600, 1500, 8000};
+  Stream stream(7, 40);
+  Window window(caps);
+  Sparsifier s(caps, Params{}, SolveMode::kIncremental);
+  Sparsifier ref(caps, Params{});
+  const std::size_t held = s.memory_bytes();
+  EXPECT_EQ(s.network().point_count(), 0u);
+  for (std::uint32_t step = 0; step < 8; ++step) {
+    if (window.keyframe_count() >= 6) {
+      ASSERT_EQ(window.remove_keyframe(window.keyframe(0).id), Status::kOk);
+    }
+    ASSERT_EQ(add(window, stream.next()), Status::kOk);
+    ASSERT_EQ(s.update(window), Status::kOk);
+    EXPECT_EQ(s.memory_bytes(), held) << "step " << step;
+  }
+  ASSERT_EQ(s.run(window), Status::kOk);
+  ASSERT_EQ(ref.run(window), Status::kOk);
+  EXPECT_TRUE(same_result(s, ref));
+  EXPECT_EQ(s.memory_bytes(), held + s.network().memory_bytes());
+  EXPECT_EQ(s.network().point_count(), ref.network().point_count());
+  ASSERT_EQ(s.update(window), Status::kOk);  // and updates carry on beside it
+  EXPECT_TRUE(same_result(s, ref));
+}
+
 TEST(Incremental, ASlideEditsOnlyWhatChanged) {
   const Capacities caps{10, 600, 1500, 8000};
   Stream stream(5, 40);

@@ -12,6 +12,7 @@
 #include "metrics.hpp"
 #include "prng.hpp"
 #include "run_record.hpp"
+#include "window_sizes.hpp"
 
 namespace ke = keepless::eval;
 
@@ -135,6 +136,31 @@ ke::RunRecord rec(double ate, std::uint64_t mps, std::uint64_t obs, std::uint64_
   r.ba_s = 1;
   r.seed = seed;
   return r;
+}
+
+// --window-sizes: a window's points, observations (a point once per
+// keyframe), pair arcs (sum of n(n-1)/2) and unmapped keypoints; the maximum
+// is taken per figure.
+TEST(EvalWindowSizes, AWindowCountsEachPointsPairsOnce) {
+  using keepless::eval::WindowMeasure;
+  using keepless::eval::WindowSize;
+  WindowMeasure m;
+  m.add_keyframe({1, 2, 3, 3}, 5);  // 3 repeated: one observation
+  m.add_keyframe({2, 3, 4}, 0);
+  m.add_keyframe({3, 9}, 2);
+  const WindowSize s = m.size();
+  EXPECT_EQ(s.keyframes, 3u);
+  EXPECT_EQ(s.points, 5u);        // 1 2 3 4 9
+  EXPECT_EQ(s.observations, 8u);  // 3 + 3 + 2
+  EXPECT_EQ(s.pair_arcs, 4u);     // 2 in two keyframes (1), 3 in three (3)
+  EXPECT_EQ(s.unmapped, 7u);
+  m.clear();
+  m.add_keyframe({7}, 0);
+  WindowSize most = m.size();
+  most.max_with(s);
+  EXPECT_EQ(most.points, 5u);
+  EXPECT_EQ(most.pair_arcs, 4u);
+  EXPECT_EQ(most.keyframes, 3u);
 }
 
 TEST(EvalContract, SummarizeGivesMeanSdSeedCountsAndRatios) {

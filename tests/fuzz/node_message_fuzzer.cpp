@@ -1,18 +1,22 @@
 // libFuzzer: the node's LCM message path (Node::handle_keyframe /
 // handle_map_event) on memq://. Building a node costs milliseconds (the
 // incremental network's cost tables), so one node serves every input: each
-// input starts with an accepted reset from publisher ids of its own (fresh
-// order state, empty window, no remembered culls), and the sparsifier's
+// input starts by taking the window over with publisher ids of its own (the
+// node's injected clock is moved past the owner timeout, then a valid empty
+// keyframe takes over and the new owner's reset empties the window: fresh
+// order, empty window, no remembered culls), and the sparsifier's
 // incremental state carries over, which the reference oracle below checks
 // too. KEEPLESS_FUZZ_FRESH_NODE=1 builds a fresh node per input instead (to
 // reproduce a finding without the history). Oracles beyond "no crash":
-//   - a rejected message leaves the window exactly as it was;
+//   - a refused message changes no state: the window, the cull memory and
+//     the owner's order (a digest of all three) are as before;
 //   - every accepted keyframe's decision equals a from-scratch
 //     Sparsifier::run() on the window the node must hold (the window before
-//     it, slid, plus the keyframe minus points culled earlier), and the
-//     node's window afterwards is that window minus the culled points;
+//     it, or an empty one after a takeover or restart, slid, plus the
+//     keyframe minus points culled earlier), and the node's window afterwards
+//     is that window minus the culled points;
 //   - every decodable keyframe gets exactly one decision, every decodable
-//     map event exactly one acknowledgement.
+//     map event exactly one acknowledgement, each naming its publisher.
 
 #include <lcm/lcm-cpp.hpp>
 
@@ -27,6 +31,8 @@
 #include "keepless/decision_t.hpp"
 #include "keepless/map_event_ack_t.hpp"
 #include "keepless/platform/node.hpp"
+#include "keepless/platform/recent_ids.hpp"
+#include "keepless/solver/min_cost_flow.hpp"
 #include "message_builders.hpp"
 #include "node_message_input.hpp"
 
@@ -68,6 +74,41 @@ bool same(const Snapshot& a, const Snapshot& b) {
   }
   return true;
 }
+
+// Everything a refused message must leave alone.
+struct Digest {
+  Snapshot window;
+  std::vector<bool> culled;  // the builders' point ids 0..63
+  std::uint32_t culls = 0;
+  bool owned = false;
+  std::int64_t owner = 0, last_sequence = 0, last_utime = 0;
+  std::uint64_t last_heard = 0;
+};
+
+Digest digest(const Node& node) {
+  Digest d;
+  d.window = snapshot(node.window());
+  for (std::uint64_t p = 0; p < 64; ++p) d.culled.push_back(node.cull_memory().contains(p));
+  d.culls = node.cull_memory().size();
+  d.owned = node.order().owned();
+  d.owner = node.order().owner();
+  d.last_sequence = node.order().last_sequence();
+  d.last_utime = node.order().last_utime();
+  d.last_heard = node.order().last_heard_ns();
+  return d;
+}
+
+bool same(const Digest& a, const Digest& b) {
+  return same(a.window, b.window) && a.culled == b.culled && a.culls == b.culls && a.owned == b.owned &&
+         a.owner == b.owner && a.last_sequence == b.last_sequence && a.last_utime == b.last_utime &&
+         a.last_heard == b.last_heard;
+}
+
+// The node's clock: moved only by the harness (takeovers need the owner's silence).
+struct FuzzClock final : keepless::solver::Clock {
+  std::uint64_t now_ns() const override { return now; }
+  std::uint64_t now = 1;
+};
 
 NodeConfig config() {
   NodeConfig c;
@@ -115,25 +156,32 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     subscribed = true;
   }
   static std::unique_ptr<Node> shared;
+  static FuzzClock clock;
   static std::int64_t inputs = 0;
   static const bool fresh = std::getenv("KEEPLESS_FUZZ_FRESH_NODE") != nullptr;
   fz::Stream stream;
   if (shared && !fresh) {
-    // Ids far from the few an input builds (a bit flip can still forge one:
-    // then the node rightly refuses the reset as stale, and a fresh node is built).
+    // Ids far from the few an input builds. After the owner's silence a
+    // valid keyframe of the new id takes the window over; its reset empties it.
     stream.publisher_base = 0x5eed000000000000 + 4 * ++inputs;
+    clock.now += static_cast<std::uint64_t>(c.owner_timeout_s * 1e9) + 1;
+    keepless::keyframe_t take = keepless::testing::make_keyframe(-2, 0, {});
+    take.utime = 0;
+    take.publisher_id = stream.publisher_base;
     keepless::map_event_t reset{};
+    reset.sequence = -1;
     reset.reset = true;
     reset.publisher_id = stream.publisher_base;
+    const std::vector<std::uint8_t> k = keepless::testing::encode(take);
     const std::vector<std::uint8_t> b = keepless::testing::encode(reset);
     heard.acks.clear();
+    shared->handle_keyframe(k.data(), static_cast<std::uint32_t>(k.size()));
     shared->handle_map_event(b.data(), static_cast<std::uint32_t>(b.size()));
     pump();
-    const bool reset_done = heard.acks.size() == 1 && heard.acks[0].status == keepless::map_event_ack_t::STATUS_APPLIED;
-    if (!reset_done) shared.reset();
+    check(heard.acks.size() == 1 && heard.acks[0].reset, "the new owner's reset was not honoured");
   }
   if (!shared || fresh) {
-    shared = std::make_unique<Node>(bus(), c);
+    shared = std::make_unique<Node>(bus(), c, &clock);
     stream.publisher_base = 0;
   }
   Node& node = *shared;
@@ -145,16 +193,21 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   limits.max_observations = c.max_observations;
   limits.max_event_ids = c.max_event_ids;
   std::set<core::PointId> culled;  // the node's memory of culls, mirrored
-  bool mirrored = true;            // false after a restart (the node may have cleared it)
 
   fz::Reader r(data, size);
   for (int step = 0; step < 64 && !r.done(); ++step) {
-    const Snapshot before = snapshot(node.window());
+    const Digest before_state = digest(node);
+    Snapshot before = before_state.window;
     const std::uint64_t rejected = node.counters().messages_rejected;
-    const std::uint64_t restarts = node.order().restarts();
+    const std::uint64_t restarts = node.order().restarts(), takeovers = node.order().takeovers();
     const std::size_t decisions = heard.decisions.size(), acks = heard.acks.size();
     const std::uint8_t op = r.u8() % fz::kOpCount;
+    if (op == fz::kAdvanceClock) {  // the owner falls silent: another id may take over
+      clock.now += static_cast<std::uint64_t>(c.owner_timeout_s * 1e9) * (1 + r.u8() % 2);
+      continue;
+    }
     bool keyframe = false, decodable = true;
+    std::int64_t event_publisher = 0;
     keepless::keyframe_t kf{};
     if (op == fz::kKeyframe || op == fz::kFlippedKeyframe || op == fz::kRawKeyframe) {
       keyframe = true;
@@ -184,27 +237,38 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       decodable = keepless::platform::check_map_event_bytes(bytes.data(), bytes.size(), limits) ==
                       keepless::platform::RejectReason::kNone &&
                   probe.decode(bytes.data(), 0, static_cast<int>(bytes.size())) == static_cast<int>(bytes.size());
+      event_publisher = probe.publisher_id;
       node.handle_map_event(bytes.data(), static_cast<std::uint32_t>(bytes.size()));
     }
     pump();
-    const bool restarted = node.order().restarts() != restarts;
-    if (restarted) mirrored = false;
-    if (node.counters().messages_rejected != rejected && !restarted) {
-      check(same(before, snapshot(node.window())), "a rejected message changed the window");
+    const bool cleared = node.order().restarts() != restarts || node.order().takeovers() != takeovers;
+    if (node.counters().messages_rejected != rejected) {
+      check(!cleared, "a refused message restarted or took over the stream");
+      check(same(before_state, digest(node)), "a refused message changed the window, the culls or the order");
     }
     if (!keyframe) {
-      if (decodable) check(heard.acks.size() == acks + 1, "a decodable map event was not acknowledged once");
-      if (heard.acks.size() > acks && heard.acks.back().reset &&
-          heard.acks.back().status == keepless::map_event_ack_t::STATUS_APPLIED) {
+      if (decodable) {
+        check(heard.acks.size() == acks + 1, "a decodable map event was not acknowledged once");
+        check(heard.acks.back().publisher_id == event_publisher, "an ack names another publisher");
+      }
+      if (heard.acks.size() > acks && heard.acks.back().reset) {
+        check(heard.acks.back().status == keepless::map_event_ack_t::STATUS_APPLIED, "a refused event reset the window");
+        check(node.window().keyframe_count() == 0, "an ack says reset, the window is not empty");
         culled.clear();  // an accepted reset clears the node's memory too
-        mirrored = true;
       }
       continue;
     }
-    if (decodable) check(heard.decisions.size() == decisions + 1, "a decodable keyframe was not answered once");
+    if (decodable) {
+      check(heard.decisions.size() == decisions + 1, "a decodable keyframe was not answered once");
+      check(heard.decisions.back().publisher_id == kf.publisher_id, "a decision names another publisher");
+    }
     if (heard.decisions.size() == decisions) continue;
     const keepless::decision_t& d = heard.decisions.back();
-    if (d.status != keepless::decision_t::STATUS_OPTIMAL || !mirrored || restarted) continue;
+    if (d.status != keepless::decision_t::STATUS_OPTIMAL) continue;
+    if (cleared) {  // a takeover or a restart: the old window and culls are gone
+      before.clear();
+      culled.clear();
+    }
 
     // The reference: the window before, slid, plus the keyframe minus culled points.
     Snapshot expected = before;

@@ -37,7 +37,17 @@ class Reader {
   const std::uint8_t* end_;
 };
 
-enum Op : std::uint8_t { kKeyframe = 0, kMapEvent, kFlippedKeyframe, kFlippedMapEvent, kRawKeyframe, kOpCount };
+// kAdvanceClock: the node's clock moves past the owner timeout (the owner
+// falls silent, another publisher id may take the window over).
+enum Op : std::uint8_t {
+  kKeyframe = 0,
+  kMapEvent,
+  kFlippedKeyframe,
+  kFlippedMapEvent,
+  kRawKeyframe,
+  kAdvanceClock,
+  kOpCount
+};
 
 // The stream state the builders advance (sequence and utime of the publishers).
 struct Stream {

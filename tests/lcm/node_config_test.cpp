@@ -101,6 +101,77 @@ TEST(NodeConfig, CapacitiesCoverTheWorstCaseWindow) {
   EXPECT_EQ(keepless::platform::window_capacities(c).max_pair_arcs, 77u);
 }
 
+// The defaults are the "default" profile, and their fixed memory, predicted
+// before allocating, is within 16 MB.
+TEST(NodeConfig, DefaultsFitSixteenMegabytes) {
+  const NodeConfig defaults;
+  EXPECT_LE(keepless::platform::estimate_node_bytes(defaults), 16e6);
+  const keepless::core::Capacities caps = keepless::platform::window_capacities(defaults);
+  EXPECT_EQ(caps.max_keyframes, 20u);
+  EXPECT_EQ(caps.max_points, 5800u);
+  EXPECT_EQ(caps.max_observations, 17000u);
+  EXPECT_EQ(caps.max_pair_arcs, 45000u);
+  NodeConfig profiled;
+  std::string error;
+  ASSERT_EQ(parse({"--profile", "default"}, profiled, error), ParseResult::kOk) << error;
+  const keepless::core::Capacities same = keepless::platform::window_capacities(profiled);
+  EXPECT_EQ(same.max_points, caps.max_points);
+  EXPECT_EQ(same.max_observations, caps.max_observations);
+  EXPECT_EQ(same.max_pair_arcs, caps.max_pair_arcs);
+  EXPECT_EQ(profiled.max_observations, defaults.max_observations);
+}
+
+TEST(NodeConfig, ProfilesParseAndSizeAsDocumented) {
+  struct Expected {
+    const char* name;
+    std::uint32_t window, per_keyframe, points, observations, pair_arcs;
+    double max_bytes;
+  };
+  for (const Expected& e : {Expected{"small", 10, 1000, 2000, 4500, 7000, 4e6},
+                            Expected{"default", 20, 2000, 5800, 17000, 45000, 16e6},
+                            Expected{"large", 40, 2000, 8100, 37000, 117000, 34e6}}) {
+    for (const std::vector<std::string>& args :
+         {std::vector<std::string>{"--profile", e.name}, {std::string("--profile=") + e.name}}) {
+      NodeConfig c;
+      std::string error;
+      ASSERT_EQ(parse(args, c, error), ParseResult::kOk) << error;
+      EXPECT_EQ(c.window, e.window) << e.name;
+      EXPECT_EQ(c.max_observations, e.per_keyframe) << e.name;
+      const keepless::core::Capacities caps = keepless::platform::window_capacities(c);
+      EXPECT_EQ(caps.max_keyframes, e.window);
+      EXPECT_EQ(caps.max_points, e.points) << e.name;
+      EXPECT_EQ(caps.max_observations, e.observations) << e.name;
+      EXPECT_EQ(caps.max_pair_arcs, e.pair_arcs) << e.name;
+      const double bytes = keepless::platform::estimate_node_bytes(c);
+      EXPECT_LE(bytes, e.max_bytes) << e.name;
+    }
+  }
+  // The other flags refine a profile wherever it stands.
+  NodeConfig c;
+  std::string error;
+  ASSERT_EQ(parse({"--max-pair-arcs", "9000", "--profile", "small", "--max-points", "3000"}, c, error), ParseResult::kOk)
+      << error;
+  EXPECT_EQ(c.window, 10u);
+  EXPECT_EQ(c.max_pair_arcs, 9000u);
+  EXPECT_EQ(c.max_points, 3000u);
+  EXPECT_EQ(c.max_window_observations, 4500u);
+  // A larger profile costs more, as predicted.
+  NodeConfig small, large;
+  ASSERT_TRUE(keepless::platform::apply_profile("small", small));
+  ASSERT_TRUE(keepless::platform::apply_profile("large", large));
+  EXPECT_LT(keepless::platform::estimate_node_bytes(small), keepless::platform::estimate_node_bytes(NodeConfig{}));
+  EXPECT_LT(keepless::platform::estimate_node_bytes(NodeConfig{}), keepless::platform::estimate_node_bytes(large));
+  for (const std::vector<std::string>& bad :
+       {std::vector<std::string>{"--profile", "tiny"}, {"--profile"}, {"--profile="},
+        {"--max-points", "100"},  // below one keyframe's 2000 observations
+        {"--profile", "small", "--max-window-observations", "999"}, {"--max-points", "-1"}}) {
+    NodeConfig b;
+    std::string why;
+    EXPECT_EQ(parse(bad, b, why), ParseResult::kError) << bad[0];
+    EXPECT_FALSE(why.empty());
+  }
+}
+
 TEST(LatencyHistogram, QuantilesWithinOneSixteenth) {
   LatencyHistogram h;
   EXPECT_EQ(h.quantile(0.5), 0u);
@@ -167,7 +238,7 @@ TEST(NodeConfig, ParsesTheReliabilityFlags) {
   NodeConfig c;
   std::string error;
   ASSERT_EQ(parse({"--event-ack-channel", "ACK", "--max-memory-mb", "64", "--max-sequence-jump", "50",
-                   "--max-utime-jump-s", "2.5", "--restart-confirm", "5", "--max-publishers", "2",
+                   "--max-utime-jump-s", "2.5", "--restart-confirm", "5", "--owner-timeout-s", "0.25",
                    "--cull-memory", "100"},
                   c, error),
             ParseResult::kOk)
@@ -178,12 +249,13 @@ TEST(NodeConfig, ParsesTheReliabilityFlags) {
   EXPECT_EQ(b.max_sequence_jump, 50u);
   EXPECT_EQ(b.max_utime_jump_us, 2500000u);
   EXPECT_EQ(b.restart_confirm, 5u);
-  EXPECT_EQ(c.max_publishers, 2u);
+  EXPECT_EQ(b.owner_timeout_ns, 250000000u);
   EXPECT_EQ(c.cull_memory, 100u);
   for (const auto& bad : std::vector<std::vector<std::string>>{{"--restart-confirm", "1"},
                                                                {"--max-sequence-jump", "0"},
                                                                {"--max-utime-jump-s", "-1"},
-                                                               {"--max-publishers", "0"},
+                                                               {"--owner-timeout-s", "-1"},
+                                                               {"--max-publishers", "4"},  // removed: one owner
                                                                {"--max-memory-mb", "0"}}) {
     NodeConfig d;
     EXPECT_EQ(parse(bad, d, error), ParseResult::kError) << bad[0] << " " << bad[1];
@@ -209,6 +281,7 @@ TEST(NodeConfig, MemoryEstimateMatchesTheNode) {
   NodeConfig huge;
   huge.window = 256;
   huge.max_observations = 4096;
+  huge.max_points = huge.max_window_observations = huge.max_pair_arcs = 0;  // the worst case of K full keyframes
   EXPECT_GT(keepless::platform::estimate_node_bytes(huge), 1024.0 * 1048576.0);
 }
 

@@ -18,8 +18,10 @@
 #include <vector>
 
 #include "child_process.hpp"
+#include "message_builders.hpp"
 #include "keepless/decision_t.hpp"
 #include "keepless/keyframe_t.hpp"
+#include "keepless/map_event_ack_t.hpp"
 #include "keepless/map_event_t.hpp"
 #include "keepless/platform/node_config.hpp"
 #include "reference_node.hpp"
@@ -159,6 +161,65 @@ TEST(NodeEndToEnd, EveryKeyframeGetsOneDecisionEqualToTheLibrary) {
   EXPECT_GT(culled, 0);
 }
 
+// The node's default configuration (latency target on, 5 ms; drain on)
+// over udpm, fed the normal VO pattern: a keyframe, at once a map event
+// deleting one of its points, then the next keyframe once the decision came.
+// Every keyframe is decided (before: a keyframe with the event queued behind
+// it was answered SKIPPED, 12 of 50 here), every event applied, and every
+// answer names the publisher. The bus is UDP on a shared host: a datagram
+// the kernel drops is not the node's doing, so losses are counted and
+// bounded, and every keyframe whose answer arrived must have been decided.
+TEST(NodeEndToEnd, TheDefaultConfigurationDecidesEveryKeyframe) {
+  TempDir tmp;
+  const std::string url = udpm(unique_port(3));
+  lcm::LCM bus(url);
+  ASSERT_TRUE(bus.good());
+  Recorder rec;
+  bus.subscribeFunction("KEEPLESS_(DECISION|MAP_EVENT_ACK|STATUS)", &Recorder::on_message, &rec);
+  constexpr int kPairs = 50;
+  kt::ChildProcess node(target_argv({KEEPLESS_NODE_BIN, "--url", url, "--status-period-ms", "100"}),
+                        tmp.file("node.log"));
+  ASSERT_TRUE(node.started());
+  pump_until(bus, 10000, [&] { return rec.statuses > 0; });
+  ASSERT_GT(rec.statuses, 0u) << "node not up\n" << node.log();
+  std::int64_t seq = 0;
+  for (int i = 0; i < kPairs; ++i) {
+    keepless::keyframe_t kf = kt::make_keyframe(++seq, i, kt::id_range(i * 10, 60));
+    kf.publisher_id = 77;
+    keepless::map_event_t e{};
+    e.sequence = ++seq;
+    e.utime = kf.utime;
+    e.deleted_point_id = {i * 10};
+    e.num_deleted_points = 1;
+    e.publisher_id = 77;
+    bus.publish("KEEPLESS_KEYFRAME", &kf);
+    bus.publish("KEEPLESS_MAP_EVENT", &e);
+    const std::size_t want = static_cast<std::size_t>(i) + 1;
+    pump_until(bus, 3000, [&] { return rec.on("KEEPLESS_DECISION").size() >= want; });
+  }
+  pump_until(bus, 1000, [&] { return rec.on("KEEPLESS_MAP_EVENT_ACK").size() >= static_cast<std::size_t>(kPairs); });
+  node.stop();
+
+  const std::vector<Message> decisions = rec.on("KEEPLESS_DECISION");
+  ASSERT_GE(decisions.size(), static_cast<std::size_t>(kPairs) * 9 / 10) << "more than 10 % lost\n" << node.log();
+  std::size_t decided = 0, skipped = 0;
+  for (const Message& m : decisions) {
+    const auto d = decode<keepless::decision_t>(m);
+    EXPECT_EQ(d.publisher_id, 77);
+    skipped += d.status == keepless::decision_t::STATUS_SKIPPED;
+    decided += d.status == keepless::decision_t::STATUS_OPTIMAL || d.status == keepless::decision_t::STATUS_BUDGET_EXHAUSTED;
+  }
+  EXPECT_EQ(skipped, 0u);
+  EXPECT_EQ(decided, decisions.size());
+  const std::vector<Message> acks = rec.on("KEEPLESS_MAP_EVENT_ACK");
+  EXPECT_GE(acks.size(), static_cast<std::size_t>(kPairs) * 9 / 10);
+  for (const Message& m : acks) {
+    const auto a = decode<keepless::map_event_ack_t>(m);
+    EXPECT_EQ(a.status, keepless::map_event_ack_t::STATUS_APPLIED);
+    EXPECT_EQ(a.publisher_id, 77);
+  }
+}
+
 TEST(NodeEndToEnd, RecordedBusReplaysToIdenticalDecisions) {
   if (std::string(LCM_LOGGER_BIN).empty() || std::string(LCM_LOGPLAYER_BIN).empty()) {
     GTEST_SKIP() << "lcm-logger / lcm-logplayer not installed (liblcm-bin)";
@@ -235,8 +296,11 @@ namespace {
 // bad_alloc (rc 134). Now the fixed memory is checked before it is allocated.
 TEST(NodeEndToEnd, FlagsBeyondTheMemoryLimitExitTwoBeforeAllocating) {
   TempDir tmp;
+  // The window's capacities at their worst case of K full keyframes (the
+  // defaults are sized from real windows, far below it).
   kt::ChildProcess node(target_argv({KEEPLESS_NODE_BIN, "--url", "memq://", "--window", "256",
-                                     "--max-observations", "4096"}),
+                                     "--max-observations", "4096", "--max-points", "0",
+                                     "--max-window-observations", "0", "--max-pair-arcs", "0"}),
                         tmp.file("node.log"));
   ASSERT_TRUE(node.started());
   ASSERT_TRUE(node.wait(60000));

@@ -12,6 +12,7 @@
 #include "keepless/decision_t.hpp"
 #include "keepless/map_event_ack_t.hpp"
 #include "keepless/platform/node.hpp"
+#include "keepless/solver/min_cost_flow.hpp"
 #include "keepless/status_t.hpp"
 #include "message_builders.hpp"
 
@@ -46,6 +47,15 @@ inline WindowSnapshot snapshot(const keepless::core::Window& w) {
   return s;
 }
 
+// The node's injected clock: every reading advances it by `tick` ns, so
+// latencies are non-zero and deterministic; tests move it on with advance().
+struct TickingClock final : keepless::solver::Clock {
+  std::uint64_t now_ns() const override { return now += tick; }
+  void advance(std::uint64_t ns) { now += ns; }
+  mutable std::uint64_t now = 1000000000ull;
+  std::uint64_t tick = 1000;  // 1 us a reading
+};
+
 class NodeOnMemq : public ::testing::Test {
  protected:
   void SetUp() override { make_node(default_config()); }
@@ -68,7 +78,8 @@ class NodeOnMemq : public ::testing::Test {
     node_.reset();
     bus_ = std::make_unique<lcm::LCM>("memq://");
     ASSERT_TRUE(bus_->good());
-    node_ = std::make_unique<Node>(*bus_, config_);
+    clock_ = TickingClock{};
+    node_ = std::make_unique<Node>(*bus_, config_, &clock_);
     ASSERT_TRUE(node_->start());
     decisions_.clear();
     statuses_.clear();
@@ -143,6 +154,7 @@ class NodeOnMemq : public ::testing::Test {
   }
 
   NodeConfig config_;
+  TickingClock clock_;
   std::unique_ptr<lcm::LCM> bus_;
   std::unique_ptr<Node> node_;
   std::vector<keepless::decision_t> decisions_;

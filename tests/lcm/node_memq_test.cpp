@@ -104,27 +104,29 @@ TEST_F(NodeOnMemq, AnUnknownKeyframeIdLosesNoValidItemAndIsAcknowledged) {
 }
 
 // Each bad merge or removal is refused alone, with its reason; every valid
-// item of the same event is applied.
+// item of the same event is applied. A source whose first item was refused
+// (3 -> 2, a chain) is merged by its next valid item (3 -> 8): a refused
+// item does not take the source's turn.
 TEST_F(NodeOnMemq, BadMergeItemsAreRefusedOneByOne) {
   fill_without_culling();  // 10: 0..29, 11: 10..39, 12: 20..49
   keepless::map_event_t e = kt::make_event(4);
   e.deleted_point_id = {5};
-  e.merged_from_id = {1, 2, 3, 3, 4, 6};
-  e.merged_into_id = {1, 7, 2, 8, 5, 9};  // self, ok, chain (2 is a source), repeat, into deleted, ok
-  e.removed_keyframe_id = {10, 10};
+  e.merged_from_id = {1, 2, 3, 3, 4, 6, 6};
+  e.merged_into_id = {1, 7, 2, 8, 5, 9, 10};  // self, ok, chain (2 is a source), ok, into deleted, ok, repeat
+  e.removed_keyframe_id = {12, 12};
   send(e);
   ASSERT_EQ(acks_.size(), 1u);
   const keepless::map_event_ack_t& a = acks_.back();
   using A = keepless::map_event_ack_t;
   EXPECT_EQ(a.status, A::STATUS_PARTIAL);
-  EXPECT_EQ(a.merged_applied, 2);  // 2 -> 7 and 6 -> 9
+  EXPECT_EQ(a.merged_applied, 3);  // 2 -> 7, 3 -> 8 and 6 -> 9
   EXPECT_EQ(a.refused[A::ITEM_MERGE_SELF], 1);
   EXPECT_EQ(a.refused[A::ITEM_MERGE_CHAIN], 1);
   EXPECT_EQ(a.refused[A::ITEM_MERGE_REPEATED_SOURCE], 1);
   EXPECT_EQ(a.refused[A::ITEM_MERGE_INTO_DELETED], 1);
   EXPECT_EQ(a.refused[A::ITEM_REMOVE_REPEATED], 1);
   EXPECT_EQ(a.removed_applied, 1);
-  EXPECT_EQ(node_->window().find_keyframe(10), -1);
+  EXPECT_EQ(node_->window().find_keyframe(12), -1);
   EXPECT_EQ(node_->counters().messages_rejected, 0u);
 }
 
@@ -365,6 +367,72 @@ TEST_F(NodeOnMemq, WindowCapacityIsAnsweredNotFatal) {
   EXPECT_EQ(decisions_.back().status, keepless::decision_t::STATUS_CAPACITY_EXCEEDED);
   EXPECT_EQ(decisions_.back().num_culled, 0);
   EXPECT_GE(node_->counters().capacity_exceeded, 1u);
+}
+
+// A window beyond the window's points: older keyframes make room, the
+// keyframe is answered STATUS_CAPACITY_EXCEEDED with what the window needed,
+// and the next keyframes are decided. Then the same for the network's pair
+// arcs, which the slide brings back within capacity.
+TEST_F(NodeOnMemq, AWindowBeyondCapacityIsAnsweredWithItsFiguresAndServingGoesOn) {
+  using S = keepless::status_t;
+  NodeConfig c = default_config();
+  c.max_points = 100;
+  c.max_window_observations = 150;
+  c.max_pair_arcs = 60;
+  c.params.pair_capacity = 100;  // nothing culled: the windows stay as sent
+  make_node(c);
+  const auto last_status = [&] {
+    node_->publish_status(false);
+    pump();
+    return statuses_.back();
+  };
+  send(kt::make_keyframe(1, 10, kt::id_range(0, 60)));
+  send(kt::make_keyframe(2, 11, kt::id_range(60, 60)));  // 120 distinct points > 100
+  ASSERT_EQ(decisions_.size(), 2u);
+  EXPECT_EQ(decisions_[0].status, keepless::decision_t::STATUS_OPTIMAL);
+  EXPECT_EQ(decisions_[1].status, keepless::decision_t::STATUS_CAPACITY_EXCEEDED);
+  EXPECT_EQ(decisions_[1].num_culled, 0);
+  EXPECT_EQ(node_->counters().capacity_exceeded, 1u);
+  EXPECT_EQ(node_->counters().messages_rejected, 0u);
+  // The new keyframe is held; the oldest made room.
+  ASSERT_EQ(node_->window().keyframe_count(), 1u);
+  EXPECT_EQ(node_->window().keyframe(0).id, 11u);
+  S st = last_status();
+  EXPECT_EQ(st.capacity_exceeded, 1);
+  EXPECT_EQ(st.last_capacity, S::CAPACITY_POINTS);
+  EXPECT_EQ(st.last_capacity_sequence, 2);
+  EXPECT_EQ(st.last_capacity_needed, 120);
+  EXPECT_EQ(st.last_capacity_held, 100);
+  EXPECT_EQ(st.capacity_pair_arcs, 60);
+
+  // Later valid keyframes are decided: 11 and 12 share 30 points (30 pair arcs).
+  send(kt::make_keyframe(3, 12, kt::id_range(90, 30)));
+  ASSERT_EQ(decisions_.size(), 3u);
+  EXPECT_EQ(decisions_[2].status, keepless::decision_t::STATUS_OPTIMAL);
+  EXPECT_EQ(decisions_[2].evaluated, 30);
+
+  // Points 90..119 in three keyframes: 90 pair arcs > 60.
+  send(kt::make_keyframe(4, 13, kt::id_range(90, 30)));
+  ASSERT_EQ(decisions_.size(), 4u);
+  EXPECT_EQ(decisions_[3].status, keepless::decision_t::STATUS_CAPACITY_EXCEEDED);
+  EXPECT_EQ(decisions_[3].num_culled, 0);
+  EXPECT_EQ(node_->window().keyframe_count(), 3u);  // held, only not decided
+  EXPECT_EQ(node_->window().pair_arcs(), 90u);
+  st = last_status();
+  EXPECT_EQ(st.capacity_exceeded, 2);
+  EXPECT_EQ(st.last_capacity, S::CAPACITY_PAIR_ARCS);
+  EXPECT_EQ(st.last_capacity_sequence, 4);
+  EXPECT_EQ(st.last_capacity_needed, 90);
+  EXPECT_EQ(st.last_capacity_held, 60);
+
+  // The window (K = 4) slides past the crowded keyframes: 11, 12, 13 + 20
+  // still needs 90; 12, 13, 20, 21 needs 30 and is decided, and so on.
+  for (int i = 0; i < 4; ++i) send(kt::make_keyframe(5 + i, 20 + i, kt::id_range(200 + 10 * i, 10)));
+  ASSERT_EQ(decisions_.size(), 8u);
+  EXPECT_EQ(decisions_[4].status, keepless::decision_t::STATUS_CAPACITY_EXCEEDED);
+  for (std::size_t d = 5; d < 8; ++d) EXPECT_EQ(decisions_[d].status, keepless::decision_t::STATUS_OPTIMAL) << d;
+  EXPECT_EQ(node_->counters().capacity_exceeded, 3u);
+  EXPECT_EQ(node_->counters().messages_rejected, 0u);
 }
 
 TEST_F(NodeOnMemq, StopsAfterMaxKeyframes) {

@@ -98,3 +98,53 @@ TEST(NodeZeroAllocation, SteadyStateReceivePathAllocatesNothing) {
 }
 
 }  // namespace
+
+namespace {
+
+// The drain (a latency target on): queued keyframes, map events and refused
+// messages handled by spin_once, pending keyframes skipped or decided, with
+// no allocation either.
+TEST(NodeZeroAllocation, TheDrainAllocatesNothing) {
+  keepless::platform::NodeConfig c;
+  c.latency_target_ms = 60000;  // drains, never fires
+  c.url = "memq://";
+  c.window = 5;
+  c.max_observations = 128;
+  c.max_event_ids = 32;
+  c.params.pair_capacity = 8;
+  c.quiet = true;
+  c.status_period_ms = 3600 * 1000;
+  lcm::LCM bus(c.url);
+  ASSERT_TRUE(bus.good());
+  keepless::platform::Node node(bus, c);
+  ASSERT_TRUE(node.start());
+  std::vector<std::vector<std::uint8_t>> messages;  // keyframe, keyframe, event, junk: one round each
+  std::int64_t seq = 0;
+  for (int i = 0; i < 40; ++i) {
+    messages.push_back(kt::encode(kt::make_keyframe(++seq, 2 * i, kt::id_range(i * 10, 100))));
+    messages.push_back(kt::encode(kt::make_keyframe(++seq, 2 * i + 1, kt::id_range(i * 10 + 5, 100))));
+    keepless::map_event_t e = kt::make_event(++seq);
+    e.deleted_point_id = {i * 10 + 1};
+    kt::finalize(e);
+    messages.push_back(kt::encode(e));
+  }
+  const std::vector<std::uint8_t> junk = {1, 2, 3};
+  auto round = [&](int i) {
+    for (int j = 0; j < 3; ++j) {
+      const auto& m = messages[static_cast<std::size_t>(3 * i + j)];
+      bus.publish(j < 2 ? c.keyframe_channel : c.event_channel, m.data(), static_cast<unsigned>(m.size()));
+    }
+    bus.publish(c.keyframe_channel, junk.data(), static_cast<unsigned>(junk.size()));
+    while (node.spin_once(0) > 0) {
+    }
+  };
+  for (int i = 0; i < 10; ++i) round(i);
+  keepless::test::AllocationCounter counter;
+  for (int i = 10; i < 40; ++i) round(i);
+  const std::uint64_t allocations = counter.stop();
+  EXPECT_EQ(allocations, 0u);
+  EXPECT_EQ(node.counters().keyframes_skipped, 40u) << "the first of each pair is superseded by the second";
+  EXPECT_EQ(node.counters().decisions_published, 80u);
+}
+
+}  // namespace

@@ -51,6 +51,32 @@ TEST(OpencvPose, TcwMatGivesCentreAndWorldFromCameraOrientation) {
   EXPECT_LT(from_q.orientation.angularDistance(from_eigen.orientation), 1e-12);
 }
 
+TEST(OpencvPose, Matrix4OverloadsTakeSophusStyleTcw) {
+  // ORB-SLAM3 holds Sophus::SE3f; its .matrix() is an Eigen::Matrix4f.
+  const Eigen::Isometry3d Twc = twc(0.7, {0.2, 1.0, -0.3}, {1.5, -2.0, 0.25});
+  CameraPose from_d, from_f;
+  ASSERT_EQ(pose_from_tcw(Eigen::Matrix4d(Twc.inverse().matrix()), &from_d), Status::kOk);
+  EXPECT_LT((from_d.centre - Twc.translation()).norm(), 1e-12);
+  EXPECT_LT(from_d.orientation.angularDistance(Eigen::Quaterniond(Twc.linear())), 1e-12);
+  const Eigen::Matrix4f Tcw_f = Twc.inverse().matrix().cast<float>();
+  ASSERT_EQ(pose_from_tcw(Tcw_f, &from_f), Status::kOk);
+  EXPECT_LT((from_f.centre - Twc.translation()).norm(), 1e-5);
+  EXPECT_LT(from_f.orientation.angularDistance(from_d.orientation), 1e-5);
+
+  CameraPose pose;
+  pose.centre = {7, 8, 9};
+  Eigen::Matrix4f bad_row = Tcw_f;
+  bad_row(3, 3) = 2;
+  EXPECT_EQ(pose_from_tcw(bad_row, &pose), Status::kBadMatrix);
+  Eigen::Matrix4f nan = Tcw_f;
+  nan(1, 3) = std::numeric_limits<float>::quiet_NaN();
+  EXPECT_EQ(pose_from_tcw(nan, &pose), Status::kNonFinite);
+  Eigen::Matrix4d scaled = Twc.inverse().matrix();
+  scaled.topLeftCorner<3, 3>() *= 1.01;
+  EXPECT_EQ(pose_from_tcw(scaled, &pose), Status::kNotRotation);
+  EXPECT_EQ(pose.centre, Eigen::Vector3d(7, 8, 9));
+}
+
 TEST(OpencvPose, RejectsMalformedPosesAndLeavesOutputUnchanged) {
   const Eigen::Isometry3d Tcw = twc(0.3, {0, 0, 1}, {1, 2, 3});
   CameraPose pose;

@@ -20,6 +20,7 @@
 
 #include "bal_eval.hpp"
 #include "keepless/core/config.hpp"
+#include "keepless/platform/node_config.hpp"
 #include "kitti_images.hpp"
 #include "prng.hpp"
 #include "report.hpp"
@@ -27,6 +28,7 @@
 #include "scenario.hpp"
 #include "slam_sim.hpp"
 #include "trajectory_io.hpp"
+#include "window_sizes.hpp"
 #include "vo_eval.hpp"
 
 namespace ke = keepless::eval;
@@ -42,12 +44,13 @@ const char* kUsage =
     "                     [--window N] [--ba-iterations N] [--image-frames N] [--noise-free] [--no-baselines]\n"
     "                     [--no-ablation] [--ablation-all] [--scope window|newest] [--floor L]\n"
     "                     [--cost paper|authors|information] [--maturity A] [--tracked-flags]\n"
+    "                     [--window-sizes]\n"
     "       keepless_eval --report DIR [--report DIR]... [--error-floor ...] [--out DIR2]\n"
     "  --data-root DIR     add the standard inputs under DIR (../shared/data layout; --quick: a small subset)\n"
     "  --format            applies to the --trajectory just before it; without it the format is guessed\n"
     "  --images, --rgbd    the real VO (perf/eval/vo) on a KITTI-layout (--calib, --poses follow it) or 7-Scenes\n"
     "                      RGB-D sequence, frames A..B inclusive (--frames; default all, --quick 0:59)\n"
-    "  --image-tracks      the synthetic back end on ORB tracks of KITTI-layout images (issue 6)\n"
+    "  --image-tracks      the synthetic back end on ORB tracks of KITTI-layout images\n"
     "  --kept-fraction F   per input, the M (found on the first seed) at which keepless keeps F of the original's\n"
     "                      map points (default 0.3); --M gives M directly instead\n"
     "  --seeds N           seeds FIRST .. FIRST+N-1 (default 5, --quick 2); tables show mean +- sd over them\n"
@@ -60,6 +63,10 @@ const char* kUsage =
     "                      decided, so the baselines get the same guard (default 0: off)\n"
     "  --tracked-flags     the real VO sends the new keyframe's tracked flags (the points it matched in that\n"
     "                      frame), which keepless never culls and so neither do the baselines\n"
+    "  --window-sizes      instead of the comparison: the original run of the first seed on each --trajectory,\n"
+    "                      --images and --rgbd input, and the largest window it gives (keyframes, points,\n"
+    "                      observations, pair arcs, unmapped keypoints) at K = 10, 20, 40, local (the local BA's)\n"
+    "                      and sliding (the last K keyframes); a table, then {\"window_sizes\":[...]} last\n"
     "  --report DIR        regenerate the tables and the JSON line from DIR's runs.csv (an earlier --out; repeat\n"
     "                      to merge runs), without running anything\n";
 
@@ -89,6 +96,7 @@ struct Args {
   std::string out;
   std::vector<std::string> report;
   int max_keyframes = -1, keypoints = -1, window = -1, ba_iterations = -1, image_frames = -1;
+  bool window_sizes = false;
   bool noise_free = false, baselines = true, ablation = true, ablation_all = false;
   keepless::core::Params policy;  // scope, coverage_floor, cost_model, maturity_keyframes; the rest is set per variant
   bool tracked_flags = false;     // --tracked-flags (the real VO)
@@ -182,6 +190,7 @@ Args parse(int argc, char** argv) {
     else if (f == "--ba-iterations") a.ba_iterations = static_cast<int>(parse_int(f, val(), 1, 1000));
     else if (f == "--image-frames") a.image_frames = static_cast<int>(parse_int(f, val(), 0, 100000));
     else if (f == "--noise-free") a.noise_free = true;
+    else if (f == "--window-sizes") a.window_sizes = true;
     else if (f == "--no-baselines") a.baselines = false;
     else if (f == "--no-ablation") a.ablation = false;
     else if (f == "--ablation-all") a.ablation_all = true;
@@ -423,6 +432,10 @@ int main(int argc, char** argv) {
   Args a = parse(argc, argv);
   if (!a.data_root.empty()) add_data_root(&a);
   if (!a.report.empty()) return report_again(a);
+  if (a.window_sizes && !a.data_root.empty()) {  // the real images are measured by --images / --rgbd
+    a.images.clear();
+    a.bal.clear();
+  }
   if (a.trajectories.empty() && a.images.empty() && a.vo.empty() && a.bal.empty())
     fail(std::string("no input: give --data-root, --trajectory, --images, --rgbd, --image-tracks or --bal\n") + kUsage);
 
@@ -445,6 +458,8 @@ int main(int argc, char** argv) {
   if (a.policy.maturity_keyframes > 0) summary.settings += ", maturity " + std::to_string(a.policy.maturity_keyframes);
   if (a.tracked_flags) summary.settings += ", tracked flags";
 
+  std::vector<std::pair<std::string, ke::WindowSizes>> sizes;  // --window-sizes
+  std::map<std::string, ke::WindowSizes> group_sizes;
   for (const auto& t : a.trajectories) {
     const std::string fmt = t.format.empty() ? guess_format(t.path) : t.format;
     ke::TrajectoryFormat tf;
@@ -470,12 +485,39 @@ int main(int argc, char** argv) {
     std::cerr << "keepless_eval: " << t.path << " (" << fmt << ")\n";
     summary.settings_inputs.push_back(info.name + ": " + std::to_string(w.keypoints_per_frame) + " keypoints, first " +
                                       std::to_string(w.max_keyframes) + " keyframes");
-    evaluate([&](std::uint64_t seed) {
-               ke::WorldOptions ws = w;
-               ws.seed = ke::input_seed(seed, info.name);  // by name, never by list position
-               return ke::make_synthetic_scenario(traj, ws, t.path, info.name, info.group);
-             },
-             info, a, sim, &summary);
+    const auto make = [&](std::uint64_t seed) {
+      ke::WorldOptions ws = w;
+      ws.seed = ke::input_seed(seed, info.name);  // by name, never by list position
+      return ke::make_synthetic_scenario(traj, ws, t.path, info.name, info.group);
+    };
+    if (a.window_sizes) {
+      ke::SimOptions so = sim;
+      so.measure_windows = true;
+      const ke::RunResult r = run(make(a.first_seed), variant(a.policy, "original", ke::Selector::kNone, 0), so, a.first_seed);
+      sizes.emplace_back(info.name, r.window_sizes);
+      group_sizes[info.group].max_with(r.window_sizes);
+      continue;
+    }
+    evaluate(make, info, a, sim, &summary);
+  }
+  if (a.window_sizes) {
+    for (const auto& in : a.vo) {
+      std::string name, err;
+      ke::WindowSizes w;
+      // Replayed at keepless_node's default capacities (K = 20).
+      if (!keepless::eval::vo::measure_real_windows(in, a.frames_first, a.frames_last != -2 ? a.frames_last : -1,
+                                                    a.first_seed, keepless::platform::window_capacities({}), &name,
+                                                    &w, &err))
+        fail(err);
+      sizes.emplace_back(name, w);
+    }
+    for (const auto& [group, w] : group_sizes) sizes.emplace_back("group " + group, w);
+    std::cout << (a.trajectories.empty() ? std::string() : "synthetic back end: " + summary.settings + "; ")
+              << (a.vo.empty() ? "" : "real VO: its defaults (local BA of at most 20 keyframes); ") << "seed "
+              << a.first_seed << ", original runs\n\n"
+              << ke::window_sizes_table(sizes) << "\n"
+              << ke::window_sizes_json(sizes) << std::endl;
+    return 0;
   }
 
   if (!a.images.empty()) {

@@ -62,7 +62,8 @@ class Engine {
       track(k, &r);
       cull_recent_points(k);
       create_points(k);
-      const std::vector<int> window = local_keyframes(k);
+      const std::vector<int> window = local_keyframes(k, o_.window);
+      if (o_.measure_windows) measure_windows(k, &r);
       const auto ts = Clock::now();
       select_points(window, &r);
       r.select_s += seconds_since(ts);
@@ -300,17 +301,45 @@ class Engine {
 
   // The new keyframe and its covisible keyframes (>= 15 shared points, the
   // best one if none), the strongest first, at most W; oldest first.
-  std::vector<int> local_keyframes(int k) const {
+  std::vector<int> local_keyframes(int k, int most) const {
     std::vector<std::pair<int, int>> cov;  // (-weight, kf)
     for (const auto& [f, wgt] : covisibility(k)) cov.emplace_back(-wgt, f);
     std::sort(cov.begin(), cov.end());
     std::vector<int> w{k};
     for (const auto& [negw, f] : cov) {
-      if (static_cast<int>(w.size()) >= o_.window || (-negw < kCovisibilityWeight && w.size() > 1)) break;
+      if (static_cast<int>(w.size()) >= most || (-negw < kCovisibilityWeight && w.size() > 1)) break;
       w.push_back(f);
     }
     std::sort(w.begin(), w.end());
     return w;
+  }
+
+  // window_sizes.hpp: the local and sliding windows at keyframe k, per K.
+  void measure_windows(int k, RunResult* r) {
+    WindowMeasure m;
+    std::vector<core::PointId> ids;
+    const auto measure = [&](const std::vector<int>& window) {
+      m.clear();
+      for (int f : window) {
+        ids.clear();
+        std::uint64_t unmapped = 0;
+        for (int id : kf_kp_mp_[static_cast<std::size_t>(f)]) {
+          if (id >= 0) ids.push_back(static_cast<core::PointId>(id));
+          else ++unmapped;
+        }
+        m.add_keyframe(ids, unmapped);
+      }
+      return m.size();
+    };
+    for (std::size_t i = 0; i < WindowSizes::kSizes.size(); ++i) {
+      const int most = WindowSizes::kSizes[i];
+      r->window_sizes.local[i].max_with(measure(local_keyframes(k, most)));
+      std::vector<int> sliding;
+      for (int f = k; f >= 0 && static_cast<int>(sliding.size()) < most; --f)
+        if (kf_alive_[static_cast<std::size_t>(f)]) sliding.push_back(f);
+      r->window_sizes.sliding[i].max_with(measure(sliding));
+    }
+    ++r->window_sizes.steps;
   }
 
   void select_points(const std::vector<int>& window, RunResult* r) {

@@ -27,6 +27,7 @@
 #include "keepless/core/config.hpp"
 #include "run_record.hpp"
 #include "scenario.hpp"
+#include "window_sizes.hpp"
 
 namespace keepless::eval {
 
@@ -48,6 +49,7 @@ struct SimOptions {
   int ba_iterations = 10;
   std::uint64_t seed = 1;         // baselines' priorities
   int snapshot_frame = -1;        // keyframe whose keypoints are recorded (SVG)
+  bool measure_windows = false;   // fill RunResult::window_sizes (window_sizes.hpp)
 };
 
 struct SnapshotPoint {
@@ -73,6 +75,7 @@ struct RunResult {
   double C = 0, F = 0, S = 0;    // ablation metrics (section IV-F)
   std::vector<Pose> estimate;    // every keyframe, as output (culled ones follow their parent)
   std::vector<SnapshotPoint> snapshot;
+  WindowSizes window_sizes;  // SimOptions::measure_windows
 };
 
 RunResult run_slam(const Scenario& scenario, const VariantSpec& spec, const SimOptions& options);

@@ -143,7 +143,13 @@ class Vo {
   void point_culling(int kf);
   void create_points(int kf);
   void search_in_neighbours(int kf);
-  std::vector<int> local_keyframes(int kf) const;
+  std::vector<int> local_keyframes(int kf, int most) const;
+  void measure_windows(int kf);
+  struct Replay {
+    std::unique_ptr<core::Window> window;
+    std::unique_ptr<core::Sparsifier> sparsifier;
+  };
+  void replay(const std::vector<int>& keyframes, std::unique_ptr<Replay>* state);
   void select_points(int kf, const std::vector<int>& local);
   // fix_first: hold local.front() too (the two-view start's gauge).
   void local_ba(const std::vector<int>& local, bool fix_first);
@@ -176,6 +182,7 @@ class Vo {
   std::vector<std::unique_ptr<core::Sparsifier>> calibration_;
   std::vector<double> calibration_sum_;
   double kept_fraction_sum_ = 0;
+  std::unique_ptr<Replay> replay_local_, replay_sliding_;  // measure_windows with replay_capacities
   std::size_t marked_culls_ = 0;
   RealRunResult result_;
 };
@@ -523,7 +530,7 @@ void Vo::search_in_neighbours(int kf) {
   }
 }
 
-std::vector<int> Vo::local_keyframes(int kf) const {
+std::vector<int> Vo::local_keyframes(int kf, int most) const {
   std::vector<int> local = {kf};
   auto cov = map_.covisibles(kf, 15);
   if (cov.empty()) {
@@ -531,10 +538,83 @@ std::vector<int> Vo::local_keyframes(int kf) const {
     if (cov.size() > 1) cov.resize(1);
   }
   for (const auto& c : cov) {
-    if (static_cast<int>(local.size()) >= opt_.max_local_keyframes) break;
+    if (static_cast<int>(local.size()) >= most) break;
     local.push_back(c.first);
   }
   return local;
+}
+
+// window_sizes.hpp: the local and sliding windows at keyframe kf, per K.
+void Vo::measure_windows(int kf) {
+  WindowMeasure m;
+  std::vector<core::PointId> ids;
+  const auto measure = [&](const std::vector<int>& window) {
+    m.clear();
+    for (int k : window) {
+      const KeyFrame& f = map_.kfs[static_cast<std::size_t>(k)];
+      ids.clear();
+      for (int p : f.mp)
+        if (p >= 0 && !map_.points[static_cast<std::size_t>(p)].bad) ids.push_back(static_cast<core::PointId>(p));
+      m.add_keyframe(ids, f.mp.size() - ids.size());
+    }
+    return m.size();
+  };
+  WindowSizes& w = result_.window_sizes;
+  for (std::size_t i = 0; i < WindowSizes::kSizes.size(); ++i) {
+    const int most = WindowSizes::kSizes[i];
+    const std::vector<int> local = local_keyframes(kf, most);
+    w.local[i].max_with(measure(local));
+    std::vector<int> sliding;
+    for (int k = kf; k >= 0 && static_cast<int>(sliding.size()) < most; --k)
+      if (!map_.kfs[static_cast<std::size_t>(k)].bad) sliding.push_back(k);
+    std::reverse(sliding.begin(), sliding.end());  // oldest first, as a node holds them
+    w.sliding[i].max_with(measure(sliding));
+    if (most == 20 && opt_.replay_capacities.max_keyframes > 0) {
+      replay(local, &replay_local_);
+      replay(sliding, &replay_sliding_);
+    }
+  }
+  ++w.steps;
+}
+
+// A window as keepless_node would hold it (its mapped observations), decided
+// by an incremental Sparsifier at the replay capacities; a capacity refusal
+// (the window's or the network's) is counted.
+void Vo::replay(const std::vector<int>& keyframes, std::unique_ptr<Replay>* state) {
+  const core::Capacities& caps = opt_.replay_capacities;
+  if (!*state) {
+    *state = std::make_unique<Replay>();
+    (*state)->window = std::make_unique<core::Window>(caps);
+    (*state)->sparsifier = std::make_unique<core::Sparsifier>(caps, core::Params{}, core::SolveMode::kIncremental);
+  }
+  Replay& r = **state;
+  r.window->clear();
+  ++result_.window_sizes.replayed;
+  std::vector<core::Observation> obs;
+  for (int k : keyframes) {
+    const KeyFrame& f = map_.kfs[static_cast<std::size_t>(k)];
+    obs.clear();
+    for (std::size_t i = 0; i < f.mp.size(); ++i) {
+      const int p = f.mp[i];
+      if (p < 0 || map_.points[static_cast<std::size_t>(p)].bad) continue;
+      obs.push_back({static_cast<core::PointId>(p), f.f.keys[i].pt.x, f.f.keys[i].pt.y, 0.0});
+    }
+    std::sort(obs.begin(), obs.end(), [](const core::Observation& a, const core::Observation& b) { return a.point < b.point; });
+    obs.erase(std::unique(obs.begin(), obs.end(),
+                          [](const core::Observation& a, const core::Observation& b) { return a.point == b.point; }),
+              obs.end());
+    core::Keyframe key;
+    key.id = static_cast<core::KeyframeId>(k);
+    const Eigen::Vector3d c = f.centre();
+    key.centre[0] = c.x();
+    key.centre[1] = c.y();
+    key.centre[2] = c.z();
+    if (r.window->add_keyframe(key, obs.data(), static_cast<std::uint32_t>(obs.size())) != core::Status::kOk) {
+      ++result_.window_sizes.refused;
+      return;
+    }
+  }
+  if (r.sparsifier->update(*r.window) == core::Status::kCapacityExceeded) ++result_.window_sizes.refused;
 }
 
 void Vo::select_points(int kf, const std::vector<int>& local) {
@@ -728,7 +808,8 @@ void Vo::local_mapping(int kf) {
   point_culling(kf);
   create_points(kf);
   search_in_neighbours(kf);
-  const std::vector<int> local = local_keyframes(kf);
+  const std::vector<int> local = local_keyframes(kf, opt_.max_local_keyframes);
+  if (opt_.measure_windows) measure_windows(kf);
   if (opt_.selector != Selector::kOriginal || !calibration_.empty()) select_points(kf, local);
   local_ba(local, false);
   keyframe_culling(kf);

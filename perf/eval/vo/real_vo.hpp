@@ -11,6 +11,7 @@
 #include "keepless/core/config.hpp"
 #include "real_sequence.hpp"
 #include "run_record.hpp"
+#include "window_sizes.hpp"
 
 namespace keepless::eval::vo {
 
@@ -32,6 +33,10 @@ struct RealVoOptions {
   bool tracked_flags = false;
   int max_local_keyframes = 20;      // local BA / keepless window: the new keyframe and its best covisibles
   std::vector<std::int64_t> calibrate_M;  // original runs: mean kept fraction per M, on every window
+  bool measure_windows = false;  // fill RealRunResult::window_sizes (window_sizes.hpp)
+  // With measure_windows: replay the K = 20 windows at these capacities
+  // (max_keyframes 0: no replay).
+  core::Capacities replay_capacities{0, 0, 0, 0, 0};
   bool verbose = false;
 };
 
@@ -60,6 +65,7 @@ struct RealRunResult {
   std::vector<Pose> estimate, ground_truth;       // tracked frames, aligned estimate
   std::vector<KeypointMark> marks;                // one keyframe's keypoints (the window with most culls)
   int marked_frame = -1;
+  WindowSizes window_sizes;  // RealVoOptions::measure_windows
 };
 
 RealRunResult run_real_vo(const RealSequence& sequence, const RealVoOptions& options);

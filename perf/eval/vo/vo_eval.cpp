@@ -131,4 +131,28 @@ bool evaluate_real_vo(const VoInput& in, const VoEvalOptions& o, std::vector<Com
   return true;
 }
 
+bool measure_real_windows(const VoInput& in, int first, int last, std::uint64_t seed, const core::Capacities& replay,
+                          std::string* name, WindowSizes* sizes, std::string* error) {
+  RealSequence seq;
+  const bool loaded = in.rgbd ? load_rgbd_sequence(in.dir, first, last, &seq, error)
+                              : load_kitti_sequence(in.dir, in.calib, in.poses, first, last, &seq, error);
+  if (!loaded) return false;
+  RealVoOptions vo;
+  vo.seed = seed;
+  vo.selector = Selector::kOriginal;
+  vo.measure_windows = true;
+  vo.replay_capacities = replay;
+  const RealRunResult r = run_real_vo(seq, vo);
+  if (!r.error.empty()) {
+    *error = r.error;
+    return false;
+  }
+  std::fprintf(stderr, "  %s seed %llu original: %zu frames, tracked %d, kfs made %d, local-mapping steps %llu, %.1f s\n",
+               seq.name.c_str(), static_cast<unsigned long long>(seed), seq.image_files.size(), r.frames_tracked,
+               r.keyframes_created, static_cast<unsigned long long>(r.window_sizes.steps), r.total_seconds);
+  *name = seq.name;
+  *sizes = r.window_sizes;
+  return true;
+}
+
 }  // namespace keepless::eval::vo

@@ -11,6 +11,7 @@
 
 #include "keepless/core/config.hpp"
 #include "run_record.hpp"
+#include "window_sizes.hpp"
 
 namespace keepless::eval::vo {
 
@@ -35,5 +36,12 @@ struct VoEvalOptions {
 // unreadable input.
 [[nodiscard]] bool evaluate_real_vo(const VoInput& input, const VoEvalOptions& options,
                                     std::vector<Comparison>* out, std::string* error);
+
+// The original run of one seed with its windows measured (window_sizes.hpp);
+// `name` gets the sequence's name. False with `error` on unreadable input.
+// `replay`: RealVoOptions::replay_capacities.
+[[nodiscard]] bool measure_real_windows(const VoInput& input, int first, int last, std::uint64_t seed,
+                                        const core::Capacities& replay, std::string* name, WindowSizes* sizes,
+                                        std::string* error);
 
 }  // namespace keepless::eval::vo

@@ -68,8 +68,9 @@ bool run_lcm_mode(const char* argv0, const KeyframeStream& stream, std::uint32_t
   const core::Capacities need = window_needs(stream);
   const std::vector<std::string> args = {
       node, "--url", url, "--window", std::to_string(stream.window), "--max-observations",
-      std::to_string(per_frame), "--max-pair-arcs", std::to_string(need.max_pair_arcs + 1),
-      "--status-period-ms", "200", "--quiet"};
+      std::to_string(per_frame), "--max-points", std::to_string(std::max(need.max_points, per_frame)),
+      "--max-window-observations", std::to_string(std::max(need.max_observations, per_frame)),
+      "--max-pair-arcs", std::to_string(need.max_pair_arcs + 1), "--status-period-ms", "200", "--quiet"};
   std::vector<char*> argv;
   for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
   argv.push_back(nullptr);

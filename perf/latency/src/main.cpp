@@ -33,6 +33,7 @@
 #include "keepless/core/sparsifier.hpp"
 #include "keepless/platform/cpu_pinning.hpp"
 #include "lcm_mode.hpp"
+#include "node_memory.hpp"
 #include "publish.hpp"
 #include "stream.hpp"
 #include "synthetic_window.hpp"
@@ -57,6 +58,7 @@ struct Options {
   std::string log;
   core::Params params;  // scope, coverage_floor, cost_model; the rest the paper's defaults
   std::int64_t unmapped = -1;  // unmapped keypoints per keyframe; -1: see usage()
+  std::string profile;         // keepless_node's --profile whose memory is reported
 };
 
 // The policy is the paper's method as the library defaults it.
@@ -71,7 +73,7 @@ void usage() {
                "         [--warmup N] [--seed S] [--cpus LIST] [--mlock] [--budget-ms MS]\n"
                "         [--budget-fraction F] [--compare WINDOWS] [--reps R] [--lcm] [--log FILE]\n"
                "         [--scope window|newest] [--floor L] [--cost paper|authors|information]\n"
-               "         [--unmapped N]\n"
+               "         [--unmapped N] [--profile small|default|large]\n"
                "  --keyframes N       decisions measured after warm-up (default: 1000; map: 3)\n"
                "  --scope, --floor, --cost  the decision policy (keepless_node's flags); other than\n"
                "                      the defaults (window, 0, paper), the same stream is replayed\n"
@@ -83,6 +85,9 @@ void usage() {
                "                      node's; 0: none)\n"
                "  --budget-fraction F run once without a budget, then again with F x its median\n"
                "  --compare W         windows sampled for the from-scratch solvers (0: none)\n"
+               "  --profile NAME      also report keepless_node's fixed memory with that --profile\n"
+               "                      (predicted, counted by the node, resident-set growth) and\n"
+               "                      whether this workload's windows fit its capacities\n"
                "  --lcm               also measure published -> received through keepless_node\n"
                "  --log FILE          replay the keyframe_t messages of an LCM log instead\n",
                kNodeDefaultBudgetMs);
@@ -113,6 +118,8 @@ bool parse(int argc, char** argv, Options* o) {
       o->cpus = v;
     } else if (a == "--log") {
       o->log = v;
+    } else if (a == "--profile") {
+      o->profile = v;
     } else if (a == "--scope") {
       if (!core::parse_scope(v, &o->params.scope)) {
         std::fprintf(stderr, "keepless_latency: bad --scope '%s' (window or newest)\n", v);
@@ -497,6 +504,15 @@ int main(int argc, char** argv) {
     usage();
     return 2;
   }
+  // Before anything else is allocated: the resident-set growth is then the node's own pages.
+  NodeMemory node_memory;
+  if (!o.profile.empty()) {
+    std::string error;
+    if (!measure_node_memory(o.profile, &node_memory, &error)) {
+      std::fprintf(stderr, "keepless_latency: --profile: %s\n", error.c_str());
+      return 2;
+    }
+  }
   std::string granted = platform::current_cpus();
   std::string pin_note = "not requested";
   if (!o.cpus.empty()) {
@@ -637,6 +653,26 @@ int main(int argc, char** argv) {
     }
   }
 
+  // keepless_node's fixed memory with --profile (measured first, above), and
+  // whether the workload's windows fit it (the decision path above is sized
+  // by the stream's needs).
+  bool fits = false;
+  if (!o.profile.empty()) {
+    const core::Capacities& p = node_memory.caps;
+    fits = r.caps.max_keyframes <= p.max_keyframes && r.caps.max_points <= p.max_points &&
+           r.caps.max_observations <= p.max_observations && r.caps.max_pair_arcs <= p.max_pair_arcs &&
+           r.caps.max_unmapped_keypoints <= p.max_unmapped_keypoints;
+    std::printf("keepless_node --profile %s: capacities %u keyframes, %u points, %u observations, %u pair arcs;"
+                " fixed memory predicted %.2f MB, counted by the node %.2f MB, resident-set growth %.2f MB;"
+                " this workload's windows %s it\n",
+                o.profile.c_str(), p.max_keyframes, p.max_points, p.max_observations, p.max_pair_arcs,
+                node_memory.predicted_bytes / 1e6, static_cast<double>(node_memory.counted_bytes) / 1e6,
+                static_cast<double>(node_memory.rss_growth_bytes) / 1e6, fits ? "fit" : "do not fit");
+  }
+  const std::uint64_t peak_rss = peak_resident_bytes();
+  std::printf("process memory: resident %.2f MB, peak resident %.2f MB\n", static_cast<double>(resident_bytes()) / 1e6,
+              static_cast<double>(peak_rss) / 1e6);
+
   LcmResult lcm;
   if (o.lcm) {
     std::string error;
@@ -691,6 +727,11 @@ int main(int argc, char** argv) {
       ratio(r.e2e.p(0.5), ref.e2e.p(0.5)), ratio(r.e2e.p(0.99), ref.e2e.p(0.99)), r.e2e_cpu.p(0.5),
       r.e2e_cpu.p(0.99), ref.e2e_cpu.p(0.5), ref.e2e_cpu.p(0.99), ratio(r.e2e_cpu.p(0.5), ref.e2e_cpu.p(0.5)),
       ratio(r.e2e_cpu.p(0.99), ref.e2e_cpu.p(0.99)));
+  std::printf("\"profile\":\"%s\",\"profile_fits\":%s,\"node_memory_predicted_bytes\":%.0f,"
+              "\"node_memory_bytes\":%llu,\"node_rss_growth_bytes\":%lld,\"peak_rss_bytes\":%llu,",
+              o.profile.c_str(), fits ? "true" : "false", node_memory.predicted_bytes,
+              static_cast<unsigned long long>(node_memory.counted_bytes),
+              static_cast<long long>(node_memory.rss_growth_bytes), static_cast<unsigned long long>(peak_rss));
   std::printf("\"identical_decisions\":%s}\n", identical ? "true" : "false");
   return identical ? 0 : 1;
 }

@@ -62,6 +62,16 @@ Status pose_from_tcw(const Eigen::Isometry3d& Tcw, CameraPose* out) {
   return pose_from_rotation(Tcw.linear(), Tcw.translation(), out);
 }
 
+Status pose_from_tcw(const Eigen::Matrix4d& Tcw, CameraPose* out) {
+  if (!Tcw.allFinite()) return Status::kNonFinite;
+  if (Tcw(3, 0) != 0 || Tcw(3, 1) != 0 || Tcw(3, 2) != 0 || Tcw(3, 3) != 1) return Status::kBadMatrix;
+  return pose_from_rotation(Tcw.topLeftCorner<3, 3>(), Tcw.topRightCorner<3, 1>(), out);
+}
+
+Status pose_from_tcw(const Eigen::Matrix4f& Tcw, CameraPose* out) {
+  return pose_from_tcw(Eigen::Matrix4d(Tcw.cast<double>()), out);
+}
+
 Status pose_from_orientation(const Eigen::Quaterniond& q_wc, const Eigen::Vector3d& centre,
                              CameraPose* out) {
   if (!q_wc.coeffs().allFinite() || !centre.allFinite()) return Status::kNonFinite;

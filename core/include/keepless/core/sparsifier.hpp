@@ -1,6 +1,7 @@
 #pragma once
 // The decision path: window -> network -> solve -> decisions, in storage
-// sized once from Capacities. run() and update() allocate nothing.
+// sized once from Capacities. run() and update() allocate nothing (but an
+// incremental Sparsifier's first run(), see SolveMode).
 //
 // run() builds the network and solves it from nothing. update() (with
 // SolveMode::kIncremental) keeps the network between calls and edits only
@@ -40,7 +41,10 @@ namespace keepless::core {
 
 enum class SolveMode : std::uint8_t {
   kFromScratch,  // run() only; update() behaves as run()
-  kIncremental,  // also holds the incremental network (about the size of the window again)
+  // update() on the incremental network (about the size of the window again)
+  // instead of run()'s, which is made by the first run() only: a caller that
+  // only updates never holds it, and one that also runs allocates it once.
+  kIncremental,
 };
 
 // How a solve starts. kClosedForm: from the optimum of the paper's network
@@ -105,7 +109,8 @@ class Sparsifier {
   const PointDecision* decisions() const;
 
   const Params& params() const;
-  const PaperNetwork& network() const;                  // after run()
+  // After run(); before an incremental Sparsifier's first run(), an empty network.
+  const PaperNetwork& network() const;
   const IncrementalNetwork* incremental_network() const;  // after update(); null without kIncremental
   SolveMode mode() const;
   Start start() const;

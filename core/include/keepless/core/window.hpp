@@ -83,6 +83,11 @@ class Window {
   std::uint32_t total_observations() const;
   std::uint32_t total_unmapped() const;  // unmapped keypoints over the window
   std::uint32_t distinct_points() const;
+  // Window keyframes observing `point` (0: not in the window).
+  std::uint32_t point_views(PointId point) const;
+  // The point -> pair arcs of the window's network: the sum over its points
+  // of n(n-1)/2, n = point_views (what Capacities::max_pair_arcs must hold).
+  std::uint64_t pair_arcs() const;
   // Slot of a keyframe id, or -1.
   std::int32_t find_keyframe(KeyframeId id) const;
 

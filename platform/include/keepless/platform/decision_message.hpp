@@ -22,6 +22,7 @@ struct DecisionRequest {
   std::int64_t sequence = 0;
   std::int64_t keyframe_id = 0;
   std::int64_t utime = 0;
+  std::int64_t publisher_id = 0;
 };
 
 // Reserves `msg`'s arrays for a window within `capacities` (the only

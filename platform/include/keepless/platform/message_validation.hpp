@@ -31,6 +31,7 @@ enum class [[nodiscard]] RejectReason : std::uint8_t {
   kWindowCapacity,        // valid, but the window cannot hold it
   kSequenceJump,          // sequence implausibly far above the last accepted one
   kUtimeJump,             // utime implausibly far above the last accepted one
+  kNotOwner,              // another publisher owns the window
   kNone,                  // accepted
 };
 constexpr std::size_t kRejectReasonCount = static_cast<std::size_t>(RejectReason::kNone);
@@ -68,83 +69,81 @@ constexpr std::size_t kKeyframeIdOffset = 24;
 RejectReason check_keyframe_bytes(const void* data, std::size_t size, const MessageLimits& limits);
 RejectReason check_map_event_bytes(const void* data, std::size_t size, const MessageLimits& limits);
 
-// The stream-order policy (README: "Stream-order policy"). Each publisher
-// (keyframe_t/map_event_t.publisher_id) has its own order: sequence strictly
-// increasing, utime never decreasing, and neither jumping further than the
-// bounds. A refused message never moves the order. A run of
-// `restart_confirm` consecutive messages of one publisher that the order
-// refused but that are in order among themselves (no accepted message of that
-// publisher in between) becomes the new order: a restart (sequence back near
-// 0) or a poisoned order (one absurd message accepted first) is served again
-// from the run's last message. A refused run interleaved with accepted
-// traffic is a second stream on one publisher id: counted, never adopted.
+// The stream-order policy (README: "Stream-order policy"), in five rules:
+// 1. The window belongs to one stream, its owner (a publisher_id; 0 for an
+//    anonymous VO): the first valid keyframe's publisher. Another publisher's
+//    messages are refused (kNotOwner) unless the owner has been silent for
+//    OrderBounds::owner_timeout_ns (0: never); then that publisher's next
+//    valid keyframe takes the window over (cleared first). Map events never
+//    take over.
+// 2. The owner's order: sequence strictly increasing, utime never
+//    decreasing, neither jumping further than the bounds.
+// 3. A refused or invalid message changes nothing. The one exception is the
+//    restart candidate: an owner keyframe that is valid against the window
+//    but refused by the order, in order with the candidate's last one (or
+//    starting a new candidate with sequence <= kRestartMaxFirstSequence).
+//    `restart_confirm` such keyframes are a restart: the last one is
+//    accepted, the window and the cull memory are cleared.
+// 4. A reset is honoured only from the owner, in order.
+// 5. Only a newer accepted keyframe of the owner supersedes a queued one
+//    (Node's drain).
 struct OrderBounds {
   std::uint64_t max_sequence_jump = 1000000;          // messages
   std::uint64_t max_utime_jump_us = 600ull * 1000000;  // 10 minutes
-  std::uint32_t restart_confirm = 3;                   // messages
+  std::uint32_t restart_confirm = 3;                   // keyframes
+  std::uint64_t owner_timeout_ns = 1000000000ull;      // 1 s; 0: the owner is never replaced
 };
+// A restart candidate starts at a sequence no larger than this.
+constexpr std::int64_t kRestartMaxFirstSequence = 16;
 
-struct StreamOrder {
-  std::int64_t publisher = 0;
-  bool started = false;
-  std::int64_t last_sequence = -1;
-  std::int64_t last_utime = 0;
-  // The run of consecutive refused messages (see above).
-  std::uint32_t run_length = 0;
-  std::int64_t run_sequence = 0;
-  std::int64_t run_utime = 0;
-  bool run_interleaved = false;  // an accepted message since the run began
-  bool run_reported = false;     // counted as a conflict already
-  std::uint64_t last_used = 0;   // tracker tick, for eviction
-};
-
-// kNone, or why (sequence, utime) does not follow `order`: kOutOfOrder,
-// kUtimeBackwards, kSequenceJump, kUtimeJump.
-RejectReason check_order(const StreamOrder& order, std::int64_t sequence, std::int64_t utime,
-                         const OrderBounds& bounds = {});
-
-// The orders of up to `max_publishers` publishers (least recently used one
-// evicted for a new one). Allocates only in the constructor.
+// The owner and its order (rules 1-3 above). check() is pure; the node
+// calls accept() for a message it accepted, extend_restart() for a valid
+// keyframe the order refused, and nothing for any other refusal.
 class OrderTracker {
  public:
-  OrderTracker(const OrderBounds& bounds, std::uint32_t max_publishers);
+  explicit OrderTracker(const OrderBounds& bounds);
 
   struct Verdict {
-    RejectReason reason = RejectReason::kNone;  // kNone: in order (possibly by adopting a run)
-    bool adopted = false;                       // a refused run became the order with this message
-    bool went_back = false;                     // ... and its sequence is below the old order's: a restart
+    RejectReason reason = RejectReason::kNone;  // kNone: accept (possibly by takeover or restart)
+    bool takeover = false;  // a new owner: clear the window and the culls first
+    bool restart = false;   // the owner restarted: clear the window and the culls first
   };
-  // Checks one message; on a refusal records it in the publisher's run, and
-  // when the run is confirmed adopts it (then reason is kNone, adopted set).
-  // The caller then calls accept() or, if the message fails other checks,
-  // nothing.
-  Verdict check(std::int64_t publisher, std::int64_t sequence, std::int64_t utime);
-  // The message passed every check: it becomes the publisher's order.
-  void accept(std::int64_t publisher, std::int64_t sequence, std::int64_t utime);
-  void clear();
+  [[nodiscard]] Verdict check(std::int64_t publisher, std::int64_t sequence, std::int64_t utime,
+                              std::uint64_t now_ns, bool keyframe) const;
+  // The message passed every check.
+  void accept(const Verdict& v, std::int64_t publisher, std::int64_t sequence, std::int64_t utime,
+              std::uint64_t now_ns);
+  // An owner keyframe, valid against the window, refused by the order:
+  // extends (or starts) the restart candidate. Returns true if it did.
+  bool extend_restart(std::int64_t publisher, std::int64_t sequence, std::int64_t utime);
 
+  bool owned() const { return owned_; }
+  std::int64_t owner() const { return owner_; }
+  std::int64_t last_sequence() const { return owned_ ? last_sequence_ : -1; }
+  std::int64_t last_utime() const { return last_utime_; }
+  std::uint64_t last_heard_ns() const { return last_heard_ns_; }
   std::uint64_t sequence_gaps() const { return gaps_; }
   std::uint64_t restarts() const { return restarts_; }
-  std::uint64_t conflicts() const { return conflicts_; }
-  std::uint64_t publishers_seen() const { return seen_; }
-  std::uint32_t publishers_active() const { return active_; }
-  bool started() const { return last_ != nullptr; }
-  std::int64_t last_sequence() const { return last_ != nullptr ? last_->last_sequence : -1; }
-  const StreamOrder* find(std::int64_t publisher) const;
-  std::size_t memory_bytes() const { return slots_.size() * sizeof(StreamOrder); }
+  std::uint64_t takeovers() const { return takeovers_; }
+  std::uint64_t owners_seen() const { return owners_seen_; }
+  std::size_t memory_bytes() const { return sizeof(*this); }
 
  private:
-  StreamOrder& slot(std::int64_t publisher);
+  bool continues_run(std::int64_t sequence, std::int64_t utime) const;
 
   OrderBounds bounds_;
-  std::vector<StreamOrder> slots_;
-  std::uint32_t active_ = 0;
-  std::uint64_t tick_ = 0;
-  std::uint64_t gaps_ = 0, restarts_ = 0, conflicts_ = 0, seen_ = 0;
-  const StreamOrder* last_ = nullptr;  // the publisher of the last accepted message
+  bool owned_ = false;
+  std::int64_t owner_ = 0;
+  std::int64_t last_sequence_ = -1;
+  std::int64_t last_utime_ = 0;
+  std::uint64_t last_heard_ns_ = 0;
+  std::uint32_t run_length_ = 0;  // the restart candidate
+  std::int64_t run_sequence_ = 0;
+  std::int64_t run_utime_ = 0;
+  std::uint64_t gaps_ = 0, restarts_ = 0, takeovers_ = 0, owners_seen_ = 0;
 };
 
-// Decoded keyframe against the window (not the order: see check_order).
+// Decoded keyframe against the window (not the order: see OrderTracker).
 // `scratch` must hold msg.num_observations ids.
 RejectReason check_keyframe(const keepless::keyframe_t& msg, const core::Window& window,
                             std::uint64_t* scratch);
@@ -152,7 +151,7 @@ RejectReason check_keyframe(const keepless::keyframe_t& msg, const core::Window&
 // A decoded map event's lists, split into the items to apply and the ones
 // refused (per item, map_event_ack_t.ITEM_*): no valid deletion or merge is
 // lost because of an unrelated bad id. Merges are refused for a self-merge,
-// a repeated source (the first is applied), a chain (the target is a source
+// a repeated source (the first valid one is applied), a chain (the target is a source
 // of this event), a target deleted by this event, or a target in `culled`
 // (may be null); removals for a keyframe not in the window or removed twice.
 struct MapEventItems {

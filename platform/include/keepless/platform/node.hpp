@@ -20,8 +20,13 @@
 namespace lcm {
 class LCM;
 }
+namespace keepless::solver {
+class Clock;
+}
 
 namespace keepless::platform {
+
+class RecentIds;
 
 struct NodeCounters {
   std::uint64_t keyframes_received = 0;
@@ -34,14 +39,17 @@ struct NodeCounters {
   std::uint64_t large_decisions = 0;  // above one LCM datagram
   std::uint64_t points_culled = 0;
   std::uint64_t keyframes_skipped = 0;    // answered STATUS_SKIPPED
+  std::uint64_t not_owner = 0;            // refused: another publisher owns the window
   std::uint64_t stale_observations = 0;   // observations of recently culled points dropped
   std::uint64_t event_items_refused = 0;  // map-event items refused (acknowledged)
 };
 
 class Node {
  public:
-  // Sizes everything from `config`. `lcm` must outlive the node.
-  Node(lcm::LCM& lcm, const NodeConfig& config);
+  // Sizes everything from `config`. `lcm` must outlive the node. `clock`
+  // (tests): arrival stamps, deadlines, latencies and the owner timeout read
+  // it instead of CLOCK_MONOTONIC; it must outlive the node.
+  Node(lcm::LCM& lcm, const NodeConfig& config, const solver::Clock* clock = nullptr);
   ~Node();
   Node(const Node&) = delete;
   Node& operator=(const Node&) = delete;
@@ -55,7 +63,8 @@ class Node {
   // --max-keyframes reached.
   bool finished() const;
 
-  // The handlers behind the subscriptions (public for tests).
+  // The handlers behind the subscriptions (public for tests), outside a
+  // drain: a keyframe is decided at once. Arrival is the clock's now.
   void handle_keyframe(const void* data, std::uint32_t size);
   void handle_map_event(const void* data, std::uint32_t size);
 
@@ -63,6 +72,7 @@ class Node {
   const NodeCounters& counters() const;
   const LatencyHistogram& latency() const;
   const OrderTracker& order() const;
+  const RecentIds& cull_memory() const;
   std::size_t memory_bytes() const;
   // Largest decision_t this node can publish, bytes.
   std::size_t max_decision_bytes() const;

@@ -21,19 +21,27 @@ struct NodeConfig {
   std::string status_channel = "KEEPLESS_STATUS";
   std::string event_ack_channel = "KEEPLESS_MAP_EVENT_ACK";  // map_event_ack_t output
 
+  // The window's capacities: the default profile (profile_config below).
+  // points, observations and pair arcs are over the whole window, sized from
+  // measured real windows; 0 takes the worst case of K full keyframes. A
+  // window beyond one is answered STATUS_CAPACITY_EXCEEDED.
   std::uint32_t window = 20;               // K: keyframes in the window (ORB-SLAM2-sized local map)
   std::uint32_t max_observations = 2000;   // per keyframe_t; larger messages are refused unread
   std::uint32_t max_event_ids = 1024;      // per list of a map_event_t
   std::uint32_t max_unmapped = 0;          // unmapped keypoints per keyframe_t (cost authors); more: refused
-  std::uint32_t max_pair_arcs = 0;         // point -> pair arcs; 0: the worst case of K full keyframes
+  std::uint32_t max_points = 5800;         // distinct points in the window
+  std::uint32_t max_window_observations = 17000;  // observations in the window
+  std::uint32_t max_pair_arcs = 45000;     // point -> pair arcs (sum over points of n(n-1)/2)
   // Refused at start (exit 2) when the fixed memory would exceed it.
   std::uint64_t max_memory_mb = 1024;
 
   // Stream-order policy (message_validation.hpp, OrderTracker).
   std::uint64_t max_sequence_jump = 1000000;  // messages
   double max_utime_jump_s = 600;
-  std::uint32_t restart_confirm = 3;  // refused in-order messages that become the new order
-  std::uint32_t max_publishers = 4;   // publisher ids with their own order
+  std::uint32_t restart_confirm = 3;  // valid keyframes back near the start that are a restart
+  // Another publisher id takes the window over only after its owner has been
+  // silent this long; 0: never.
+  double owner_timeout_s = 1.0;
   // Culled point ids remembered (a keyframe already in flight cannot bring
   // them back); 0: the window's point capacity.
   std::uint32_t cull_memory = 0;
@@ -63,11 +71,16 @@ std::string node_usage();
 
 OrderBounds order_bounds(const NodeConfig& config);
 
-// The window's fixed capacities for `config`, sized for the worst case of K
+// The window's fixed capacities for `config`: max_points,
+// max_window_observations and max_pair_arcs, or where 0 the worst case of K
 // full keyframes (every observation a distinct point; for pair arcs, every
-// point in every keyframe unless max_pair_arcs caps it), so a message within
-// the limits never overflows the window.
+// point in every keyframe).
 core::Capacities window_capacities(const NodeConfig& config);
+
+// Named capacity sets (--profile): "small", "default", "large". Sets the
+// window, the per-message limits and the window's capacities of `config`
+// (nothing else); false for another name.
+[[nodiscard]] bool apply_profile(const std::string& name, NodeConfig& config);
 
 // The node's fixed memory for `config`, predicted before allocating it
 // (memory_estimate.hpp: the window pair, the sparsifier, the message buffers

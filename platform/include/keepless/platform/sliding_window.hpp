@@ -27,10 +27,23 @@ class SlidingWindow {
   const core::Window& window() const { return *active_; }
   std::uint32_t max_keyframes() const { return capacities_.max_keyframes; }
 
-  // Adds a keyframe, first dropping the oldest when K are held. On any error
-  // the window is unchanged.
+  // What a window holds, or would hold.
+  struct Demand {
+    std::uint64_t keyframes = 0, points = 0, observations = 0, unmapped = 0;
+  };
+
+  // Adds a keyframe, first dropping the oldest when K are held. When the
+  // window's points, observations or unmapped keypoints cannot hold it as
+  // well, older keyframes go too, oldest first, until they can, so a window
+  // beyond capacity never stops the stream: `*evicted` (if given) counts
+  // them, beyond the usual slide, and overflow() says what the window would
+  // have needed. On any error (a keyframe beyond the window on its own
+  // included) the window is unchanged.
   [[nodiscard]] core::Status push(const core::Keyframe& keyframe, const core::Observation* observations,
-                                  std::uint32_t count);
+                                  std::uint32_t count, std::uint32_t* evicted = nullptr);
+  // The window the last push that evicted would have made: the usual slide
+  // plus the new keyframe.
+  const Demand& overflow() const { return overflow_; }
 
   // Drops every observation of these points (any order, at most the window's
   // point capacity).
@@ -49,6 +62,9 @@ class SlidingWindow {
     std::uint32_t removed_count = 0;
   };
   [[nodiscard]] core::Status edit(const Edit& edit);
+  // Of the last successful edit's merges, those whose source the window
+  // held (the others changed nothing).
+  std::uint32_t merges_effective() const { return merges_effective_; }
 
   void clear();
   std::size_t memory_bytes() const;
@@ -57,6 +73,7 @@ class SlidingWindow {
   struct Merge {
     core::PointId from;
     core::PointId into;
+    bool used;  // the window held `from`
   };
   // Copies the active window into the spare, minus `skip_slots` slots from the
   // front, minus removed keyframes, with point ids mapped through the sorted
@@ -66,7 +83,13 @@ class SlidingWindow {
                                      std::uint32_t merge_count, const core::Keyframe* extra,
                                      const core::Observation* extra_observations, std::uint32_t extra_count);
 
+  // What the usual slide (dropping `skip_front` keyframes) plus this keyframe
+  // would hold.
+  Demand demand(std::uint32_t skip_front, const core::Keyframe& keyframe, const core::Observation* observations,
+                std::uint32_t count);
+
   core::Capacities capacities_;
+  Demand overflow_;
   core::Window a_;
   core::Window b_;
   core::Window* active_;
@@ -77,6 +100,7 @@ class SlidingWindow {
   std::vector<std::uint8_t> tracked_scratch_;       // one keyframe's tracked flags, beside obs_scratch_
   std::vector<core::PointId> drop_table_;           // sorted
   std::vector<Merge> merge_table_;                  // sorted by from
+  std::uint32_t merges_effective_ = 0;
 };
 
 }  // namespace keepless::platform

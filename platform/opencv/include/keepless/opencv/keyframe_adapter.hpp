@@ -62,6 +62,10 @@ struct CameraPose {
 [[nodiscard]] Status pose_from_tcw(const cv::Mat& Tcw, CameraPose* out);
 // From Tcw as an Eigen isometry (pass Twc.inverse() for camera-to-world).
 [[nodiscard]] Status pose_from_tcw(const Eigen::Isometry3d& Tcw, CameraPose* out);
+// From Tcw as a 4x4 matrix, e.g. ORB-SLAM3's Sophus::SE3f through .matrix()
+// (so this header needs no Sophus); the last row must be 0 0 0 1.
+[[nodiscard]] Status pose_from_tcw(const Eigen::Matrix4f& Tcw, CameraPose* out);
+[[nodiscard]] Status pose_from_tcw(const Eigen::Matrix4d& Tcw, CameraPose* out);
 // From the world-from-camera rotation and the centre; q is re-normalised.
 [[nodiscard]] Status pose_from_orientation(const Eigen::Quaterniond& q_wc, const Eigen::Vector3d& centre,
                                            CameraPose* out);

@@ -1,0 +1,475 @@
+// Stray traffic cannot deny service on memq://: normal VO traffic (keyframe,
+// then a map event) is decided with the drain on; no message or short burst
+// wipes the window, the cull memory or the order; publishers are isolated
+// and every answer names the publisher it answers; latency counts from
+// arrival; a refused merge item does not hide a valid one.
+
+#include <gtest/gtest.h>
+
+#include <cstdint>
+#include <limits>
+#include <vector>
+
+#include "keepless/platform/recent_ids.hpp"
+#include "node_memq_fixture.hpp"
+
+namespace {
+
+namespace kt = keepless::testing;
+using kt::NodeOnMemq;
+using kt::snapshot;
+using kt::WindowSnapshot;
+using keepless::decision_t;
+using keepless::map_event_ack_t;
+using keepless::platform::NodeConfig;
+using keepless::platform::RejectReason;
+
+// Everything a stray message must not change: the window, the cull memory
+// (points 0..kPoints), the owner and its order.
+struct State {
+  WindowSnapshot window;
+  std::vector<bool> culled;
+  std::uint32_t culls = 0;
+  bool owned = false;
+  std::int64_t owner = 0, last_sequence = 0, last_utime = 0;
+  bool operator==(const State& o) const {
+    return window == o.window && culled == o.culled && culls == o.culls && owned == o.owned && owner == o.owner &&
+           last_sequence == o.last_sequence && last_utime == o.last_utime;
+  }
+};
+constexpr std::int64_t kPoints = 400;
+
+class GuardOnMemq : public NodeOnMemq {
+ protected:
+  State state() const {
+    State s;
+    s.window = snapshot(node_->window());
+    for (std::int64_t p = 0; p < kPoints; ++p) s.culled.push_back(node_->cull_memory().contains(static_cast<std::uint64_t>(p)));
+    s.culls = node_->cull_memory().size();
+    s.owned = node_->order().owned();
+    s.owner = node_->order().owner();
+    s.last_sequence = node_->order().last_sequence();
+    s.last_utime = node_->order().last_utime();
+    return s;
+  }
+  keepless::status_t status() {
+    node_->publish_status(false);
+    pump();
+    return statuses_.back();
+  }
+  // Keyframe `sequence` of `publisher`: 20 points from `sequence`, id unique per (publisher, sequence).
+  static keepless::keyframe_t keyframe(std::int64_t publisher, std::int64_t sequence) {
+    keepless::keyframe_t m = kt::make_keyframe(sequence, publisher * 100000 + sequence, kt::id_range(sequence, 20));
+    m.publisher_id = publisher;
+    return m;
+  }
+  // The anonymous owner's keyframes 1..n (ids 1..n, overlapping points): the
+  // window of K = 4 holds n-3..n and something was culled.
+  void live_stream(std::int64_t n) {
+    for (std::int64_t s = 1; s <= n; ++s) send(kt::make_keyframe(s, s, kt::id_range(s * 5 % kPoints, 30)));
+    ASSERT_EQ(node_->window().keyframe_count(), 4u);
+    ASSERT_GT(node_->cull_memory().size(), 0u) << "the stream must cull";
+    ASSERT_EQ(node_->counters().messages_rejected, 0u);
+  }
+  std::size_t count(int status, std::size_t first = 0) const {
+    std::size_t n = 0;
+    for (std::size_t i = first; i < decisions_.size(); ++i) n += decisions_[i].status == status;
+    return n;
+  }
+  void queue(const std::string& channel, const std::vector<std::uint8_t>& bytes) {
+    bus_->publish(channel, bytes.data(), static_cast<unsigned>(bytes.size()));  // not handled yet
+  }
+  void queue(const keepless::keyframe_t& m) { queue(config_.keyframe_channel, kt::encode(m)); }
+  void queue(keepless::map_event_t e) {
+    kt::finalize(e);
+    queue(config_.event_channel, kt::encode(e));
+  }
+  // The drain on (a latency target that never fires).
+  void make_draining_node() {
+    NodeConfig c = default_config();
+    c.latency_target_ms = 60000;
+    c.queue_capacity = 4096;
+    make_node(c);
+  }
+};
+
+// --- 1. the drain ---------------------------------------------------------------
+
+// Defect 1: with a latency target a keyframe followed by a map event (the
+// normal VO pattern) was answered SKIPPED, never decided: 0 of 100.
+TEST_F(GuardOnMemq, AKeyframeFollowedByAMapEventIsDecided) {
+  make_draining_node();
+  std::int64_t seq = 0;
+  for (int i = 0; i < 100; ++i) {
+    queue(kt::make_keyframe(++seq, i, kt::id_range(i * 3, 30)));
+    keepless::map_event_t e = kt::make_event(++seq);
+    e.deleted_point_id = {i * 3};
+    queue(e);
+    ASSERT_GT(node_->spin_once(0), 0);
+    pump();
+  }
+  ASSERT_EQ(decisions_.size(), 100u);
+  EXPECT_EQ(count(decision_t::STATUS_OPTIMAL), 100u);
+  EXPECT_EQ(node_->counters().keyframes_skipped, 0u);
+  EXPECT_GT(node_->counters().points_culled, 0u);
+  ASSERT_EQ(acks_.size(), 100u);
+  for (const map_event_ack_t& a : acks_) EXPECT_EQ(a.status, map_event_ack_t::STATUS_APPLIED);
+}
+
+// Defect 1: junk, an invalid keyframe or another publisher's keyframe queued
+// behind a keyframe made it SKIPPED. Answers stay in arrival order.
+TEST_F(GuardOnMemq, JunkInvalidAndForeignMessagesNeverCauseASkip) {
+  make_draining_node();
+  std::int64_t seq = 0;
+  for (int i = 0; i < 30; ++i) {
+    queue(kt::make_keyframe(++seq, i, kt::id_range(i * 3, 30)));
+    switch (i % 3) {
+      case 0: queue(config_.keyframe_channel, {0x12, 0x34}); break;  // 2 bytes of junk: no answer
+      case 1: {
+        keepless::keyframe_t bad = kt::make_keyframe(++seq, 1000 + i, kt::id_range(0, 5));
+        bad.centre[0] = std::numeric_limits<double>::quiet_NaN();
+        queue(bad);
+        break;
+      }
+      default: {
+        keepless::keyframe_t other = kt::make_keyframe(1, 2000 + i, kt::id_range(0, 5));
+        other.publisher_id = 99;
+        queue(other);
+      }
+    }
+    ASSERT_GT(node_->spin_once(0), 0);
+    pump();
+  }
+  EXPECT_EQ(node_->counters().keyframes_skipped, 0u);
+  std::size_t decided = 0;
+  std::int64_t last_sequence = 0;
+  for (const decision_t& d : decisions_) {
+    if (d.publisher_id == 0 && d.keyframe_id < 1000) {
+      decided += d.status == decision_t::STATUS_OPTIMAL;
+      EXPECT_GT(d.sequence, last_sequence) << "answers out of order";
+      last_sequence = d.sequence;
+    }
+  }
+  EXPECT_EQ(decided, 30u);
+  EXPECT_EQ(decisions_.size(), 50u) << "30 decided, 10 invalid and 10 foreign answered, junk unanswered";
+}
+
+// Only a newer accepted keyframe of the same stream supersedes: with a
+// rejected one between two valid ones, the first is SKIPPED by the second
+// only, and the rejected one is answered after the first.
+TEST_F(GuardOnMemq, OnlyANewerAcceptedKeyframeSupersedes) {
+  make_draining_node();
+  queue(kt::make_keyframe(1, 1, kt::id_range(0, 30)));
+  queue(kt::make_keyframe(1, 2, kt::id_range(0, 30)));  // out of order: refused
+  queue(kt::make_keyframe(2, 3, kt::id_range(5, 30)));
+  ASSERT_GT(node_->spin_once(0), 0);
+  pump();
+  ASSERT_EQ(decisions_.size(), 3u);
+  EXPECT_EQ(decisions_[0].keyframe_id, 1);
+  EXPECT_EQ(decisions_[0].status, decision_t::STATUS_OPTIMAL) << "decided before the refusal was answered";
+  EXPECT_EQ(decisions_[1].reject_reason, keepless::status_t::REJECT_OUT_OF_ORDER);
+  EXPECT_EQ(decisions_[2].status, decision_t::STATUS_OPTIMAL);
+  queue(kt::make_keyframe(3, 4, kt::id_range(10, 30)));
+  queue(kt::make_keyframe(4, 5, kt::id_range(15, 30)));
+  ASSERT_GT(node_->spin_once(0), 0);
+  pump();
+  ASSERT_EQ(decisions_.size(), 5u);
+  EXPECT_EQ(decisions_[3].status, decision_t::STATUS_SKIPPED);
+  ASSERT_EQ(decisions_[3].num_window_keyframes, 3) << "the window it entered, not the newer one's";
+  EXPECT_EQ(decisions_[3].window_keyframe_id.back(), 4);
+  EXPECT_EQ(decisions_[4].status, decision_t::STATUS_OPTIMAL);
+}
+
+// The default configuration (latency target on, 5 ms) decides normal VO
+// traffic: keyframe, map event, keyframe, ... queued together.
+TEST_F(GuardOnMemq, TheDefaultLatencyTargetDecidesEveryKeyframe) {
+  NodeConfig c = default_config();
+  c.latency_target_ms = NodeConfig{}.latency_target_ms;
+  ASSERT_GT(c.latency_target_ms, 0);
+  make_node(c);
+  std::int64_t seq = 0;
+  for (int round = 0; round < 20; ++round) {
+    for (int i = 0; i < 5; ++i) {
+      const int k = round * 5 + i;
+      queue(kt::make_keyframe(++seq, k, kt::id_range(k * 3, 30)));
+      keepless::map_event_t e = kt::make_event(++seq);
+      e.deleted_point_id = {k * 3 + 1};
+      queue(e);
+    }
+    ASSERT_GT(node_->spin_once(0), 0);
+    pump();
+  }
+  ASSERT_EQ(decisions_.size(), 100u);
+  EXPECT_EQ(count(decision_t::STATUS_SKIPPED), 0u);
+  EXPECT_EQ(count(decision_t::STATUS_OPTIMAL) + count(decision_t::STATUS_BUDGET_EXHAUSTED), 100u);
+  EXPECT_EQ(acks_.size(), 100u);
+}
+
+// --- 2. no wipe by stray traffic ---------------------------------------------------
+
+// Defect 2(a): one reset from a never-seen publisher id wiped the window and
+// the cull memory. The owner's own reset is still honoured, and says so.
+TEST_F(GuardOnMemq, AResetFromAnotherPublisherChangesNothing) {
+  live_stream(20);
+  const State before = state();
+  keepless::map_event_t reset = kt::make_event(21);
+  reset.reset = true;
+  reset.publisher_id = 4242;
+  send(reset);
+  EXPECT_TRUE(state() == before);
+  ASSERT_EQ(acks_.size(), 1u);
+  EXPECT_EQ(acks_.back().status, map_event_ack_t::STATUS_REJECTED);
+  EXPECT_EQ(acks_.back().reject_reason, keepless::status_t::REJECT_NOT_OWNER);
+  EXPECT_FALSE(acks_.back().reset);
+  EXPECT_EQ(acks_.back().publisher_id, 4242);
+  // The owner's reset, in order: honoured at once.
+  keepless::map_event_t own = kt::make_event(21);
+  own.reset = true;
+  send(own);
+  EXPECT_EQ(node_->window().keyframe_count(), 0u);
+  EXPECT_EQ(node_->cull_memory().size(), 0u);
+  EXPECT_TRUE(acks_.back().reset);
+  EXPECT_EQ(acks_.back().status, map_event_ack_t::STATUS_APPLIED);
+}
+
+// Defect 2(b): retransmitted 17, 18, 19 after 20 were adopted as a restart:
+// window 4 -> 1, keyframe 19 decided twice, a false gap.
+TEST_F(GuardOnMemq, RetransmissionsDoNotRestart) {
+  live_stream(20);
+  const State before = state();
+  const std::uint64_t gaps = node_->order().sequence_gaps();
+  for (std::int64_t s = 17; s <= 19; ++s) send(kt::make_keyframe(s, s, kt::id_range(s * 5 % kPoints, 30)));
+  EXPECT_TRUE(state() == before);
+  EXPECT_EQ(node_->order().restarts(), 0u);
+  EXPECT_EQ(node_->order().sequence_gaps(), gaps);
+  EXPECT_EQ(count(decision_t::STATUS_OPTIMAL), 20u) << "no keyframe decided twice";
+  send(kt::make_keyframe(21, 21, kt::id_range(105, 30)));
+  EXPECT_EQ(decisions_.back().status, decision_t::STATUS_OPTIMAL);
+}
+
+// Defect 2(c): 1, 2, then 3 with a NaN centre: the third was rejected, yet
+// the window went 4 -> 0 and the order 20 -> 3. A real restart (1, 2, then
+// a valid 4) is still recognised at its third valid keyframe.
+TEST_F(GuardOnMemq, AnInvalidKeyframeNeverCompletesARestart) {
+  live_stream(20);
+  const State before = state();
+  send(kt::make_keyframe(1, 501, kt::id_range(300, 10)));
+  send(kt::make_keyframe(2, 502, kt::id_range(300, 10)));
+  keepless::keyframe_t nan = kt::make_keyframe(3, 503, kt::id_range(300, 10));
+  nan.centre[1] = std::numeric_limits<double>::quiet_NaN();
+  send(nan);
+  EXPECT_TRUE(state() == before);
+  EXPECT_EQ(decisions_.back().reject_reason, keepless::status_t::REJECT_NON_FINITE);
+  send(kt::make_keyframe(4, 504, kt::id_range(300, 10)));
+  EXPECT_EQ(decisions_.back().status, decision_t::STATUS_OPTIMAL);
+  EXPECT_EQ(node_->order().restarts(), 1u);
+  EXPECT_EQ(node_->order().last_sequence(), 4);
+  ASSERT_EQ(node_->window().keyframe_count(), 1u) << "the old run's keyframes left with the restart";
+  EXPECT_EQ(node_->cull_memory().size(), 0u);
+}
+
+// Defect 2(d): three stale empty map events wiped the window, and the third
+// ack said APPLIED, reset = false.
+TEST_F(GuardOnMemq, StaleMapEventsNeverWipe) {
+  live_stream(20);
+  const State before = state();
+  for (std::int64_t s = 1; s <= 6; ++s) send(kt::make_event(s));
+  EXPECT_TRUE(state() == before);
+  ASSERT_EQ(acks_.size(), 6u);
+  for (const map_event_ack_t& a : acks_) {
+    EXPECT_EQ(a.status, map_event_ack_t::STATUS_REJECTED);
+    EXPECT_FALSE(a.reset);
+  }
+  EXPECT_EQ(node_->order().restarts(), 0u);
+}
+
+// Defect 3: one late message of the old process (1030) between the new
+// process's 1 and 2 locked the restart out for good (0 of 199).
+TEST_F(GuardOnMemq, AStragglerDoesNotLockARestartOut) {
+  for (std::int64_t s = 1020; s <= 1029; ++s) send(kt::make_keyframe(s, s, kt::id_range(s % kPoints, 30)));
+  send(kt::make_keyframe(1, 1, kt::id_range(0, 20)));            // the new process
+  send(kt::make_keyframe(1030, 1030, kt::id_range(230, 30)));     // the old one's straggler
+  const std::size_t first = decisions_.size();
+  for (std::int64_t s = 2; s <= 200; ++s) send(kt::make_keyframe(s, s, kt::id_range(s, 20)));
+  EXPECT_EQ(count(decision_t::STATUS_OPTIMAL, first), 198u) << "served from its third keyframe";
+  EXPECT_EQ(node_->order().restarts(), 1u);
+  EXPECT_EQ(status().stream_restarts, 1);
+  EXPECT_EQ(node_->order().last_sequence(), 200);
+}
+
+// Defect 4(a): a sender with next sequences and utime +599 s throttled the
+// live publisher to 100 of 300. Another id never touches the owner.
+TEST_F(GuardOnMemq, AnotherSenderCannotThrottleTheOwner) {
+  std::int64_t seq = 0;
+  for (int i = 0; i < 300; ++i) {
+    ++seq;
+    keepless::keyframe_t m = kt::make_keyframe(seq, i, kt::id_range(i % 50, 20));
+    m.publisher_id = 7;
+    send(m);
+    if (i % 3 == 2) {
+      keepless::keyframe_t t = kt::make_keyframe(seq + 1, 10000 + i, kt::id_range(0, 5));
+      t.utime = m.utime + 599000000;
+      t.publisher_id = 9;
+      const State before = state();
+      send(t);
+      ASSERT_TRUE(state() == before) << "after keyframe " << i;
+    }
+  }
+  std::size_t owner = 0;
+  for (const decision_t& d : decisions_) owner += d.publisher_id == 7 && d.status == decision_t::STATUS_OPTIMAL;
+  EXPECT_EQ(owner, 300u);
+  EXPECT_EQ(rejected(RejectReason::kNotOwner), 100u);
+}
+
+// Defect 4(b): three far-ahead messages per three keyframes wiped the window
+// every cycle (200 restarts). Far-ahead messages are no restart.
+TEST_F(GuardOnMemq, FarAheadMessagesNeverWipe) {
+  std::int64_t seq = 0;
+  for (int i = 0; i < 300; ++i) {
+    send(kt::make_keyframe(++seq, i, kt::id_range(i % 50, 20)));
+    if (i % 3 == 2 && i > 3) {
+      const State before = state();
+      for (int j = 0; j < 3; ++j) send(kt::make_keyframe(seq + 2000000 + j, 100000 + i * 3 + j, kt::id_range(0, 5)));
+      ASSERT_TRUE(state() == before) << "after keyframe " << i;
+    }
+  }
+  EXPECT_EQ(count(decision_t::STATUS_OPTIMAL), 300u);
+  EXPECT_EQ(node_->order().restarts(), 0u);
+}
+
+// Defect 5: invalid messages from more ids than --max-publishers evicted the
+// owner's order; then a stale reset wiped the window, a jump 20 -> 520
+// counted no gap and a replayed keyframe was decided.
+TEST_F(GuardOnMemq, ManyPublisherIdsNeverTurnOrderChecksOff) {
+  live_stream(20);
+  const State before = state();
+  for (std::int64_t id = 1; id <= 400; ++id) {
+    keepless::keyframe_t bad = kt::make_keyframe(1, 5000 + id, kt::id_range(0, 5));
+    bad.orientation[0] = 2;  // invalid
+    bad.publisher_id = id;
+    send(bad);
+    keepless::map_event_t e = kt::make_event(1);
+    e.publisher_id = id;
+    send(e);
+  }
+  EXPECT_TRUE(state() == before);
+  keepless::map_event_t stale = kt::make_event(3);
+  stale.reset = true;
+  send(stale);
+  EXPECT_TRUE(state() == before) << "a stale reset of the owner is still refused";
+  send(kt::make_keyframe(18, 18, kt::id_range(90, 30)));  // replayed
+  EXPECT_EQ(decisions_.back().reject_reason, keepless::status_t::REJECT_OUT_OF_ORDER);
+  const std::uint64_t gaps = node_->order().sequence_gaps();
+  send(kt::make_keyframe(520, 520, kt::id_range(100, 30)));
+  EXPECT_EQ(node_->order().sequence_gaps(), gaps + 499);
+  const keepless::status_t s = status();
+  EXPECT_EQ(s.publishers_seen, 1);
+  EXPECT_EQ(s.publishers_active, 1);
+}
+
+// --- 3. isolation -----------------------------------------------------------------
+
+// Defect 6: two VOs numbering their own keyframes got 18 of 40 refused as
+// duplicates and their points merged; decision_t named no publisher.
+TEST_F(GuardOnMemq, PublishersNeverTouchEachOthersKeyframesOrPoints) {
+  for (int i = 1; i <= 20; ++i) {
+    send(keyframe(1, i));
+    keepless::keyframe_t other = kt::make_keyframe(i, i, kt::id_range(0, 10));  // same ids and points
+    other.publisher_id = 2;
+    send(other);
+  }
+  std::size_t first = 0;
+  for (const decision_t& d : decisions_) {
+    if (d.publisher_id == 1) first += d.status == decision_t::STATUS_OPTIMAL;
+    if (d.publisher_id == 2) {
+      EXPECT_EQ(d.reject_reason, keepless::status_t::REJECT_NOT_OWNER);
+    }
+  }
+  EXPECT_EQ(first, 20u);
+  EXPECT_EQ(rejected(RejectReason::kDuplicateKeyframe), 0u);
+  // The other publisher's reset and edits cannot remove the owner's keyframes.
+  const State before = state();
+  keepless::map_event_t e = kt::make_event(21);
+  e.publisher_id = 2;
+  e.removed_keyframe_id = {static_cast<std::int64_t>(node_->window().keyframe(0).id)};
+  e.deleted_point_id = kt::id_range(0, 16);
+  send(e);
+  e.reset = true;
+  send(e);
+  EXPECT_TRUE(state() == before);
+}
+
+TEST_F(GuardOnMemq, WithOwnerTimeoutZeroTheOwnerIsNeverReplaced) {
+  NodeConfig c = default_config();
+  c.owner_timeout_s = 0;
+  make_node(c);
+  send(keyframe(1, 1));
+  clock_.advance(3600ull * 1000000000ull);
+  send(keyframe(2, 2));
+  EXPECT_EQ(decisions_.back().reject_reason, keepless::status_t::REJECT_NOT_OWNER);
+  EXPECT_EQ(node_->order().owner(), 1);
+}
+
+// --- 4. latency from arrival --------------------------------------------------------
+
+// Defect 7: latency counted from the drain, so a backlog never showed in
+// latency_max. Here every handler reads the (ticking) clock once: a keyframe
+// with 300 junk messages behind it waits 300 readings longer, and the
+// deadline counts from its arrival too.
+TEST_F(GuardOnMemq, LatencyAndDeadlineCountFromArrival) {
+  const auto run = [&](double target_ms, int junk) {
+    NodeConfig c = default_config();
+    c.latency_target_ms = target_ms;
+    c.queue_capacity = 4096;
+    make_node(c);
+    clock_.tick = 10000;  // 10 us a reading
+    queue(kt::make_keyframe(1, 1, kt::id_range(0, 30)));
+    queue(kt::make_keyframe(2, 2, kt::id_range(5, 30)));
+    for (int i = 0; i < junk; ++i) queue(config_.keyframe_channel, {0x00, 0x01, 0x02});
+    EXPECT_GT(node_->spin_once(0), 0);
+    pump();
+    EXPECT_EQ(decisions_.size(), 2u);
+    return std::pair<std::uint64_t, int>(node_->latency().max(), decisions_.empty() ? -1 : decisions_.back().status);
+  };
+  const auto quiet = run(60000, 0);
+  const auto backlog = run(60000, 300);
+  EXPECT_EQ(backlog.second, decision_t::STATUS_OPTIMAL);
+  EXPECT_GE(backlog.first, quiet.first + 300 * 10000) << "the backlog shows in latency_max";
+  EXPECT_EQ(status().latency_max_ns, static_cast<std::int64_t>(backlog.first));
+  // A deadline 1 ms beyond the quiet case's latency: met without the
+  // backlog, missed with it (3 ms of waiting).
+  const double target_ms = static_cast<double>(quiet.first) / 1e6 + 1.0;
+  EXPECT_EQ(run(target_ms, 0).second, decision_t::STATUS_OPTIMAL);
+  EXPECT_EQ(run(target_ms, 300).second, decision_t::STATUS_BUDGET_EXHAUSTED);
+}
+
+// --- merges (small items) -------------------------------------------------------------
+
+// Merges 5 -> 5 then 5 -> 25: both were refused, so the valid one was lost.
+TEST_F(GuardOnMemq, ARefusedMergeDoesNotHideTheValidOne) {
+  fill_without_culling();  // 10: 0..29, 11: 10..39, 12: 20..49
+  keepless::map_event_t e = kt::make_event(4);
+  e.merged_from_id = {5, 5};
+  e.merged_into_id = {5, 25};
+  send(e);
+  ASSERT_EQ(acks_.size(), 1u);
+  EXPECT_EQ(acks_.back().merged_applied, 1);
+  EXPECT_EQ(acks_.back().refused[map_event_ack_t::ITEM_MERGE_SELF], 1);
+  EXPECT_EQ(acks_.back().refused[map_event_ack_t::ITEM_MERGE_REPEATED_SOURCE], 0);
+  const keepless::core::Window& w = node_->window();
+  for (std::uint32_t j = 0; j < w.observation_count(0); ++j) EXPECT_NE(w.observations(0)[j].point, 5u) << "5 merged";
+}
+
+// merged_applied counted merges that changed nothing (source not in the window).
+TEST_F(GuardOnMemq, MergedAppliedCountsOnlyMergesThatChangedSomething) {
+  fill_without_culling();
+  keepless::map_event_t e = kt::make_event(4);
+  e.merged_from_id = {9999, 45};
+  e.merged_into_id = {1, 500};
+  send(e);
+  ASSERT_EQ(acks_.size(), 1u);
+  EXPECT_EQ(acks_.back().status, map_event_ack_t::STATUS_APPLIED);
+  EXPECT_EQ(acks_.back().merged_applied, 1);
+}
+
+}  // namespace
