@@ -113,9 +113,11 @@ struct Sparsifier::Impl {
     }
     // The policies' scratch only where they are on (Params are fixed).
     if (p.scope == Scope::kNewest) in_scope.resize(c.max_points);
-    if (p.coverage_floor > 0) {
+    if (p.coverage_floor > 0 || p.maturity_keyframes > 0) {
       slots_at.resize(std::size_t{c.max_points} + 1);
       slots.resize(c.max_observations);
+    }
+    if (p.coverage_floor > 0) {
       covered.resize(c.max_keyframes);
       culled_at.resize(std::size_t{c.max_keyframes} + 1);
       culled_list.resize(c.max_observations);
@@ -212,8 +214,8 @@ struct Sparsifier::Impl {
     sum.evaluated = net.evaluated_count();
     sum.pairs = net.pair_count();
     sum.arcs = net.evaluated_count() + net.pair_arc_count() + net.pair_count();
-    const std::uint32_t k = window.keyframe_count();
-    if (params.scope == Scope::kNewest && k > 0) restrict_to_newest(window, k - 1);
+    // The budget is taken from what the tracking guard and the scope leave.
+    protect_and_scope(window, net, window.keyframe_count());
 
     // Candidates by (M*, id): a stable counting sort (decisions ascend by id).
     const std::uint32_t never = max_points + 1;
@@ -276,14 +278,66 @@ struct Sparsifier::Impl {
   template <typename Net>
   void apply_policies(const Window& window, const Net& net, bool finished) {
     const std::uint32_t k = window.keyframe_count();
-    if (!budgeted && params.scope == Scope::kNewest && k > 0) restrict_to_newest(window, k - 1);
-    if (params.coverage_floor > 0 && finished) {
-      net.point_slots(slots_at.data(), slots.data());
-      apply_floor(k);
+    if (params.coverage_floor > 0 && finished) net.point_slots(slots_at.data(), slots.data());
+    // A budget chose among what the guard and the scope left (decide_budget).
+    if (!budgeted) protect_and_scope(window, net, k);
+    if (params.coverage_floor > 0 && finished) apply_floor(k);
+  }
+
+  // The tracking guard, then the scope: with the guard the scope decides the
+  // keyframe that just became A old (while the window holds A keyframes or
+  // fewer, the guard skipped all).
+  template <typename Net>
+  void protect_and_scope(const Window& window, const Net& net, std::uint32_t k) {
+    const std::uint32_t maturity = params.maturity_keyframes;
+    if (maturity > 0) net.point_slots(slots_at.data(), slots.data());
+    protect_tracking(window, k);
+    if (params.scope == Scope::kNewest && k > maturity) restrict_to_newest(window, k - 1 - maturity);
+  }
+
+  // Turns a decided point into a skip, as the policies report skips.
+  void skip(PointDecision& d) {
+    --(d.verdict == Verdict::kKeep ? summary.kept : summary.culled);
+    ++summary.skipped;
+    d = PointDecision{d.point, Verdict::kSkip, 0, 0};
+  }
+
+  // Tracking-safe culling, before the scope and the floor: points first seen
+  // in the newest A window keyframes (Params::maturity_keyframes; first seen =
+  // the smallest window slot observing the point) are skipped as guarded;
+  // then the points the newest keyframe flags tracked (Keyframe::tracked)
+  // are skipped as tracked. The network is untouched: they still compete
+  // for the pairs' M, so the step is a pass over the exact optimum.
+  void protect_tracking(const Window& window, std::uint32_t k) {
+    const std::uint32_t maturity = params.maturity_keyframes;
+    if (maturity > 0) {
+      const std::uint32_t young_from = k > maturity ? k - maturity : 0;
+      for (std::uint32_t i = 0; i < count; ++i) {
+        PointDecision& d = decisions[i];
+        if (d.verdict == Verdict::kSkip) continue;
+        std::uint32_t first = k;
+        for (std::uint32_t x = slots_at[i]; x < slots_at[i + 1]; ++x) first = std::min(first, slots[x]);
+        if (first < young_from) continue;
+        skip(d);
+        ++summary.guarded;
+      }
+    }
+    if (k == 0 || window.keyframe(k - 1).tracked == nullptr) return;
+    const std::uint8_t* tracked = window.keyframe(k - 1).tracked;
+    const Observation* obs = window.observations(k - 1);
+    const PointDecision* first = decisions.data();
+    for (std::uint32_t o = 0; o < window.observation_count(k - 1); ++o) {
+      if (tracked[o] == 0) continue;
+      PointDecision* d = std::lower_bound(
+          decisions.data(), decisions.data() + count, obs[o].point,
+          [](const PointDecision& x, PointId id) { return x.point < id; });
+      if (d == first + count || d->point != obs[o].point || d->verdict == Verdict::kSkip) continue;
+      skip(*d);
+      ++summary.tracked;
     }
   }
 
-  // The newest keyframe's points are found by id among the decisions
+  // The decided keyframe's points are found by id among the decisions
   // (ascending id): its observations, not every point's keyframes, are read.
   void restrict_to_newest(const Window& window, std::uint32_t newest) {
     std::uint8_t* seen = in_scope.data();
@@ -299,10 +353,8 @@ struct Sparsifier::Impl {
     for (std::uint32_t i = 0; i < count; ++i) {
       PointDecision& d = decisions[i];
       if (d.verdict == Verdict::kSkip || seen[i]) continue;
-      --(d.verdict == Verdict::kKeep ? summary.kept : summary.culled);
-      ++summary.skipped;
+      skip(d);
       ++summary.out_of_scope;
-      d = PointDecision{d.point, Verdict::kSkip, 0, 0};
     }
   }
 

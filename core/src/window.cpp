@@ -33,6 +33,7 @@ struct Window::Impl {
   std::vector<std::uint32_t> obs_count;  // [max_keyframes]
   std::vector<Observation> pool;         // [max_observations], contiguous in slot order
   std::vector<PointId> scratch;          // [max_observations], duplicate check
+  std::vector<std::uint8_t> tracked;     // [max_observations], beside pool (Keyframe::tracked)
   std::vector<Keypoint> unmapped;        // [max_unmapped_keypoints], contiguous in slot order
   IdTable views;                         // distinct point -> keyframes observing it
   std::uint32_t count = 0;               // keyframes
@@ -46,6 +47,7 @@ struct Window::Impl {
     obs_count.resize(c.max_keyframes);
     pool.resize(c.max_observations);
     scratch.resize(c.max_observations);
+    tracked.resize(c.max_observations);
     unmapped.resize(c.max_unmapped_keypoints);
   }
 
@@ -129,6 +131,12 @@ Status Window::add(const Keyframe& keyframe, const Observation* observations, st
   w.obs_begin[slot] = w.total;
   w.obs_count[slot] = count;
   if (count > 0) std::memcpy(w.pool.data() + w.total, observations, count * sizeof(Observation));
+  if (count > 0 && keyframe.tracked != nullptr) {
+    std::memcpy(w.tracked.data() + w.total, keyframe.tracked, count);
+    w.keyframes[slot].tracked = w.tracked.data() + w.total;
+  } else {
+    w.keyframes[slot].tracked = nullptr;
+  }
   for (std::uint32_t i = 0; i < count; ++i) w.add_view(observations[i].point);
   w.total += count;
   if (keyframe.unmapped_count > 0) {
@@ -155,6 +163,7 @@ Status Window::remove_keyframe(KeyframeId id) {
   const std::uint32_t tail = w.total - begin - n;
   if (tail > 0) {
     std::memmove(w.pool.data() + begin, w.pool.data() + begin + n, tail * sizeof(Observation));
+    std::memmove(w.tracked.data() + begin, w.tracked.data() + begin + n, tail);
   }
   const std::uint32_t dropped = w.keyframes[slot].unmapped_count;
   if (dropped > 0) {
@@ -168,6 +177,7 @@ Status Window::remove_keyframe(KeyframeId id) {
     w.stamps[s] = w.stamps[s + 1];
     w.obs_begin[s] = w.obs_begin[s + 1] - n;
     w.obs_count[s] = w.obs_count[s + 1];
+    if (w.keyframes[s].tracked != nullptr) w.keyframes[s].tracked = w.tracked.data() + w.obs_begin[s];
   }
   w.total -= n;
   --w.count;
@@ -225,6 +235,7 @@ std::size_t Window::memory_bytes() const {
          w.stamps.capacity() * sizeof(std::uint64_t) +
          (w.obs_begin.capacity() + w.obs_count.capacity()) * sizeof(std::uint32_t) +
          w.pool.capacity() * sizeof(Observation) + w.scratch.capacity() * sizeof(PointId) +
+         w.tracked.capacity() +
          w.unmapped.capacity() * sizeof(Keypoint) +
          w.views.memory_bytes();
 }

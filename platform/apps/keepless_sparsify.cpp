@@ -78,6 +78,8 @@ const std::vector<keepless::cli::Flag> kFlags = {
     {"--scope", "window|newest", "decide every point, or only the newest keyframe's (default window)"},
     {"--floor", "L", "every keyframe keeps >= L of its evaluated points (default 0: off)"},
     {"--cost", "paper|authors|information", "point -> pair costs (default paper)"},
+    {"--maturity", "A", "tracking-safe culling: points first seen in the newest A keyframes of a\n"
+                        "window are not decided yet (default 0: off)"},
     {"--image", "WxH", "the image the authors' grid covers (default 640x480; COLMAP: its cameras')"},
     {"--max-keyframes", "N", "refuse an input with more keyframes (default 10000)"},
     {"--max-points", "N", "refuse an input with more points (default 2000000)"},
@@ -190,6 +192,12 @@ int parse_args(int argc, char** argv, Options* opt, bool* help, bool* version) {
         return usage_error(bad + " (an integer >= 0)");
       }
       opt->params.coverage_floor = static_cast<std::uint32_t>(floor);
+    } else if (flag == "--maturity") {
+      std::uint64_t maturity = 0;
+      if (!core::parse_uint64(value, &maturity) || maturity > std::numeric_limits<std::uint32_t>::max()) {
+        return usage_error(bad + " (an integer >= 0)");
+      }
+      opt->params.maturity_keyframes = static_cast<std::uint32_t>(maturity);
     } else if (flag == "--cost") {
       if (!core::parse_cost_model(value, &opt->params.cost_model)) {
         return usage_error(bad + " (paper, authors or information)");
@@ -367,13 +375,15 @@ int decide_window_unguarded(const Options& opt, const core::WindowFile& file, co
       "\"parse_ms\":%.3f,\"build_ms\":%.3f,\"solve_ms\":%.3f,\"memory_bytes\":%zu,"
       "\"scope\":\"%s\",\"floor\":%u,\"cost\":\"%s\",\"out_of_scope\":%u,"
       "\"floor_keyframes\":%u,\"floor_promoted\":%u,\"floor_short\":%u,"
-      "\"budget\":\"%s\",\"budget_value\":%s,\"budget_m\":%" PRId64 ",\"budget_observations\":%" PRIu64 "}\n",
+      "\"budget\":\"%s\",\"budget_value\":%s,\"budget_m\":%" PRId64 ",\"budget_observations\":%" PRIu64 ","
+      "\"maturity\":%u,\"guarded\":%u}\n",
       sum.keyframes, sum.points, sum.evaluated, sum.kept, sum.culled, sum.skipped, sum.pairs,
       sum.arcs, sum.max_flow, sum.total_cost, opt.params.pair_capacity, theta, opt.params.box_width,
       opt.params.box_height, parse_ms, build_ms, solve_ms, memory, core::to_string(opt.params.scope),
       opt.params.coverage_floor, core::to_string(opt.params.cost_model), sum.out_of_scope,
       sum.floor_keyframes, sum.floor_promoted, sum.floor_short,
-      core::to_string(opt.params.budget.kind), budget_value, sum.budget_m, sum.budget_observations);
+      core::to_string(opt.params.budget.kind), budget_value, sum.budget_m, sum.budget_observations,
+      opt.params.maturity_keyframes, sum.guarded);
   return std::fflush(stdout) == 0 ? 0 : kExitInternal;
 }
 

@@ -107,7 +107,11 @@ RejectReason check_keyframe_bytes(const void* data, std::size_t size, const Mess
   if (unmapped < 0) return RejectReason::kInvalidField;
   if (static_cast<std::uint32_t>(unmapped) > limits.max_unmapped) return RejectReason::kOversizeCount;
   at += 8 * static_cast<std::size_t>(unmapped);
-  if (size != at + wire::kKeyframeTrailerBytes) return RejectReason::kTruncated;
+  // Tracked flags, after publisher_id: 0 or one per observation.
+  if (size < at + wire::kKeyframeTrailerBytes) return RejectReason::kTruncated;
+  const std::int32_t tracked = read_be32(p + at + wire::kKeyframeTrailerBytes - 4);
+  if (tracked != 0 && tracked != n) return RejectReason::kInvalidField;
+  if (size != at + wire::kKeyframeTrailerBytes + static_cast<std::size_t>(tracked)) return RejectReason::kTruncated;
   return RejectReason::kNone;
 }
 
@@ -238,6 +242,14 @@ RejectReason check_keyframe(const keepless::keyframe_t& msg, const core::Window&
   }
   for (std::size_t i = 0; i < unmapped; ++i) {
     if (!std::isfinite(msg.unmapped_u[i]) || !std::isfinite(msg.unmapped_v[i])) return RejectReason::kNonFinite;
+  }
+  // Tracked flags: none, or one 0/1 per observation.
+  if ((msg.num_tracked != 0 && msg.num_tracked != msg.num_observations) ||
+      msg.tracked.size() != static_cast<std::size_t>(msg.num_tracked)) {
+    return RejectReason::kInvalidField;
+  }
+  for (std::int8_t t : msg.tracked) {
+    if (t != 0 && t != 1) return RejectReason::kInvalidField;
   }
   if (msg.image_width <= 0 || msg.image_height <= 0) return RejectReason::kInvalidField;
   // Float-derived quaternions are off by ~1e-7; anything far from unit is a bug upstream.

@@ -69,7 +69,9 @@ struct Node::Impl {
     kf.intrinsics.reserve(4);
     kf.unmapped_u.reserve(c.max_unmapped);
     kf.unmapped_v.reserve(c.max_unmapped);
+    kf.tracked.reserve(c.max_observations);
     unmapped.resize(c.max_unmapped);
+    tracked.resize(c.max_observations);
     event.deleted_point_id.reserve(c.max_event_ids);
     event.merged_from_id.reserve(c.max_event_ids);
     event.merged_into_id.reserve(c.max_event_ids);
@@ -205,6 +207,7 @@ struct Node::Impl {
       observations[kept].u = static_cast<double>(kf.u[i]);
       observations[kept].v = static_cast<double>(kf.v[i]);
       observations[kept].depth = kf.num_depths != 0 ? static_cast<double>(kf.depth[i]) : 0.0;
+      tracked[kept] = kf.num_tracked != 0 ? static_cast<std::uint8_t>(kf.tracked[i]) : 0;
       ++kept;
     }
     core::Keyframe keyframe;
@@ -223,6 +226,7 @@ struct Node::Impl {
     }
     keyframe.unmapped = unmapped.data();
     keyframe.unmapped_count = m;
+    keyframe.tracked = kf.num_tracked != 0 ? tracked.data() : nullptr;
     const core::Status s = sliding.push(keyframe, observations.data(), kept, evicted);
     if (s != core::Status::kOk) return reason_of(s);
     if (*evicted > 0) note_window_overflow(kf.sequence);
@@ -248,6 +252,7 @@ struct Node::Impl {
     kf.intrinsics.clear();
     kf.unmapped_u.clear();
     kf.unmapped_v.clear();
+    kf.tracked.clear();
     if (r == RejectReason::kNone && kf.decode(data, 0, static_cast<int>(size)) < 0) r = RejectReason::kTruncated;
     if (r != RejectReason::kNone) {
       // Ids unreadable: no decision can name the request.
@@ -503,6 +508,7 @@ struct Node::Impl {
            observations.size() * sizeof(core::Observation) + id_scratch.size() * sizeof(std::uint64_t) +
            (kf.point_id.capacity() * 16) + kf.depth.capacity() * 4 + kf.intrinsics.capacity() * 8 +
            kf.unmapped_u.capacity() * 8 + unmapped.size() * sizeof(core::Keypoint) +
+           kf.tracked.capacity() + tracked.size() +
            (event.deleted_point_id.capacity() + event.merged_from_id.capacity() +
             event.merged_into_id.capacity() + event.removed_keyframe_id.capacity()) * 8 +
            (decision.window_keyframe_id.capacity() + decision.culled_point_id.capacity()) * 8 +
@@ -555,6 +561,7 @@ struct Node::Impl {
   keepless::status_t status{};
   std::vector<core::Observation> observations;
   std::vector<core::Keypoint> unmapped;  // [max_unmapped]
+  std::vector<std::uint8_t> tracked;     // [max_observations], the accepted observations' flags
   std::vector<std::uint64_t> id_scratch;
   std::vector<std::uint8_t> out;
   std::array<std::uint8_t, 1024> small{};

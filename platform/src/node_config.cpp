@@ -93,6 +93,8 @@ std::string node_usage() {
          "  --cost paper|authors|information\n"
          "                            point -> pair costs (default paper; README, Decision policies)\n"
          "  --image WxH               the image the authors' 64x48 grid covers (default 640x480)\n"
+         "  --maturity A              points first seen in the newest A window keyframes are not decided\n"
+         "                            yet (default 0: off); a keyframe_t's tracked flags are always honoured\n"
          "  --budget-work N           solver work units per decision (default unlimited)\n"
          "  --latency-target-ms X     solve deadline from keyframe arrival (default 5; 0 = none)\n"
          "  --cpus LIST               pin to these CPUs, e.g. 0,1 or 2-3 (reported if refused)\n"
@@ -287,6 +289,9 @@ ParseResult parse_node_arguments(int argc, const char* const* argv, NodeConfig& 
       if (!core::parse_cost_model(value.c_str(), &config.params.cost_model)) {
         return bad("expected paper, authors or information");
       }
+    } else if (flag == "--maturity") {
+      if (!parse_u64(value, 0, std::numeric_limits<std::uint32_t>::max(), n)) return bad("expected an integer >= 0");
+      config.params.maturity_keyframes = static_cast<std::uint32_t>(n);
     } else if (flag == "--image") {
       if (!parse_box(value, config.params.image_width, config.params.image_height) ||
           config.params.image_width < 1 || config.params.image_height < 1) {

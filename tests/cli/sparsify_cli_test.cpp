@@ -421,6 +421,7 @@ void expect_matches_reference(const Result& r, const std::string& window, const 
   EXPECT_EQ(json_int(json, "floor_keyframes"), ref.floor_keyframes);
   EXPECT_EQ(json_int(json, "floor_promoted"), ref.floor_promoted);
   EXPECT_EQ(json_int(json, "floor_short"), ref.floor_short);
+  EXPECT_EQ(json_int(json, "guarded"), ref.guarded);
   EXPECT_NE(json.find(std::string("\"scope\":\"") + core::to_string(params.scope) + "\""),
             std::string::npos);
   EXPECT_NE(json.find(std::string("\"cost\":\"") + core::to_string(params.cost_model) + "\""),
@@ -540,6 +541,24 @@ TEST_F(SparsifyCliTest, KeepBudgetsReachTheLibrary) {
     EXPECT_EQ(kept, s.summary().kept);
     EXPECT_GT(lines, kept);
   }
+}
+
+// --maturity reaches the library: the reference's decisions and guarded count.
+TEST_F(SparsifyCliTest, MaturityMatchesReference) {
+  const std::string window = write("clustered.txt", clustered_window());
+  const std::string out = path("decisions.txt");
+  for (const char* scope : {"window", "newest"}) {
+    SCOPED_TRACE(scope);
+    core::Params params;
+    params.pair_capacity = 2;
+    params.maturity_keyframes = 1;
+    ASSERT_TRUE(core::parse_scope(scope, &params.scope));
+    const Result r = sparsify({"--window", window, "--M", "2", "--scope", scope, "--maturity", "1", "--decisions", out});
+    expect_matches_reference(r, window, out, params);
+    EXPECT_EQ(json_int(last_line(r.out), "maturity"), 1);
+  }
+  const Result bad = sparsify({"--window", window, "--maturity", "-1"});
+  EXPECT_EQ(bad.status, 2);
 }
 
 #ifdef KEEPLESS_MAKE_WINDOW_BIN

@@ -162,6 +162,21 @@ inline void random_policies(RandomCase& c, std::uint64_t seed) {
   }
 }
 
+// Tracking-safe culling on a case: a maturity guard A in 0..4 and tracked
+// flags on some keyframes (the newest's protect, the others' must be ignored).
+inline void random_guard(RandomCase& c, std::uint64_t seed) {
+  Rng rng(seed ^ 0x6775617264ULL);
+  c.params.maturity_keyframes = static_cast<std::uint32_t>(rng.between(0, 4));
+  for (auto& f : c.frames) {
+    f.tracked.clear();
+    if (!rng.chance(60)) continue;
+    const int percent = static_cast<int>(rng.between(5, 60));
+    for (std::size_t i = 0; i < f.observations.size(); ++i) {
+      f.tracked.push_back(rng.chance(percent) ? static_cast<std::uint8_t>(rng.between(1, 255)) : 0);
+    }
+  }
+}
+
 inline core::Keyframe keyframe_of(const RefKeyframe& f, std::vector<core::Keypoint>& unmapped) {
   core::Keyframe kf;
   kf.id = f.id;
@@ -174,6 +189,7 @@ inline core::Keyframe keyframe_of(const RefKeyframe& f, std::vector<core::Keypoi
   for (const auto& k : f.unmapped) unmapped.push_back({k.first, k.second});
   kf.unmapped = unmapped.data();
   kf.unmapped_count = static_cast<std::uint32_t>(unmapped.size());
+  kf.tracked = f.tracked.empty() ? nullptr : f.tracked.data();
   return kf;
 }
 

@@ -174,5 +174,78 @@ TEST(ZeroAllocation, PoliciesAndCostModelsAllocateNothing) {
   EXPECT_GT(promoted, 0u);
 }
 
+// Tracking-safe culling on: a maturity guard with each scope and a floor,
+// and tracked flags on the keyframes; from-scratch and incremental.
+TEST(ZeroAllocation, TrackingGuardAllocatesNothing) {
+  const Capacities caps{12, 2048, 8192, 32768, 2048};
+  struct Frame {
+    Keyframe keyframe;
+    std::vector<Observation> observations;
+    std::vector<Keypoint> unmapped;
+    std::vector<std::uint8_t> tracked;
+  };
+  std::vector<std::vector<Frame>> windows;
+  for (std::uint64_t seed = 1; seed <= 12; ++seed) {
+    auto c = test::random_case(seed, 12, 150);
+    test::random_policies(c, seed);
+    test::random_guard(c, seed);
+    std::vector<Frame> frames(c.frames.size());
+    for (std::size_t i = 0; i < frames.size(); ++i) {
+      frames[i].tracked = c.frames[i].tracked;
+      frames[i].keyframe = test::keyframe_of(c.frames[i], frames[i].unmapped);
+      frames[i].keyframe.tracked = frames[i].tracked.empty() ? nullptr : frames[i].tracked.data();
+      frames[i].observations = test::observations_of(c.frames[i]);
+    }
+    windows.push_back(std::move(frames));
+  }
+  std::vector<std::unique_ptr<Sparsifier>> sparsifiers;
+  for (Scope scope : {Scope::kWindow, Scope::kNewest}) {
+    Params p;
+    p.pair_capacity = 2;
+    p.scope = scope;
+    p.coverage_floor = 10;
+    p.maturity_keyframes = 2;
+    for (Start start : {Start::kClosedForm, Start::kZeroFlow}) {
+      sparsifiers.push_back(std::make_unique<Sparsifier>(caps, p, SolveMode::kIncremental, start));
+    }
+  }
+  Window window(caps);
+  const auto run_all = [&](std::uint64_t* guarded) {
+    std::uint32_t ok = 0;
+    for (auto& s : sparsifiers) {
+      ok += s->run(window) == Status::kOk;
+      *guarded += s->summary().guarded + s->summary().tracked;
+      ok += s->update(window) == Status::kOk;
+    }
+    return ok;
+  };
+  std::uint64_t guarded = 0;
+  for (const auto& f : windows[0]) {
+    ASSERT_EQ(window.add_keyframe(f.keyframe, f.observations.data(),
+                                  static_cast<std::uint32_t>(f.observations.size())),
+              Status::kOk);
+  }
+  ASSERT_EQ(run_all(&guarded), 2 * sparsifiers.size());  // warm-up
+  window.clear();
+
+  std::uint64_t calls = 0, ok = 0;
+  guarded = 0;
+  test::AllocationCounter counter;
+  for (const auto& frames : windows) {
+    for (const auto& f : frames) {
+      if (window.keyframe_count() == 6) (void)window.remove_keyframe(window.keyframe(0).id);
+      (void)window.add_keyframe(f.keyframe, f.observations.data(),
+                                static_cast<std::uint32_t>(f.observations.size()));
+      ok += run_all(&guarded);
+      calls += 2 * sparsifiers.size();
+    }
+    window.clear();
+  }
+  EXPECT_EQ(counter.stop(), 0u);
+  EXPECT_EQ(ok, calls);
+  EXPECT_GT(calls, 200u);
+  EXPECT_GT(guarded, 0u);
+}
+
 }  // namespace
 }  // namespace keepless::core

@@ -63,6 +63,32 @@ TEST(LcmMessages, KeyframeCountAtFixedOffset) {
 
 // The optional arrays after the observations (depths, intrinsics, unmapped
 // keypoints): a round trip, and the pre-decode checks of their counts.
+// The tracked flags after publisher_id: a round trip, and the pre-decode
+// check of their count (0 or num_observations).
+TEST(LcmMessages, KeyframeTrackedFlags) {
+  using keepless::platform::RejectReason;
+  const keepless::platform::MessageLimits limits;
+  keepless::keyframe_t m = kt::make_keyframe(1, 1, {5, 6, 7});
+  m.publisher_id = 9;
+  m.num_tracked = 3;
+  m.tracked = {1, 0, 1};
+  const auto bytes = kt::encode(m);
+  ASSERT_EQ(bytes.size(), wire::kKeyframeHeaderBytes + 3 * wire::kKeyframeBytesPerObservation +
+                              wire::kKeyframeOptionalCountBytes + wire::kKeyframeTrailerBytes + 3);
+  EXPECT_EQ(keepless::platform::check_keyframe_bytes(bytes.data(), bytes.size(), limits), RejectReason::kNone);
+  keepless::keyframe_t d{};
+  ASSERT_EQ(d.decode(bytes.data(), 0, static_cast<int>(bytes.size())), static_cast<int>(bytes.size()));
+  EXPECT_EQ(d.tracked, m.tracked);
+  EXPECT_EQ(d.publisher_id, 9);
+  m.num_tracked = 2;
+  m.tracked = {1, 0};
+  const auto bad = kt::encode(m);
+  EXPECT_EQ(keepless::platform::check_keyframe_bytes(bad.data(), bad.size(), limits), RejectReason::kInvalidField);
+  auto cut = bytes;
+  cut.pop_back();
+  EXPECT_EQ(keepless::platform::check_keyframe_bytes(cut.data(), cut.size(), limits), RejectReason::kTruncated);
+}
+
 TEST(LcmMessages, KeyframeOptionalFields) {
   keepless::keyframe_t m = kt::make_keyframe(1, 1, {5, 6, 7});
   m.num_depths = 3;
@@ -106,8 +132,8 @@ TEST(LcmMessages, KeyframeOptionalFields) {
   bad = m;
   auto negative = kt::encode(bad);
   // num_unmapped sits 4 + 16 bytes (its two floats each) + the 8-byte
-  // publisher_id before the end.
-  negative[negative.size() - 28] = 0xff;
+  // publisher_id + the 4-byte num_tracked (no flags) before the end.
+  negative[negative.size() - 32] = 0xff;
   EXPECT_EQ(check(negative), RejectReason::kInvalidField);
 }
 

@@ -252,6 +252,19 @@ TEST(NodeConfig, ParsesTheKeepBudgets) {
   EXPECT_NE(error.find("exclude each other"), std::string::npos) << error;
 }
 
+TEST(NodeConfig, ParsesTheMaturityGuard) {
+  NodeConfig c;
+  std::string error;
+  ASSERT_EQ(parse({}, c, error), ParseResult::kOk);
+  EXPECT_EQ(c.params.maturity_keyframes, 0u);  // off by default
+  ASSERT_EQ(parse({"--maturity", "2"}, c, error), ParseResult::kOk) << error;
+  EXPECT_EQ(c.params.maturity_keyframes, 2u);
+  for (const char* bad : {"-1", "x", "4294967296"}) {
+    NodeConfig d;
+    EXPECT_EQ(parse({"--maturity", bad}, d, error), ParseResult::kError) << bad;
+  }
+}
+
 TEST(NodeConfig, ParsesTheReliabilityFlags) {
   NodeConfig c;
   std::string error;

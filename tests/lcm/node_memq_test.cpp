@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 #include <lcm/lcm-cpp.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <memory>
@@ -538,6 +539,71 @@ TEST_F(NodeOnMemq, PoliciesAndOptionalFieldsMatchTheLibrary) {
     send(big);
     EXPECT_EQ(rejected(RejectReason::kOversizeCount), 1u);
   }
+}
+
+// Tracking-safe culling: the tracked flags of keyframe_t reach the window,
+// the newest keyframe's flagged points are never culled, and with --maturity
+// the decisions equal the library's on the same windows.
+TEST_F(NodeOnMemq, TrackedFlagsAndMaturityMatchTheLibrary) {
+  NodeConfig c = default_config();
+  c.params.pair_capacity = 2;
+  c.params.maturity_keyframes = 1;
+  make_node(c);
+  kt::ReferenceNode ref(keepless::platform::window_capacities(config_), config_.params, config_.window);
+  std::vector<kt::ReferenceDecision> expected;
+  std::vector<keepless::keyframe_t> sent;
+  for (int i = 0; i < 8; ++i) {
+    keepless::keyframe_t m = kt::make_keyframe(i + 1, 100 + i, kt::id_range(i * 8, 40));
+    if (i % 4 != 2) {  // every fourth keyframe sends none
+      m.num_tracked = m.num_observations;
+      for (int j = 0; j < m.num_observations; ++j) m.tracked.push_back(static_cast<std::int8_t>((j + i) % 3 == 0));
+    }
+    expected.push_back(ref.step(m));
+    sent.push_back(m);
+    send(m);
+  }
+  ASSERT_EQ(decisions_.size(), 8u);
+  EXPECT_EQ(node_->counters().messages_rejected, 0u);
+  int culled = 0;
+  for (int i = 0; i < 8; ++i) {
+    kt::expect_same(expected[i], decisions_[i], ("keyframe " + std::to_string(i)).c_str());
+    culled += decisions_[i].num_culled;
+    const keepless::keyframe_t& m = sent[static_cast<std::size_t>(i)];
+    for (int j = 0; j < m.num_tracked; ++j) {
+      if (m.tracked[static_cast<std::size_t>(j)] == 0) continue;
+      EXPECT_EQ(std::count(decisions_[i].culled_point_id.begin(), decisions_[i].culled_point_id.end(),
+                           m.point_id[static_cast<std::size_t>(j)]),
+                0)
+          << "tracked point " << m.point_id[static_cast<std::size_t>(j)] << " culled at keyframe " << i;
+    }
+  }
+  EXPECT_GT(culled, 0) << "the stream should exercise culling";
+  // The newest keyframe in the window holds its flags.
+  const keepless::core::Window& w = node_->window();
+  ASSERT_NE(w.keyframe(w.keyframe_count() - 1).tracked, nullptr);
+}
+
+TEST_F(NodeOnMemq, RejectsBadTrackedFlags) {
+  fill();
+  const WindowSnapshot before = snapshot(node_->window());
+  keepless::keyframe_t m = kt::make_keyframe(4, 13, kt::id_range(0, 5));
+  m.num_tracked = 4;  // neither 0 nor num_observations
+  m.tracked.assign(4, 1);
+  send(m);
+  EXPECT_EQ(rejected(RejectReason::kInvalidField), 1u);
+  m.num_tracked = 5;
+  m.tracked.assign(5, 0);
+  m.tracked[2] = 2;  // a flag is 0 or 1
+  send(m);
+  EXPECT_EQ(rejected(RejectReason::kInvalidField), 2u);
+  EXPECT_EQ(node_->counters().messages_rejected, 2u);
+  EXPECT_TRUE(snapshot(node_->window()) == before);
+  // The same message with good flags is taken.
+  m.tracked[2] = 1;
+  send(m);
+  EXPECT_EQ(node_->counters().messages_rejected, 2u);
+  EXPECT_EQ(node_->window().keyframe_count(), 4u);
+  EXPECT_NE(node_->window().keyframe(3).tracked, nullptr);
 }
 
 // --keep-fraction 0.3: every decision keeps exactly floor(0.3 x evaluated

@@ -46,6 +46,7 @@ class ReferenceNode {
       o.u = m.u[i];
       o.v = m.v[i];
       if (m.num_depths != 0) o.depth = m.depth[static_cast<std::size_t>(i)];
+      if (m.num_tracked != 0) f.tracked[o.point] = static_cast<std::uint8_t>(m.tracked[static_cast<std::size_t>(i)]);
       f.obs.push_back(o);
     }
     if (m.num_intrinsics == 4) {
@@ -57,6 +58,7 @@ class ReferenceNode {
     for (int i = 0; i < m.num_unmapped; ++i) {
       f.unmapped.push_back({m.unmapped_u[static_cast<std::size_t>(i)], m.unmapped_v[static_cast<std::size_t>(i)]});
     }
+    f.has_tracked = m.num_tracked != 0;
     if (frames_.size() == k_) frames_.pop_front();
     frames_.push_back(f);
 
@@ -65,6 +67,9 @@ class ReferenceNode {
       core::Keyframe kf = fr.kf;
       kf.unmapped = fr.unmapped.data();
       kf.unmapped_count = static_cast<std::uint32_t>(fr.unmapped.size());
+      std::vector<std::uint8_t> flags;  // the window copies them
+      for (const core::Observation& o : fr.obs) flags.push_back(fr.tracked.count(o.point) ? fr.tracked.at(o.point) : 0);
+      kf.tracked = fr.has_tracked && !flags.empty() ? flags.data() : nullptr;
       if (w.add_keyframe(kf, fr.obs.data(), static_cast<std::uint32_t>(fr.obs.size())) != core::Status::kOk) {
         ADD_FAILURE() << "reference window rejected keyframe " << fr.kf.id;
       }
@@ -115,14 +120,16 @@ class ReferenceNode {
     std::deque<Frame> next;
     for (Frame& fr : frames_) {
       if (removed.count(static_cast<std::int64_t>(fr.kf.id)) > 0) continue;
-      Frame out{fr.kf, {}, fr.unmapped};
+      Frame out{fr.kf, {}, fr.unmapped, {}, fr.has_tracked};
       std::set<core::PointId> seen;
       for (core::Observation o : fr.obs) {
         const auto id = static_cast<std::int64_t>(o.point);
         if (deleted.count(id) > 0) continue;
         const auto m = merged.find(id);
+        const std::uint8_t flag = fr.tracked.count(o.point) ? fr.tracked.at(o.point) : 0;
         if (m != merged.end()) o.point = static_cast<core::PointId>(m->second);
         if (!seen.insert(o.point).second) continue;
+        out.tracked[o.point] = flag;
         out.obs.push_back(o);
       }
       next.push_back(out);
@@ -135,6 +142,8 @@ class ReferenceNode {
     core::Keyframe kf;
     std::vector<core::Observation> obs;
     std::vector<core::Keypoint> unmapped;
+    std::map<core::PointId, std::uint8_t> tracked;  // keyframe_t's tracked flags by point
+    bool has_tracked = false;
   };
   core::Capacities caps_;
   core::Params params_;

@@ -268,6 +268,53 @@ TEST(OpencvKeyframes, NonFiniteDepthsOrIntrinsicsAndShortDepthListsAreRefused) {
   EXPECT_EQ(window.keyframe_count(), 1u);
 }
 
+// Tracked flags (KeyframeExtras::tracked) reach the window per mapped
+// observation, 0 for reserved-id unmapped keypoints; a wrong length is
+// refused; and the newest keyframe's tracked points are never culled.
+TEST(OpencvKeyframes, TrackedFlagsReachTheWindowAndProtect) {
+  const core::Capacities caps = small_capacities();
+  core::Params params;
+  params.pair_capacity = 1;
+  core::Window window(caps);
+  core::Sparsifier sparsifier(caps, params);
+  KeyframeAdapter adapter(caps);
+  Frame a = frame(0, 0, 30), b = frame(1, 0, 30);
+  ASSERT_EQ(adapter.add_keyframe(window, 1, centre_at(0), a.keypoints, a.ids), Status::kOk);
+  ASSERT_EQ(adapter.add_keyframe(window, 2, centre_at(1), b.keypoints, b.ids), Status::kOk);
+  ASSERT_EQ(sparsifier.run(window), core::Status::kOk);
+  std::vector<core::PointId> culled;
+  culled_points(sparsifier, &culled);
+  ASSERT_FALSE(culled.empty());
+
+  std::vector<std::uint8_t> tracked(30, 0);
+  for (std::size_t i = 0; i < tracked.size(); i += 2) tracked[i] = 1;
+  std::vector<cv::KeyPoint> unmapped = {cv::KeyPoint(5.f, 5.f, 31.f)};
+  KeyframeExtras extras;
+  extras.unmapped = &unmapped;
+  extras.tracked = &tracked;
+  std::vector<std::uint8_t> short_tracked(29, 1);
+  KeyframeExtras bad = extras;
+  bad.tracked = &short_tracked;
+  ASSERT_TRUE(window.remove_keyframe(2) == core::Status::kOk);
+  EXPECT_EQ(adapter.add_keyframe(window, 2, centre_at(1), b.keypoints, b.ids, bad), Status::kSizeMismatch);
+  EXPECT_EQ(window.keyframe_count(), 1u);
+  ASSERT_EQ(adapter.add_keyframe(window, 2, centre_at(1), b.keypoints, b.ids, extras), Status::kOk);
+  const core::Keyframe& k = window.keyframe(1);
+  ASSERT_NE(k.tracked, nullptr);
+  ASSERT_EQ(window.observation_count(1), 31u);
+  for (std::uint32_t i = 0; i < 30; ++i) EXPECT_EQ(k.tracked[i], tracked[i]) << i;
+  EXPECT_EQ(k.tracked[30], 0);  // the unmapped keypoint's reserved id
+
+  ASSERT_EQ(sparsifier.run(window), core::Status::kOk);
+  std::vector<core::PointId> after;
+  culled_points(sparsifier, &after);
+  for (std::size_t i = 0; i < tracked.size(); ++i) {
+    if (tracked[i] == 0) continue;
+    EXPECT_FALSE(std::binary_search(after.begin(), after.end(), b.ids[i])) << b.ids[i];
+  }
+  EXPECT_GT(sparsifier.summary().tracked, 0u);
+}
+
 TEST(OpencvKeyframes, NativeUnmappedListCountsUnderAuthorsButNotInThePapersBox) {
   // Dense enough clutter (12 around each point) to move the authors' binned c_s.
   core::Capacities caps = small_capacities();

@@ -52,6 +52,23 @@ TEST(OpencvKeyframeMessage, CarriesPoseAndObservationsAndRoundTrips) {
   EXPECT_EQ(back.image_width, 640);
   EXPECT_EQ(back.publisher_id, 77);
 
+  EXPECT_EQ(msg.num_tracked, 0);  // no flags given
+  EXPECT_TRUE(msg.tracked.empty());
+  {  // with tracked flags: one per observation sent, the unmapped ones 0
+    std::vector<std::uint8_t> flags = {1, 0};
+    KeyframeExtras extras;
+    extras.unmapped = &unmapped;
+    extras.tracked = &flags;
+    KeyframeRecord flagged;
+    ASSERT_EQ(adapter.convert(43, pose, kps, ids, extras, &flagged), Status::kOk);
+    keepless::keyframe_t t;
+    to_keyframe_message(flagged, 11, 1500, 640, 480, true, &t);
+    EXPECT_EQ(t.num_tracked, 3);
+    EXPECT_EQ(t.tracked, (std::vector<std::int8_t>{1, 0, 0}));
+    to_keyframe_message(flagged, 12, 1600, 640, 480, false, &t);
+    EXPECT_EQ(t.num_tracked, 2);
+    EXPECT_EQ(t.tracked, (std::vector<std::int8_t>{1, 0}));
+  }
   to_keyframe_message(record, 10, 2000, 640, 480, true, &msg);
   ASSERT_EQ(msg.num_observations, 3);
   EXPECT_NE(static_cast<std::uint64_t>(msg.point_id[2]) & kUnmappedBit, 0u);

@@ -1,5 +1,6 @@
 #pragma once
-// The decision policies (core::Params::scope, core::Params::coverage_floor)
+// The decision policies (core::Params::maturity_keyframes and the newest
+// keyframe's tracked flags, core::Params::scope, core::Params::coverage_floor)
 // applied to the naive reference's optimum, written from their definitions:
 // each point's keyframes in a std::set, each keyframe's coverage recounted
 // from scratch at its turn, its culled points sorted whole.
@@ -23,9 +24,39 @@ inline void ref_apply_policies(const std::vector<RefKeyframe>& frames, const cor
     for (const auto& o : frames[f].observations) slots[o.point].insert(f);
   }
   const std::size_t k = frames.size();
-  if (params.scope == core::Scope::kNewest && k > 0) {
+  const auto skip = [](RefPoint& p) {
+    p.verdict = core::Verdict::kSkip;
+    p.flow = 0;
+    p.capacity = 0;
+  };
+  // Tracking-safe culling: a point whose oldest observing window keyframe is
+  // among the newest A is guarded; then a point the newest keyframe flags
+  // tracked.
+  const std::size_t a = params.maturity_keyframes;
+  for (RefPoint& p : r.points) {
+    if (a == 0 || p.verdict == core::Verdict::kSkip) continue;
+    const std::size_t first = *slots[p.id].begin();  // std::set: ascending
+    if (first + a >= k) {
+      skip(p);
+      ++r.guarded;
+    }
+  }
+  if (k > 0 && !frames[k - 1].tracked.empty()) {
+    std::set<std::uint64_t> tracked;
+    for (std::size_t i = 0; i < frames[k - 1].observations.size(); ++i) {
+      if (frames[k - 1].tracked[i] != 0) tracked.insert(frames[k - 1].observations[i].point);
+    }
     for (RefPoint& p : r.points) {
-      if (p.verdict == core::Verdict::kSkip || slots[p.id].count(k - 1) != 0) continue;
+      if (p.verdict == core::Verdict::kSkip || tracked.count(p.id) == 0) continue;
+      skip(p);
+      ++r.tracked;
+    }
+  }
+  // Scope newest decides the keyframe A slots before the newest.
+  if (params.scope == core::Scope::kNewest && k > a) {
+    const std::size_t decided = k - 1 - a;
+    for (RefPoint& p : r.points) {
+      if (p.verdict == core::Verdict::kSkip || slots[p.id].count(decided) != 0) continue;
       p.verdict = core::Verdict::kSkip;
       p.flow = 0;
       p.capacity = 0;

@@ -41,6 +41,7 @@ struct RefKeyframe {
   std::vector<RefObservation> observations;
   double fx = 0, fy = 0, cx = 0, cy = 0;  // fx = 0: unknown
   std::vector<std::pair<double, double>> unmapped;  // (u, v)
+  std::vector<std::uint8_t> tracked;  // empty, or one flag per observation (core::Keyframe::tracked)
 };
 
 struct RefPoint {
@@ -63,6 +64,8 @@ struct RefResult {
   std::uint32_t floor_keyframes = 0;
   std::uint32_t floor_promoted = 0;
   std::uint32_t floor_short = 0;
+  std::uint32_t guarded = 0;
+  std::uint32_t tracked = 0;
 };
 
 // c_m(n): c_m(m) = 1, c_m(n) = ceil((n+1)/(n-1) * c_m(n+1)), recursively.
@@ -277,6 +280,7 @@ inline std::vector<RefKeyframe> ref_frames_of(const core::Window& window) {
     for (std::uint32_t i = 0; i < window.observation_count(s); ++i) {
       const core::Observation& o = window.observations(s)[i];
       f.observations.push_back({o.point, o.u, o.v, o.depth});
+      if (kf.tracked != nullptr) f.tracked.push_back(kf.tracked[i]);
     }
     frames.push_back(f);
   }

@@ -76,6 +76,12 @@ const std::vector<cli::Flag> kFlags = {
     {"--floor", "L", "keepless's coverage floor (core::Params coverage_floor)"},
     {"--cost", "paper|authors|information", "keepless's cost model; with --kept-fraction the real VO\n"
                                             "decides the new keyframe's points"},
+    {"--maturity", "A", "tracking-safe culling: points first seen in the newest A window keyframes\n"
+                        "are not decided yet (core::Params maturity_keyframes); every selector\n"
+                        "culls only what keepless decided, so the baselines get the same guard\n"
+                        "(default 0: off)"},
+    {"--tracked-flags", nullptr, "the real VO sends the new keyframe's tracked flags (the points it\n"
+                                 "matched in that frame), which no selector culls"},
     {"--window-sizes", nullptr, "instead of the comparison: the original run of the first seed on each\n"
                                 "--trajectory, --images and --rgbd input, and the largest window it\n"
                                 "gives (keyframes, points, observations, pair arcs, unmapped keypoints)\n"
@@ -117,7 +123,8 @@ struct Args {
   int max_keyframes = -1, keypoints = -1, window = -1, ba_iterations = -1, image_frames = -1;
   bool window_sizes = false;
   bool noise_free = false, baselines = true, ablation = true, ablation_all = false;
-  keepless::core::Params policy;  // scope, coverage_floor, cost_model; the rest is set per variant
+  keepless::core::Params policy;  // scope, coverage_floor, cost_model, maturity_keyframes; the rest is set per variant
+  bool tracked_flags = false;     // --tracked-flags (the real VO)
 };
 
 [[noreturn]] void fail(const std::string& msg) {
@@ -224,6 +231,8 @@ Args parse(int argc, char** argv) {
       const std::string v = val();
       if (!keepless::core::parse_scope(v.c_str(), &a.policy.scope)) fail("--scope: expected window or newest, got '" + v + "'");
     } else if (f == "--floor") a.policy.coverage_floor = static_cast<std::uint32_t>(parse_int(f, val(), 0, 100000));
+    else if (f == "--maturity") a.policy.maturity_keyframes = static_cast<std::uint32_t>(parse_int(f, val(), 0, 1000));
+    else if (f == "--tracked-flags") a.tracked_flags = true;
     else if (f == "--cost") {
       const std::string v = val();
       if (!keepless::core::parse_cost_model(v.c_str(), &a.policy.cost_model))
@@ -327,6 +336,7 @@ ke::VariantSpec variant(const keepless::core::Params& policy, const std::string&
   v.params.scope = policy.scope;
   v.params.coverage_floor = policy.coverage_floor;
   v.params.cost_model = policy.cost_model;
+  v.params.maturity_keyframes = policy.maturity_keyframes;
   v.params.pair_capacity = std::isfinite(fraction) ? keepless::core::Params{}.pair_capacity : M;
   if (std::isfinite(fraction)) v.params.budget = {keepless::core::BudgetKind::kFraction, 0, fraction};
   v.params.cost_terms = costs;
@@ -443,6 +453,8 @@ int main(int argc, char** argv) {
   summary.coverage_floor = a.policy.coverage_floor;
   summary.settings += "; keepless scope " + summary.scope + ", coverage floor " +
                       std::to_string(summary.coverage_floor) + ", cost " + summary.cost_model;
+  if (a.policy.maturity_keyframes > 0) summary.settings += ", maturity " + std::to_string(a.policy.maturity_keyframes);
+  if (a.tracked_flags) summary.settings += ", tracked flags";
 
   std::vector<std::pair<std::string, ke::WindowSizes>> sizes;  // --window-sizes
   std::map<std::string, ke::WindowSizes> group_sizes;
@@ -540,6 +552,7 @@ int main(int argc, char** argv) {
     for (const OperatingPoint& op : a.ops) vo.ops.emplace_back(op.fraction, op.M);
     vo.baselines = a.baselines;
     vo.policy = a.policy;
+    vo.tracked_flags = a.tracked_flags;
     vo.out = a.out;
     std::string err;
     for (const auto& in : a.vo)

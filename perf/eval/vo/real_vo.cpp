@@ -382,11 +382,13 @@ int Vo::insert_keyframe(TrackedFrame& cur) {
   k.Tcw = cur.Tcw;
   k.f = cur.f;
   k.mp.assign(cur.f.keys.size(), -1);
+  k.tracked.assign(cur.f.keys.size(), 0);
   map_.kfs.push_back(std::move(k));
   const int id = static_cast<int>(map_.kfs.size()) - 1;
   for (std::size_t i = 0; i < cur.mp.size(); ++i) {
     const int p = cur.mp[i] >= 0 ? map_.resolve(cur.mp[i]) : -1;
     if (p < 0) continue;
+    map_.kfs[static_cast<std::size_t>(id)].tracked[i] = 1;
     map_.add_observation(p, id, static_cast<int>(i));
     map_.update_point(p);
   }
@@ -624,6 +626,7 @@ void Vo::select_points(int kf, const std::vector<int>& local) {
   std::vector<cv::KeyPoint> keypoints, unmapped;
   std::vector<core::PointId> ids;
   std::vector<double> depths;
+  std::vector<std::uint8_t> tracked;
   // The paper's box N(p, f) has counted the unmapped detections as
   // reserved-id observations since the VO first ran; core's native list is
   // what kAuthors' grid reads (and the box does not), so `paper` keeps the
@@ -640,10 +643,15 @@ void Vo::select_points(int kf, const std::vector<int>& local) {
     unmapped.clear();
     ids.clear();
     depths.clear();
+    tracked.clear();
+    // Only the new keyframe's flags are read (core::Keyframe::tracked).
+    const bool flags = opt_.tracked_flags && k == kf && f.tracked.size() == f.mp.size();
+    extras.tracked = flags ? &tracked : nullptr;
     for (std::size_t i = 0; i < f.mp.size(); ++i) {
       if (f.mp[i] >= 0 && !map_.points[static_cast<std::size_t>(f.mp[i])].bad) {
         keypoints.push_back(f.f.keys[i]);
         ids.push_back(static_cast<core::PointId>(f.mp[i]));
+        if (flags) tracked.push_back(f.tracked[i]);
         depths.push_back((f.Tcw * map_.points[static_cast<std::size_t>(f.mp[i])].X).z());
       } else {
         unmapped.push_back(f.f.keys[i]);

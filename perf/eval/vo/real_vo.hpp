@@ -30,6 +30,9 @@ struct RealVoOptions {
   // keepless (M = params.pair_capacity; scope, coverage_floor, cost_model as
   // the eval's --scope/--floor/--cost). image_width/height are the camera's.
   core::Params params;
+  // Send the new keyframe's tracked flags (core::Keyframe::tracked: the map
+  // points the tracker matched in that frame) with its window.
+  bool tracked_flags = false;
   int max_local_keyframes = 20;      // local BA / keepless window: the new keyframe and its best covisibles
   bool measure_windows = false;  // fill RealRunResult::window_sizes (window_sizes.hpp)
   // With measure_windows: replay the K = 20 windows at these capacities

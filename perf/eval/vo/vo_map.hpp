@@ -33,6 +33,9 @@ struct KeyFrame {
   Eigen::Isometry3d Tcw = Eigen::Isometry3d::Identity();
   Frame f;
   std::vector<int> mp;  // per keypoint, -1 = unmapped
+  // Per keypoint: the tracker matched its map point in the frame that became
+  // this keyframe (before the keyframe's own new points were made).
+  std::vector<std::uint8_t> tracked;
   bool bad = false;
   int parent = -1;                                          // set when culled
   Eigen::Isometry3d T_cp = Eigen::Isometry3d::Identity();  // pose relative to the parent then

@@ -58,6 +58,8 @@ void add_totals(const core::Summary& s, core::Summary* t) {
   t->floor_keyframes += s.floor_keyframes;
   t->floor_promoted += s.floor_promoted;
   t->floor_short += s.floor_short;
+  t->guarded += s.guarded;  // tracking-safe culling's counts, likewise
+  t->tracked += s.tracked;
 }
 
 // Final counts over the decisions.

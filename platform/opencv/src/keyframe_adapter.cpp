@@ -84,6 +84,7 @@ Status pose_from_orientation(const Eigen::Quaterniond& q_wc, const Eigen::Vector
 KeyframeAdapter::KeyframeAdapter(const core::Capacities& capacities) {
   record_.observations.reserve(capacities.max_observations);
   record_.unmapped.reserve(capacities.max_unmapped_keypoints);
+  record_.tracked.reserve(capacities.max_observations);
   sorted_.reserve(capacities.max_observations);
 }
 
@@ -95,6 +96,7 @@ Status KeyframeAdapter::convert(core::KeyframeId id, const CameraPose& pose,
   const std::vector<double>* depths = extras.depths;
   if (keypoints.size() != point_ids.size()) return Status::kSizeMismatch;
   if (depths != nullptr && depths->size() != point_ids.size()) return Status::kSizeMismatch;
+  if (extras.tracked != nullptr && extras.tracked->size() != point_ids.size()) return Status::kSizeMismatch;
   if (!pose.centre.allFinite() || !pose.orientation.coeffs().allFinite()) return Status::kNonFinite;
   if (std::abs(pose.orientation.norm() - 1.0) > kRotationTolerance) return Status::kNotRotation;
   const Intrinsics& in = extras.intrinsics;
@@ -149,6 +151,13 @@ Status KeyframeAdapter::convert(core::KeyframeId id, const CameraPose& pose,
   }
   out->keyframe.unmapped = out->unmapped.empty() ? nullptr : out->unmapped.data();
   out->keyframe.unmapped_count = static_cast<std::uint32_t>(out->unmapped.size());
+  // Tracked flags: the mapped keypoints' as given, 0 for reserved-id unmapped ones.
+  out->tracked.clear();
+  if (extras.tracked != nullptr) {
+    for (const std::uint8_t t : *extras.tracked) out->tracked.push_back(t != 0 ? 1 : 0);
+    out->tracked.resize(out->observations.size(), 0);
+  }
+  out->keyframe.tracked = out->tracked.empty() ? nullptr : out->tracked.data();
   return Status::kOk;
 }
 

@@ -98,6 +98,14 @@ struct Params {
   std::int32_t image_height = 480;
   // Keep budget (see KeepBudget): when set, it replaces M in selection.
   KeepBudget budget{};
+  // Tracking-safe culling: the maturity guard A. A point is first seen in
+  // the oldest window keyframe that observes it (window order); points first
+  // seen in the newest A keyframes are not decided yet (skipped,
+  // Summary::guarded) and are decided once A newer keyframes follow that
+  // one. With Scope::kNewest the decided keyframe is the one A slots before
+  // the newest (none while the window holds A keyframes or fewer). 0: off.
+  // (A keyframe's tracked flags, Keyframe::tracked, need no parameter.)
+  std::uint32_t maturity_keyframes = 0;
 };
 
 // The options' names as command lines spell them: "window", "newest";

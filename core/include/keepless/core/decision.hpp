@@ -45,6 +45,12 @@ struct Summary {
   // observations of the points it kept (before the floor's promotions).
   std::int64_t budget_m = 0;
   std::uint64_t budget_observations = 0;
+  // Tracking-safe culling: evaluated points skipped because they are younger
+  // than Params::maturity_keyframes, then those skipped because the newest
+  // keyframe flags them tracked (Keyframe::tracked); both counted in
+  // `skipped`, each point in one of them.
+  std::uint32_t guarded = 0;
+  std::uint32_t tracked = 0;
 };
 
 }  // namespace keepless::core

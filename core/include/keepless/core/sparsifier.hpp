@@ -13,8 +13,12 @@
 // the same window.
 //
 // The decision policies act on the exact optimum's verdicts, the same way in
-// run() and update(): Params::scope = kNewest turns every evaluated point the
-// newest keyframe does not observe into a skip (flow and capacity reported
+// run() and update(): first tracking-safe culling skips the points younger
+// than Params::maturity_keyframes (Summary::guarded) and those the newest
+// keyframe flags tracked (Keyframe::tracked, Summary::tracked); then
+// Params::scope = kNewest (deciding the keyframe maturity_keyframes before
+// the newest) turns every evaluated point the
+// decided keyframe does not observe into a skip (flow and capacity reported
 // as 0, Summary::out_of_scope); Params::coverage_floor = L then promotes
 // culled points back to keep, keyframe by keyframe from the oldest, until
 // each keyframe has L evaluated points not culled or none of its evaluated

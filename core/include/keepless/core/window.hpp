@@ -30,6 +30,13 @@ struct Keyframe {
   // a keyframe read back from a Window points at the window's copy.
   const Keypoint* unmapped = nullptr;
   std::uint32_t unmapped_count = 0;
+  // Optional tracked flags, one per observation in add_keyframe's order
+  // (null: none): nonzero = the tracker matched this point in its latest
+  // frames. The newest window keyframe's flags protect those points from
+  // culling (Summary::tracked); older keyframes' flags are history and are
+  // not read. add_keyframe copies them; a keyframe read back from a Window
+  // points at the window's copy.
+  const std::uint8_t* tracked = nullptr;
 };
 
 struct Observation {

@@ -53,7 +53,9 @@ constexpr std::size_t kKeyframeBytesPerObservation = 16;  // int64 id + 2 float
 // After the observations: int32 num_depths, its floats, int32
 // num_intrinsics, its doubles, int32 num_unmapped, its 2 floats each.
 constexpr std::size_t kKeyframeOptionalCountBytes = 12;
-constexpr std::size_t kKeyframeTrailerBytes = 8;          // int64 publisher_id, after the arrays
+// After the arrays: int64 publisher_id, int32 num_tracked, then its int8
+// flags (0 or num_observations of them).
+constexpr std::size_t kKeyframeTrailerBytes = 12;
 constexpr std::size_t kMapEventCountOffset = 25;          // 3 x int32: deleted, merged, removed
 constexpr std::size_t kMapEventHeaderBytes = 37;
 constexpr std::size_t kMapEventTrailerBytes = 8;          // int64 publisher_id

@@ -87,14 +87,20 @@ struct KeyframeExtras {
   // unknown (the observation costs the neutral level); NaN or infinity is
   // refused (kNonFinite), a length other than point_ids' is kSizeMismatch.
   const std::vector<double>* depths = nullptr;
+  // Per mapped keypoint (in point_ids' order), nonzero if the tracker matched
+  // its map point in its latest frames (core::Keyframe::tracked): on the
+  // newest window keyframe those points are never culled. A length other
+  // than point_ids' is kSizeMismatch.
+  const std::vector<std::uint8_t>* tracked = nullptr;
 };
 
 // A keyframe converted for the window: what add_keyframe and keyframe_t take.
 struct KeyframeRecord {
-  core::Keyframe keyframe;  // keyframe.unmapped points into `unmapped` (re-point it after a copy)
+  core::Keyframe keyframe;  // keyframe.unmapped/.tracked point into `unmapped`/`tracked` (re-point them after a copy)
   std::vector<core::Observation> observations;  // mapped first, then reserved-id unmapped
   std::uint32_t mapped = 0;                     // observations[0, mapped) are map points
   std::vector<core::Keypoint> unmapped;         // UnmappedAs::kKeypointList
+  std::vector<std::uint8_t> tracked;            // per observation, or empty (keyframe.tracked points here)
 };
 
 // Converts keyframes into a window. Its buffers are reserved once from the

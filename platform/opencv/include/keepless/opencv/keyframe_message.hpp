@@ -15,8 +15,8 @@ namespace keepless::opencv {
 // or the keyframe's native list as unmapped_u/v), so the node's N(p, f)
 // counts them as the window's did. The optional arrays carry the observations'
 // depths when any is known and the keyframe's intrinsics when set (the
-// information cost model); publisher_id names this process to the node's
-// stream-order policy. No status: the record was validated when it was made.
+// information cost model), and the tracked flags when the record has them;
+// publisher_id names this process to the node's stream-order policy. No status: the record was validated when it was made.
 inline void to_keyframe_message(const KeyframeRecord& record, std::int64_t sequence, std::int64_t utime,
                                 std::int32_t image_width, std::int32_t image_height, bool with_unmapped,
                                 keepless::keyframe_t* out, std::int64_t publisher_id = 0) {
@@ -57,6 +57,11 @@ inline void to_keyframe_message(const KeyframeRecord& record, std::int64_t seque
     out->unmapped_v[i] = static_cast<float>(record.unmapped[i].v);
   }
   out->publisher_id = publisher_id;
+  // Tracked flags (KeyframeExtras::tracked), one per observation sent.
+  const bool tracked = !record.tracked.empty();
+  out->num_tracked = tracked ? static_cast<std::int32_t>(n) : 0;
+  out->tracked.resize(tracked ? n : 0);
+  for (std::uint32_t i = 0; tracked && i < n; ++i) out->tracked[i] = static_cast<std::int8_t>(record.tracked[i] != 0);
 }
 
 }  // namespace keepless::opencv
