@@ -33,6 +33,7 @@
 #include <exception>
 #include <limits>
 #include <new>
+#include <stdexcept>
 #include <string>
 
 #include "keepless/core/config.hpp"
@@ -298,6 +299,10 @@ int main(int argc, char** argv) {
     }
     return run(opt);
   } catch (const std::bad_alloc&) {  // below --max-memory-mb, but the machine has less
+    std::fprintf(stderr, "%s:0: cannot allocate the memory this window needs (lower --max-memory-mb)\n",
+                 opt.window.c_str());
+    return kExitInput;
+  } catch (const std::length_error&) {  // the same on 32-bit: an array larger than the address space
     std::fprintf(stderr, "%s:0: cannot allocate the memory this window needs (lower --max-memory-mb)\n",
                  opt.window.c_str());
     return kExitInput;
