@@ -9,5 +9,5 @@ set(KEEPLESS_SYSROOT_NAME sysroot-armhf)
 # argument passing of such structs changed in GCC 7.1: it concerns linking
 # with objects built by GCC 6 or older, never the case here (one compiler,
 # the sysroot's GCC 12 libstdc++).
-string(APPEND CMAKE_CXX_FLAGS_INIT " -Wno-psabi")
+set(CMAKE_CXX_FLAGS_INIT "-Wno-psabi")  # set, not appended: CMake reads this file more than once
 include(${CMAKE_CURRENT_LIST_DIR}/linux_cross.cmake)
