@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# cross_build.sh <aarch64|armhf> [--no-embedded]
+# cross_build.sh <aarch64|armhf> [--ci] [--no-embedded]
 #
 # From a clean clone: installs the host tools it needs (idempotently),
 # prepares the cached target sysroot, configures and builds keepless for the
@@ -11,17 +11,33 @@
 #
 #   aarch64: presets `aarch64` (build-aarch64/) and `embedded`
 #            (build-aarch64-embedded/)
-#   armhf:   toolchains/arm-linux-gnueabihf.cmake (build-armhf/), no embedded
+#   armhf:   presets `armhf` (build-armhf/) and `embedded-armhf`
+#            (build-armhf-embedded/)
+#
+# --ci: the shorter run CI makes: no full build; the embedded profile only,
+# with the lcm tests built and run beside the solver, core and cross ones.
+# --no-embedded: the full build and suite only.
 set -euo pipefail
 
 arch="${1:-}"
-embedded=1
-[[ "${2:-}" == "--no-embedded" ]] && embedded=0
+shift || true
+embedded=1 full=1
+for flag in "$@"; do
+  case "$flag" in
+    --ci) full=0 ;;
+    --no-embedded) embedded=0 ;;
+    *) arch="" ;;
+  esac
+done
 case "$arch" in
-  aarch64) triple=aarch64-linux-gnu ;;
-  armhf)   triple=arm-linux-gnueabihf; embedded=0 ;;
-  *) echo "usage: $0 <aarch64|armhf> [--no-embedded]" >&2; exit 2 ;;
+  aarch64) triple=aarch64-linux-gnu;   qemu=qemu-aarch64; embedded_preset=embedded ;;
+  armhf)   triple=arm-linux-gnueabihf; qemu=qemu-arm;     embedded_preset=embedded-armhf ;;
+  *) echo "usage: $0 <aarch64|armhf> [--ci] [--no-embedded]" >&2; exit 2 ;;
 esac
+if ((!full && !embedded)); then
+  echo "cross_build.sh: --ci runs the embedded profile; it cannot be combined with --no-embedded" >&2
+  exit 2
+fi
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$root"
 start=$SECONDS
@@ -50,23 +66,14 @@ step "sysroot"
 
 status=0
 # --- full build and suite under qemu -----------------------------------------
-if [[ "$arch" == aarch64 ]]; then
-  build="$root/build-aarch64"
-  step "configure (preset aarch64)"
-  cmake --preset aarch64
+build="$root/build-$arch"
+if ((full)); then
+  step "configure (preset $arch)"
+  cmake --preset "$arch"
   step "build"
-  cmake --build --preset aarch64
-  step "ctest under qemu-aarch64"
-  ctest --preset aarch64 || status=1
-else
-  build="$root/build-$arch"
-  step "configure ($triple)"
-  cmake -S "$root" -B "$build" -G Ninja -DCMAKE_TOOLCHAIN_FILE="$root/toolchains/$triple.cmake" \
-        -DCMAKE_BUILD_TYPE=Release -DKEEPLESS_WERROR=ON -DKEEPLESS_BUILD_PERF=OFF
-  step "build"
-  cmake --build "$build" -j2
-  step "ctest under qemu-arm"
-  ctest --test-dir "$build" --output-on-failure -j2 || status=1
+  cmake --build --preset "$arch"
+  step "ctest under $qemu"
+  ctest --preset "$arch" || status=1
 fi
 
 # --- embedded profile --------------------------------------------------------
@@ -80,20 +87,30 @@ footprint() {  # footprint <label> <build dir>
       awk -v n="keepless_$lib" -v l="$1" '{printf "  %-8s %-16s text %7d  data %5d  bss %5d\n", l, n, $1, $2, $3}'
   done
 }
+ebuild="$root/build-$arch-embedded"
 if ((embedded)); then
-  ebuild="$root/build-aarch64-embedded"
-  step "configure (preset embedded)"
-  cmake --preset embedded
+  step "configure (preset $embedded_preset)"
+  cmake --preset "$embedded_preset"
   step "build solver, core and their tests (-Os -fno-exceptions -fno-rtti)"
-  cmake --build --preset embedded
-  step "ctest (embedded) under qemu-aarch64: labels solver, core, cross"
-  ctest --preset embedded || status=1
+  cmake --build --preset "$embedded_preset"
+  if ((full)); then
+    step "ctest (embedded) under $qemu: labels solver, core, cross"
+    ctest --preset "$embedded_preset" || status=1
+  else
+    # The lcm tests (node, messages, bus) on the same build: the node links
+    # the embedded libraries, as on the board.
+    step "build the lcm tests (embedded)"
+    cmake --build "$ebuild" --target tests/lcm/all -j2
+    step "ctest (embedded) under $qemu: labels solver, core, cross, lcm"
+    ctest --test-dir "$ebuild" --output-on-failure -j2 -L '^(solver|core|cross|lcm)$' || status=1
+  fi
 fi
 
 step "static footprint ($triple-size -t, whole archive)"
-footprint release "$build"
+((full)) && footprint release "$build"
 ((embedded)) && footprint embedded "$ebuild"
 
 step "done"
-if ((status)); then echo "cross_build.sh $arch: FAILED"; else echo "cross_build.sh $arch: all tests passed"; fi
+what="$arch"; ((full)) || what="$arch --ci"
+if ((status)); then echo "cross_build.sh $what: FAILED"; else echo "cross_build.sh $what: all tests passed"; fi
 exit $status

@@ -10,8 +10,10 @@
 // Every probe is bounded by the table size; nothing allocates after the
 // constructor.
 
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 namespace keepless::core {
@@ -20,10 +22,14 @@ class IdTable {
  public:
   // Room for `capacity` ids at once.
   explicit IdTable(std::uint32_t capacity) : capacity_(capacity) {
-    std::size_t size = 2;
-    while (size < 2 * std::size_t{capacity}) size <<= 1;
-    slots_.assign(size, Slot{});
-    mask_ = size - 1;
+    // Sized in 64 bits: with a 32-bit size_t, 2 * capacity wraps from 2^31
+    // on and the doubling reached 0 and never ended. A table beyond the
+    // address space saturates, and the vector refuses it (length_error).
+    std::uint64_t size = 2;
+    while (size < 2 * std::uint64_t{capacity}) size <<= 1;
+    slots_.assign(static_cast<std::size_t>(std::min<std::uint64_t>(size, std::numeric_limits<std::size_t>::max())),
+                  Slot{});
+    mask_ = slots_.size() - 1;
   }
 
   // splitmix64's finaliser: a fixed, platform-independent hash.

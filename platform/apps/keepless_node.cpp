@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <memory>
 #include <new>
+#include <stdexcept>
 #include <string>
 
 #include "cli/cli.hpp"
@@ -74,13 +75,18 @@ int main(int argc, char** argv) {
                  need / 1048576.0, static_cast<unsigned long long>(config.max_memory_mb));
     return 2;
   }
+  const auto cannot_allocate = [need] {
+    std::fprintf(stderr, "keepless_node: cannot allocate the fixed memory (about %.0f MB) for these flags\n",
+                 need / 1048576.0);
+    return 2;
+  };
   std::unique_ptr<platform::Node> owned;
   try {
     owned = std::make_unique<platform::Node>(bus, config);
   } catch (const std::bad_alloc&) {
-    std::fprintf(stderr, "keepless_node: cannot allocate the fixed memory (about %.0f MB) for these flags\n",
-                 need / 1048576.0);
-    return 2;
+    return cannot_allocate();
+  } catch (const std::length_error&) {  // 32-bit: an array larger than the address space
+    return cannot_allocate();
   }
   platform::Node& node = *owned;
   if (!node.start()) {

@@ -26,6 +26,7 @@
 #include <exception>
 #include <limits>
 #include <new>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -413,6 +414,10 @@ int main(int argc, char** argv) {
                  "%s: out of memory (--max-memory-mb %llu allowed it, but the process got less: check `ulimit -v` "
                  "and free memory)\n",
                  opt.model.path.c_str(), static_cast<unsigned long long>(opt.max_memory_mb));
+    return kExitInput;
+  } catch (const std::length_error&) {  // the same on 32-bit: an array larger than the address space
+    std::fprintf(stderr, "%s:0: cannot allocate the memory this window needs (lower --max-memory-mb)\n",
+                 opt.window.c_str());
     return kExitInput;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "keepless_sparsify: %s\n", e.what());

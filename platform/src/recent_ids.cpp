@@ -1,6 +1,7 @@
 #include "keepless/platform/recent_ids.hpp"
 
 #include <algorithm>
+#include <limits>
 
 namespace keepless::platform {
 
@@ -20,12 +21,16 @@ std::uint64_t mix(std::uint64_t x) {
 }  // namespace
 
 RecentIds::RecentIds(std::uint32_t capacity) : capacity_(capacity) {
-  std::size_t slots = 2;
-  while (slots < 2 * std::size_t{capacity}) slots <<= 1;  // load factor <= 1/2
-  table_.assign(slots, 0);
-  used_.assign(slots, 0);
+  // Load factor <= 1/2. Sized in 64 bits: with a 32-bit size_t, 2 * capacity
+  // wraps from 2^31 on and the doubling never ended; a table beyond the
+  // address space saturates and the vector refuses it (length_error).
+  std::uint64_t slots = 2;
+  while (slots < 2 * std::uint64_t{capacity}) slots <<= 1;
+  const auto size = static_cast<std::size_t>(std::min<std::uint64_t>(slots, std::numeric_limits<std::size_t>::max()));
+  table_.assign(size, 0);
+  used_.assign(size, 0);
   ring_.assign(capacity, 0);
-  mask_ = slots - 1;
+  mask_ = size - 1;
 }
 
 std::size_t RecentIds::memory_bytes() const {

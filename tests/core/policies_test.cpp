@@ -8,7 +8,9 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstddef>
 #include <cstdint>
+#include <deque>
 #include <limits>
 #include <map>
 #include <tuple>
@@ -99,23 +101,36 @@ const Capacities kCaps{16, 2048, 8192, 32768, 4096};
   return ::testing::AssertionSuccess();
 }
 
+// Sparsifiers by their parameters, reused while they stay in the cache. At
+// most kHeld at once, the oldest dropped first: almost every case draws new
+// parameters, and each Sparsifier holds its capacities (a few MB), so an
+// unbounded cache kept one per case and start: 9 GB resident on x86-64, and
+// past a 32-bit board's address space (std::bad_alloc on armhf).
 class Cache {
  public:
   Sparsifier& get(const Params& p, Start start, SolveMode mode = SolveMode::kFromScratch) {
-    const auto key = std::make_tuple(p.pair_capacity, p.theta, p.box_width, p.box_height,
-                                     static_cast<int>(p.scope), p.coverage_floor,
-                                     static_cast<int>(p.cost_model), p.image_width,
-                                     static_cast<int>(start), static_cast<int>(mode));
+    const Key key = std::make_tuple(p.pair_capacity, p.theta, p.box_width, p.box_height,
+                                    static_cast<int>(p.scope), p.coverage_floor,
+                                    static_cast<int>(p.cost_model), p.image_width,
+                                    static_cast<int>(start), static_cast<int>(mode));
+    auto found = cache_.find(key);
+    if (found != cache_.end()) return *found->second;
+    if (order_.size() == kHeld) {
+      cache_.erase(order_.front());
+      order_.pop_front();
+    }
+    order_.push_back(key);
     auto& slot = cache_[key];
-    if (!slot) slot = std::make_unique<Sparsifier>(kCaps, p, mode, start);
+    slot = std::make_unique<Sparsifier>(kCaps, p, mode, start);
     return *slot;
   }
 
  private:
-  std::map<std::tuple<std::int64_t, double, std::int32_t, std::int32_t, int, std::uint32_t, int,
-                      std::int32_t, int, int>,
-           std::unique_ptr<Sparsifier>>
-      cache_;
+  static constexpr std::size_t kHeld = 16;
+  using Key = std::tuple<std::int64_t, double, std::int32_t, std::int32_t, int, std::uint32_t, int,
+                         std::int32_t, int, int>;
+  std::map<Key, std::unique_ptr<Sparsifier>> cache_;
+  std::deque<Key> order_;  // insertion order, oldest first
 };
 
 TEST(Policies, RandomWindowsMatchReference) {

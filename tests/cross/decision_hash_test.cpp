@@ -1,8 +1,9 @@
 // Decisions must not depend on the architecture: a board (aarch64) and the
 // x86-64 machine that tuned it must keep the same points. These tests hash
 // everything the decision path outputs for a fixed, generated workload and
-// compare with hashes recorded on x86-64; the aarch64 suite (ctest under
-// qemu, toolchains/cross_build.sh) asserts the same constants.
+// compare with hashes recorded on x86-64; the aarch64 and the 32-bit armhf
+// suites (ctest under qemu, toolchains/cross_build.sh) assert the same
+// constants.
 //
 // If a deliberate change to the costs, the network or the solver's tie-break
 // changes the decisions, the failure prints the new hash: re-record it here
