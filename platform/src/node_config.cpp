@@ -91,7 +91,7 @@ std::string node_usage() {
          "  --scope window|newest     decide every window point, or only the newest keyframe's (default window)\n"
          "  --floor L                 every keyframe keeps >= L of its evaluated points (default 0: off)\n"
          "  --cost paper|authors|information\n"
-         "                            point -> pair costs (default paper; README, Decision policies)\n"
+         "                            point -> pair costs (default paper; docs/design/policies.md)\n"
          "  --image WxH               the image the authors' 64x48 grid covers (default 640x480)\n"
          "  --budget-work N           solver work units per decision (default unlimited)\n"
          "  --latency-target-ms X     solve deadline from keyframe arrival (default 5; 0 = none)\n"
