@@ -91,7 +91,7 @@ std::string node_usage() {
          "  --scope window|newest     decide every window point, or only the newest keyframe's (default window)\n"
          "  --floor L                 every keyframe keeps >= L of its evaluated points (default 0: off)\n"
          "  --cost paper|authors|information\n"
-         "                            point -> pair costs (default paper; README, Decision policies)\n"
+         "                            point -> pair costs (default paper; docs/design/policies.md)\n"
          "  --image WxH               the image the authors' 64x48 grid covers (default 640x480)\n"
          "  --maturity A              points first seen in the newest A window keyframes are not decided\n"
          "                            yet (default 0: off); a keyframe_t's tracked flags are always honoured\n"
