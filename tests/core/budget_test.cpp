@@ -312,6 +312,56 @@ TEST(KeepBudgets, UpdateMatchesRun) {
   EXPECT_GT(windows, 200u);
 }
 
+// With the tracking guard (Params::maturity_keyframes) a budget is taken
+// from what the guard and the scope leave: the guarded points stay skipped
+// exactly as without a budget, the budget keeps min(K, those left) of them,
+// the K with the smallest thresholds (ties to the smaller id), and update()
+// decides what run() does.
+TEST(KeepBudgets, TakenFromWhatTheGuardLeaves) {
+  std::uint32_t windows = 0, guarded = 0;
+  for (std::uint64_t seed = 1; seed <= 40 && !HasFailure(); ++seed) {
+    test::RandomCase c = test::random_case(7000 + seed, 16, 160);
+    test::random_policies(c, 7000 + seed);
+    c.params.coverage_floor = 0;  // the floor's promotions come on top of the budget
+    c.params.maturity_keyframes = 1 + static_cast<std::uint32_t>(seed % 3);
+    Params budgeted = c.params;
+    const std::uint32_t k_points = 5 + static_cast<std::uint32_t>(seed % 30);
+    budgeted.budget = KeepBudget{BudgetKind::kPoints, k_points, 0.0};
+    Window window(kCaps);
+    Sparsifier plain(kCaps, c.params);
+    Sparsifier run(kCaps, budgeted);
+    Sparsifier update(kCaps, budgeted, SolveMode::kIncremental, Start::kClosedForm);
+    const std::uint32_t size = 4 + static_cast<std::uint32_t>(seed % 5);
+    for (const auto& f : c.frames) {
+      if (window.keyframe_count() == size) {
+        ASSERT_EQ(window.remove_keyframe(window.keyframe(0).id), Status::kOk);
+      }
+      ASSERT_EQ(test::add_frame(window, f), Status::kOk);
+      ASSERT_EQ(plain.run(window), Status::kOk);
+      ASSERT_EQ(run.run(window), Status::kOk);
+      ASSERT_EQ(update.update(window), Status::kOk);
+      ASSERT_TRUE(same(run, update)) << "seed " << seed << " keyframe " << f.id;
+      ASSERT_EQ(run.summary().guarded, plain.summary().guarded) << "seed " << seed;
+      ASSERT_EQ(run.decision_count(), plain.decision_count());
+      // The candidates: what the guard and the scope leave decided.
+      std::vector<std::pair<std::uint32_t, PointId>> left;  // (threshold, id)
+      for (std::uint32_t i = 0; i < plain.decision_count(); ++i) {
+        const bool skipped = plain.decisions()[i].verdict == Verdict::kSkip;
+        ASSERT_EQ(run.decisions()[i].verdict == Verdict::kSkip, skipped) << "seed " << seed;
+        if (!skipped) left.emplace_back(run.keep_thresholds()[i], run.decisions()[i].point);
+      }
+      std::sort(left.begin(), left.end());
+      std::set<PointId> expected;
+      for (std::size_t j = 0; j < std::min<std::size_t>(k_points, left.size()); ++j) expected.insert(left[j].second);
+      ASSERT_EQ(kept_of(run), expected) << "seed " << seed << " keyframe " << f.id;
+      guarded += run.summary().guarded;
+      ++windows;
+    }
+  }
+  EXPECT_GT(windows, 200u);
+  EXPECT_GT(guarded, 0u) << "the guard should have skipped points";
+}
+
 TEST(KeepBudgets, InvalidBudgets) {
   Params p;
   p.budget = KeepBudget{BudgetKind::kFraction, 0, 1.5};
