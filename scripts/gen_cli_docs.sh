@@ -3,8 +3,10 @@
 # docs/reference/cli/README.md. Regenerate after changing a tool's options:
 #   scripts/gen_cli_docs.sh [BUILD_DIR]           (default build; tools in BUILD_DIR/bin)
 #   scripts/gen_cli_docs.sh --check [BUILD_DIR]   compare pages and index instead of writing (scripts/check_docs.sh)
-# Every tool has --help: one that is not built, or whose --help does not exit 0
-# on stdout, is an error (build the tools first).
+# Every tool has --help and a page. A built tool whose --help does not exit 0
+# on stdout is an error; a tool not built is an error when writing, and is not
+# compared with --check (builds without perf/, e.g. the asan preset, lack the
+# benchmark and evaluation tools).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 check=0
@@ -57,21 +59,29 @@ Tools are in \`build/bin/\`. \`ctest -L cli\` checks these conventions for every
 mkdir -p "$out"
 for entry in "${TOOLS[@]}"; do
   IFS='|' read -r tool line more <<<"$entry"
-  help=""
-  if [ -x "$bin/$tool" ] && help=$(cd "$scratch" && timeout 5 "$bin/$tool" --help 2>/dev/null </dev/null) && [ -n "$help" ]; then
-    index+="
+  index+="
 | [\`$tool\`]($tool.md) | $line | [guide]($more) |"
+  if [ ! -x "$bin/$tool" ]; then
     if [ "$check" = 1 ]; then
-      if ! diff -q <(page "$tool" "$line" "$help") "$out/$tool.md" >/dev/null 2>&1; then
-        echo "gen_cli_docs: $out/$tool.md differs from '$tool --help'; run scripts/gen_cli_docs.sh" >&2
-        status=1
-      fi
+      echo "gen_cli_docs: $tool: not built in ${1:-build}/bin; its page is not compared" >&2
     else
-      page "$tool" "$line" "$help" >"$out/$tool.md"
+      echo "gen_cli_docs: $tool: not built in ${1:-build}/bin; build the tools first" >&2
+      status=1
+    fi
+    continue
+  fi
+  if ! help=$(cd "$scratch" && timeout 5 "$bin/$tool" --help 2>/dev/null </dev/null) || [ -z "$help" ]; then
+    echo "gen_cli_docs: $tool --help failed or printed nothing" >&2
+    status=1
+    continue
+  fi
+  if [ "$check" = 1 ]; then
+    if ! diff -q <(page "$tool" "$line" "$help") "$out/$tool.md" >/dev/null 2>&1; then
+      echo "gen_cli_docs: $out/$tool.md differs from '$tool --help'; run scripts/gen_cli_docs.sh" >&2
+      status=1
     fi
   else
-    echo "gen_cli_docs: $tool: not built in ${1:-build}/bin, or its --help failed; build the tools first" >&2
-    status=1
+    page "$tool" "$line" "$help" >"$out/$tool.md"
   fi
 done
 if [ "$check" = 1 ]; then
