@@ -278,7 +278,9 @@ RejectReason check_map_event(const keepless::map_event_t& msg) {
 }
 
 const char* invalid_keyframe_field(const keepless::keyframe_t* m) {
-  if (m == nullptr) return "an array count (num_observations, num_depths, num_intrinsics or num_unmapped)";
+  if (m == nullptr) {
+    return "an array count (num_observations, num_depths, num_intrinsics, num_unmapped or num_tracked)";
+  }
   const auto n = static_cast<std::size_t>(m->num_observations);
   if (m->num_observations < 0 || m->point_id.size() != n || m->u.size() != n || m->v.size() != n) {
     return "num_observations (negative or not the arrays' length)";
@@ -294,6 +296,13 @@ const char* invalid_keyframe_field(const keepless::keyframe_t* m) {
   if (m->num_unmapped < 0 || m->unmapped_u.size() != static_cast<std::size_t>(m->num_unmapped) ||
       m->unmapped_v.size() != static_cast<std::size_t>(m->num_unmapped)) {
     return "num_unmapped (negative or not the arrays' length)";
+  }
+  if ((m->num_tracked != 0 && m->num_tracked != m->num_observations) ||
+      m->tracked.size() != static_cast<std::size_t>(m->num_tracked)) {
+    return "num_tracked (must be 0 or num_observations)";
+  }
+  for (std::int8_t t : m->tracked) {
+    if (t != 0 && t != 1) return "tracked (a flag is 0 or 1)";
   }
   if (m->image_width <= 0) return "image_width (must be > 0)";
   if (m->image_height <= 0) return "image_height (must be > 0)";

@@ -253,7 +253,16 @@ TEST(MessageValidation, InvalidFieldNamesTheField) {
   m.num_intrinsics = 3;
   m.intrinsics = {1, 2, 3};
   EXPECT_STREQ(invalid_keyframe_field(&m), "num_intrinsics (must be 0 or 4)");
+  m.num_intrinsics = 0;
+  m.intrinsics.clear();
+  m.num_tracked = 1;  // neither 0 nor num_observations (2)
+  m.tracked = {1};
+  EXPECT_STREQ(invalid_keyframe_field(&m), "num_tracked (must be 0 or num_observations)");
+  m.num_tracked = 2;
+  m.tracked = {1, 2};
+  EXPECT_STREQ(invalid_keyframe_field(&m), "tracked (a flag is 0 or 1)");
   EXPECT_NE(std::string(invalid_keyframe_field(nullptr)).find("num_observations"), std::string::npos);
+  EXPECT_NE(std::string(invalid_keyframe_field(nullptr)).find("num_tracked"), std::string::npos);
   keepless::map_event_t e = kt::make_event(1);
   e.num_deleted_points = -1;
   EXPECT_NE(std::string(keepless::platform::invalid_map_event_field(&e)).find("num_deleted_points"),
