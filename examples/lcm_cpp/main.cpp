@@ -26,12 +26,17 @@ struct Inbox {
   bool node_up = false;
   int decisions = 0;
   int culled = 0;
-  void on_status(const lcm::ReceiveBuffer*, const std::string&, const keepless::status_t*) { node_up = true; }
-  void on_decision(const lcm::ReceiveBuffer*, const std::string&, const keepless::decision_t* d) {
+  // Plain functions with a context (subscribeFunction): GCC's UBSan misreports
+  // LCM's pointer-to-member call in the member-function subscribe.
+  static void on_status(const lcm::ReceiveBuffer*, const std::string&, const keepless::status_t*, Inbox* in) {
+    in->node_up = true;
+  }
+  static void on_decision(const lcm::ReceiveBuffer*, const std::string&, const keepless::decision_t* d,
+                          Inbox* in) {
     std::printf("decision for keyframe %lld: status %d, %d points, kept %d, culled %d\n",
                 static_cast<long long>(d->keyframe_id), d->status, d->points, d->kept, d->culled);
-    ++decisions;
-    culled += d->num_culled;
+    ++in->decisions;
+    in->culled += d->num_culled;
   }
 };
 
@@ -48,8 +53,8 @@ int main(int argc, char** argv) {
     return 1;
   }
   Inbox inbox;
-  bus.subscribe("KEEPLESS_STATUS", &Inbox::on_status, &inbox);
-  bus.subscribe("KEEPLESS_DECISION", &Inbox::on_decision, &inbox);
+  bus.subscribeFunction("KEEPLESS_STATUS", &Inbox::on_status, &inbox);
+  bus.subscribeFunction("KEEPLESS_DECISION", &Inbox::on_decision, &inbox);
   for (int i = 0; i < 100 && !inbox.node_up; ++i) wait(bus, 100);  // the node's status: it is up
   if (!inbox.node_up) {
     std::fprintf(stderr, "lcm_cpp: no keepless_node status on %s within 10 s\n", url.c_str());
