@@ -367,6 +367,7 @@ core::Capacities window_capacities(const NodeConfig& config) {
   c.max_observations = capped(config.max_window_observations);
   c.max_points = capped(config.max_points);
   c.max_unmapped_keypoints = static_cast<std::uint32_t>(k * config.max_unmapped);
+  c.max_keyframe_observations = config.max_observations;  // a keyframe_t's, refused beyond
   // Sum over points of n(n-1)/2 with sum n <= observations and n <= K.
   const std::uint64_t worst_arcs = std::uint64_t{c.max_observations} * (k - 1) / 2;
   c.max_pair_arcs = static_cast<std::uint32_t>(

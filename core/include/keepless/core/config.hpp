@@ -18,7 +18,18 @@ struct Capacities {
   // Keyframe::unmapped keypoints held over the window (16 bytes each), for
   // CostModel::kAuthors; 0: keyframes carrying any are refused.
   std::uint32_t max_unmapped_keypoints = 0;
+  // Observations of one keyframe; 0: max_observations. The per-keyframe
+  // scratch (duplicate check, N(p, f)) is sized by it, not by the window's.
+  std::uint32_t max_keyframe_observations = 0;
 };
+
+// What one keyframe may carry: max_keyframe_observations, at most the
+// window's max_observations.
+inline std::uint32_t keyframe_observation_limit(const Capacities& c) {
+  return c.max_keyframe_observations != 0 && c.max_keyframe_observations < c.max_observations
+             ? c.max_keyframe_observations
+             : c.max_observations;
+}
 
 // Bits of Params::cost_terms.
 enum CostTerm : std::uint8_t { kConnectivityCost = 1, kSpatialCost = 2, kBaselineCost = 4 };
