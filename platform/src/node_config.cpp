@@ -64,12 +64,12 @@ std::string node_usage() {
          "                            counts them)\n"
          "  --profile NAME            a set of the capacities above and below, applied before the other flags:\n"
          "                            small (K 10, N 1000, 2000 points, 4500 observations, 7000 pair arcs;\n"
-         "                            3.8 MB), default (K 20, N 2000, 5800, 17000, 45000; 15.6 MB),\n"
-         "                            large (K 40, N 2000, 8100, 37000, 117000; 33.2 MB)\n"
-         "  --max-points N            distinct points the window holds (default 5800; 0: K*N)\n"
-         "  --max-window-observations N  observations the window holds (default 17000; 0: K*N)\n"
+         "                            3.4 MB), default (K 20, N 2000, 6600, 19100, 51000; 15.5 MB),\n"
+         "                            large (K 40, N 2000, 8100, 37000, 117000; 28.7 MB)\n"
+         "  --max-points N            distinct points the window holds (default 6600; 0: K*N)\n"
+         "  --max-window-observations N  observations the window holds (default 19100; 0: K*N)\n"
          "  --max-pair-arcs N         point -> pair arcs of the window's network, sum of n(n-1)/2 over its points\n"
-         "                            (default 45000; 0: worst case K*N*(K-1)/2). A window beyond a capacity is\n"
+         "                            (default 51000; 0: worst case K*N*(K-1)/2). A window beyond a capacity is\n"
          "                            answered 'capacity exceeded' (status_t says which, needed and held)\n"
          "  --max-memory-mb N         refuse to start when the fixed memory would exceed N MB (default 1024)\n"
          "  --max-sequence-jump N     refuse a sequence more than N above the publisher's last (default 1000000)\n"
@@ -139,7 +139,7 @@ ParseResult parse_profile(int argc, const char* const* argv, NodeConfig& config,
 
 bool apply_profile(const std::string& name, NodeConfig& config) {
   // Sized from the largest windows of the real sequences (7-Scenes, KITTI 00
-  // and 06) at that K: default about 1.75x them within 16 MB, large 2x,
+  // and 06) at that K: default and large 2x them (default within 16 MB),
   // small what fits 4 MB. NodeConfig's defaults are "default".
   struct Profile {
     const char* name;
@@ -147,7 +147,7 @@ bool apply_profile(const std::string& name, NodeConfig& config) {
   };
   static const Profile kProfiles[] = {
       {"small", 10, 1000, 2000, 4500, 7000},
-      {"default", 20, 2000, 5800, 17000, 45000},
+      {"default", 20, 2000, 6600, 19100, 51000},
       {"large", 40, 2000, 8100, 37000, 117000},
   };
   for (const Profile& p : kProfiles) {

@@ -108,9 +108,10 @@ TEST(NodeConfig, DefaultsFitSixteenMegabytes) {
   EXPECT_LE(keepless::platform::estimate_node_bytes(defaults), 16e6);
   const keepless::core::Capacities caps = keepless::platform::window_capacities(defaults);
   EXPECT_EQ(caps.max_keyframes, 20u);
-  EXPECT_EQ(caps.max_points, 5800u);
-  EXPECT_EQ(caps.max_observations, 17000u);
-  EXPECT_EQ(caps.max_pair_arcs, 45000u);
+  EXPECT_EQ(caps.max_points, 6600u);
+  EXPECT_EQ(caps.max_observations, 19100u);
+  EXPECT_EQ(caps.max_pair_arcs, 51000u);
+  EXPECT_EQ(caps.max_keyframe_observations, defaults.max_observations);
   NodeConfig profiled;
   std::string error;
   ASSERT_EQ(parse({"--profile", "default"}, profiled, error), ParseResult::kOk) << error;
@@ -127,9 +128,9 @@ TEST(NodeConfig, ProfilesParseAndSizeAsDocumented) {
     std::uint32_t window, per_keyframe, points, observations, pair_arcs;
     double max_bytes;
   };
-  for (const Expected& e : {Expected{"small", 10, 1000, 2000, 4500, 7000, 4e6},
-                            Expected{"default", 20, 2000, 5800, 17000, 45000, 16e6},
-                            Expected{"large", 40, 2000, 8100, 37000, 117000, 34e6}}) {
+  for (const Expected& e : {Expected{"small", 10, 1000, 2000, 4500, 7000, 3.6e6},
+                            Expected{"default", 20, 2000, 6600, 19100, 51000, 16e6},
+                            Expected{"large", 40, 2000, 8100, 37000, 117000, 30e6}}) {
     for (const std::vector<std::string>& args :
          {std::vector<std::string>{"--profile", e.name}, {std::string("--profile=") + e.name}}) {
       NodeConfig c;
