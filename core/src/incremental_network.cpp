@@ -124,7 +124,8 @@ struct IncrementalNetwork::Impl {
   std::vector<std::uint32_t> pool_point;  // point slot of each
   std::uint32_t pool_top = 0;
   ObservationScorer scorer;
-  std::vector<std::uint32_t> counts;  // N (or information level) of the keyframe being added, [keyframe_observation_limit]
+  // N (or information level) of the keyframe being added, [keyframe_observation_limit].
+  std::vector<std::uint32_t> counts;
 
   IdTable slot_of;  // point id -> slot
   std::vector<Point> points;

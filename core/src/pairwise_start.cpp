@@ -145,8 +145,8 @@ void PairwiseStart::Impl::compute(const solver::MinCostFlow& solver, solver::Nod
     const Point p = point[e.tail];
     const bool unit = e.capacity != 0 && e.head != sink && p.rank >= 0;
     std::int32_t& at = first[e.head];
-    units[unit ? at : dump] = Unit{static_cast<std::uint32_t>(p.cost) + static_cast<std::uint32_t>(e.cost),
-                                   static_cast<std::uint32_t>(p.rank), a};
+    const auto cost = static_cast<std::uint32_t>(p.cost) + static_cast<std::uint32_t>(e.cost);
+    units[unit ? at : dump] = Unit{cost, static_cast<std::uint32_t>(p.rank), a};
     at += unit ? 1 : 0;
   }
   for (std::int32_t v = nodes; v > 0; --v) first[v] = first[v - 1];

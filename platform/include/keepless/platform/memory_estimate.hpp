@@ -4,9 +4,9 @@
 // whose fixed memory exceeds its limit (exit 2) instead of dying in
 // bad_alloc. Measured on small probe instances (megabytes at most) and
 // extrapolated: linear in points, observations, pair arcs and one keyframe's
-// observations (its scratch), quadratic in
-// keyframes (keyframe pairs), plus the point-id hash tables, whose slots are
-// the power of two at or above twice the points.
+// observations (its scratch), quadratic in keyframes (keyframe pairs), plus
+// the point-id hash tables, whose slots are the power of two at or above
+// twice the points.
 
 #include <cstddef>
 #include <cstdint>
