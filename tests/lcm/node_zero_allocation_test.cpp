@@ -18,8 +18,10 @@ namespace {
 
 namespace kt = keepless::testing;
 
-TEST(NodeZeroAllocation, SteadyStateReceivePathAllocatesNothing) {
+// `defer`: deferred culling's T (0: off).
+void steady_state(std::uint32_t defer) {
   keepless::platform::NodeConfig c;
+  c.params.defer_keyframes = defer;
   c.latency_target_ms = 0;
   c.url = "memq://";
   c.window = 5;
@@ -94,8 +96,20 @@ TEST(NodeZeroAllocation, SteadyStateReceivePathAllocatesNothing) {
   EXPECT_EQ(allocations, 0u);
   EXPECT_EQ(node.counters().decisions_published, 40u + 14u);  // the 14 decodable bad ones are answered too
   EXPECT_EQ(node.counters().messages_rejected, 40u);
-  EXPECT_GT(node.counters().points_culled, 0u);
+  if (defer == 0) {
+    EXPECT_GT(node.counters().points_culled, 0u);
+  } else {
+    EXPECT_EQ(node.counters().points_culled, 0u);
+    EXPECT_GT(node.counters().points_excluded, 0u);
+    EXPECT_GT(node.counters().points_deleted, 0u);
+  }
 }
+
+TEST(NodeZeroAllocation, SteadyStateReceivePathAllocatesNothing) { steady_state(0); }
+
+// Deferred culling: excluding, observing excluded points, expiring, and map
+// events that delete or merge them.
+TEST(NodeZeroAllocation, DeferredCullingAllocatesNothing) { steady_state(2); }
 
 }  // namespace
 

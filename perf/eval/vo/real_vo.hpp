@@ -56,6 +56,7 @@ struct RealRunResult {
   int keyframes_created = 0;
   std::int64_t observations = 0;  // of the alive points at the end
   std::int64_t points_culled_by_selector = 0;
+  std::int64_t points_deleted_deferred = 0;  // params.defer_keyframes: excluded points the rule deleted
   int local_bas = 0;
   int window_rejections = 0;  // windows the adapter or Sparsifier refused (nothing culled there)
   SelectorCounts selector;  // windows the selector decided, its Sparsifier's floor counts over them
