@@ -188,7 +188,6 @@ class Vo {
   core::Window window_;
   core::Sparsifier sparsifier_;
   core::DeferredCulls deferred_;  // params.defer_keyframes: excluded points until deleted
-  std::vector<core::PointId> expired_;
   double kept_fraction_sum_ = 0;
   std::unique_ptr<Replay> replay_local_, replay_sliding_;  // measure_windows with replay_capacities
   std::size_t marked_culls_ = 0;
@@ -736,22 +735,17 @@ void Vo::select_points(int kf, const std::vector<int>& local) {
       result_.marks.push_back(mark);
     }
   }
-  for (core::PointId id : culls) {
-    // Deferred: out of local BA now, out of the map when the rule says
-    // (core::DeferredCulls); one that does not fit is deleted at once.
-    if (deferring() && deferred_.exclude(id) == core::Status::kOk) {
-      map_.points[static_cast<std::size_t>(id)].excluded = true;
-    } else {
-      map_.set_bad(static_cast<int>(id));
-    }
-  }
   if (deferring()) {
-    expired_.resize(deferred_.capacity());
-    expired_.resize(deferred_.expire(expired_.data()));
-    for (core::PointId id : expired_) {
+    // Out of local BA now, out of the map when the rule says (core::DeferredCulls).
+    std::vector<core::PointId> excluded, deleted;
+    opencv::defer_culls(culls, deferred_, &excluded, &deleted);
+    for (core::PointId id : excluded) map_.points[static_cast<std::size_t>(id)].excluded = true;
+    for (core::PointId id : deleted) {
       if (!map_.points[static_cast<std::size_t>(id)].bad) map_.set_bad(static_cast<int>(id));
     }
-    result_.points_deleted_deferred += static_cast<std::int64_t>(expired_.size());
+    result_.points_deleted_deferred += static_cast<std::int64_t>(deleted.size());
+  } else {
+    for (core::PointId id : culls) map_.set_bad(static_cast<int>(id));
   }
   result_.points_culled_by_selector += static_cast<std::int64_t>(culls.size());
   result_.selector_seconds += seconds_since(start);
@@ -815,12 +809,16 @@ void Vo::local_ba(const std::vector<int>& local, bool fix_first) {
 // Deferred culling's clock: one tick per keyframe; the points its tracker
 // matched (its tracked flags) are matched at this tick.
 void Vo::note_matches(int kf) {
-  deferred_.begin_keyframe();
   const KeyFrame& f = map_.kfs[static_cast<std::size_t>(kf)];
+  std::vector<core::PointId> ids;
+  std::vector<std::uint8_t> tracked;
   for (std::size_t i = 0; i < f.mp.size() && i < f.tracked.size(); ++i) {
     const int p = f.mp[i] >= 0 ? map_.resolve(f.mp[i]) : -1;
-    if (p >= 0) (void)deferred_.observe(static_cast<core::PointId>(p), f.tracked[i] != 0);
+    if (p < 0) continue;
+    ids.push_back(static_cast<core::PointId>(p));
+    tracked.push_back(f.tracked[i]);
   }
+  (void)opencv::note_keyframe(deferred_, ids, &tracked);  // the lengths agree
 }
 
 // Excluded points left out of the local BA keep a refined structure: each
