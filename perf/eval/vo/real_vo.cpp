@@ -763,16 +763,23 @@ void Vo::local_ba(const std::vector<int>& local, bool fix_first) {
     kf_of_pose.push_back(k);
   }
   std::vector<int> points = map_.points_of(local);
-  // Excluded points (deferred culling) are not in the point blocks.
-  points.erase(std::remove_if(points.begin(), points.end(),
-                              [&](int p) { return map_.points[static_cast<std::size_t>(p)].excluded; }),
-               points.end());
+  // Excluded points (deferred culling) are not in the point blocks: left
+  // out, or (defer_fixed) constant landmarks seen only by the local keyframes.
+  if (!opt_.defer_fixed) {
+    points.erase(std::remove_if(points.begin(), points.end(),
+                                [&](int p) { return map_.points[static_cast<std::size_t>(p)].excluded; }),
+                 points.end());
+  }
+  std::vector<char> is_local(map_.kfs.size(), 0);
+  for (int k : local) is_local[static_cast<std::size_t>(k)] = 1;
   std::vector<std::pair<int, int>> obs_of;  // (point, kf) per observation
   for (std::size_t pi = 0; pi < points.size(); ++pi) {
     const MapPoint& m = map_.points[static_cast<std::size_t>(points[pi])];
     problem.points.push_back(m.X);
+    problem.point_fixed.push_back(m.excluded);
     for (const auto& [k, i] : m.obs) {
       if (map_.kfs[static_cast<std::size_t>(k)].bad) continue;
+      if (m.excluded && !is_local[static_cast<std::size_t>(k)]) continue;
       if (pose_of[static_cast<std::size_t>(k)] < 0) {  // a fixed observer
         pose_of[static_cast<std::size_t>(k)] = static_cast<int>(problem.poses.size());
         problem.poses.push_back(to_block(map_.kfs[static_cast<std::size_t>(k)].Tcw));
@@ -794,7 +801,9 @@ void Vo::local_ba(const std::vector<int>& local, bool fix_first) {
     if (!problem.pose_fixed[q]) map_.kfs[static_cast<std::size_t>(kf_of_pose[q])].Tcw = from_block(problem.poses[q]);
   }
   for (std::size_t pi = 0; pi < points.size(); ++pi) {
-    if (problem.points[pi].allFinite()) map_.points[static_cast<std::size_t>(points[pi])].X = problem.points[pi];
+    if (!problem.point_fixed[pi] && problem.points[pi].allFinite()) {
+      map_.points[static_cast<std::size_t>(points[pi])].X = problem.points[pi];
+    }
   }
   for (std::size_t o = 0; o < outlier.size(); ++o) {
     if (outlier[o] && !map_.points[static_cast<std::size_t>(obs_of[o].first)].bad) {

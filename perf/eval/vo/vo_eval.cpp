@@ -78,6 +78,7 @@ bool evaluate_real_vo(const VoInput& in, const VoEvalOptions& o, std::vector<Com
     vo.params.maturity_keyframes = o.policy.maturity_keyframes;
     vo.params.defer_keyframes = o.policy.defer_keyframes;
     vo.tracked_flags = o.tracked_flags;
+    vo.defer_fixed = o.defer_fixed;
     vo.seed = o.seeds[si];
     vo.selector = Selector::kOriginal;
     const RealRunResult original = run_real_vo(seq, vo);

@@ -31,6 +31,7 @@ struct VoEvalOptions {
   // keyframe's points (scope newest: the points the VO culls).
   core::Params policy;  // and maturity_keyframes, defer_keyframes
   bool tracked_flags = false;  // RealVoOptions::tracked_flags
+  bool defer_fixed = false;    // RealVoOptions::defer_fixed
   std::string out;  // non-empty: NAME_trajectory.svg and NAME_keypoints.svg there
 };
 
