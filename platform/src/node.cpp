@@ -460,7 +460,7 @@ struct Node::Impl {
       cleared = true;
     } else if (r == RejectReason::kNone) {
       split_map_event(event, sliding.window(), &culls, id_scratch.data(), items);
-      if (deferring) into_excluded = forget_edited_points(items);
+      if (deferring) into_excluded = split_merges_into_excluded(items);
       SlidingWindow::Edit e;
       e.deleted = reinterpret_cast<const core::PointId*>(event.deleted_point_id.data());
       e.deleted_count = static_cast<std::uint32_t>(event.num_deleted_points);
@@ -476,6 +476,7 @@ struct Node::Impl {
         merges_applied += into_excluded;
       }
       if (s != core::Status::kOk) r = reason_of(s);
+      if (s == core::Status::kOk && deferring) forget_edited_points(items, into_excluded);
     }
     if (r != RejectReason::kNone) {
       reject("map_event_t", config.event_channel, size, r, true, event.sequence, 0);
@@ -488,18 +489,13 @@ struct Node::Impl {
     publish_ack(r, items, cleared, merges_applied);
   }
 
-  // Deferred culling and a map event's valid items: deleted points and merge
-  // sources are forgotten (the VO removed them itself). A merge into an
-  // excluded point is taken out of the merges: its source is moved to
-  // merged_kept, to be dropped from the window (its observations now belong
-  // to a point out of BA). Returns how many were.
-  std::uint32_t forget_edited_points(MapEventItems& items) {
-    const auto nd = static_cast<std::uint32_t>(event.num_deleted_points);
-    for (std::uint32_t i = 0; i < nd; ++i) (void)deferred.forget(static_cast<core::PointId>(event.deleted_point_id[i]));
+  // Deferred culling and a map event's valid items: a merge into an excluded
+  // point is taken out of the merges and its source moved to merged_kept, to
+  // be dropped from the window (its observations now belong to a point out
+  // of BA). Returns how many were.
+  std::uint32_t split_merges_into_excluded(MapEventItems& items) {
     std::uint32_t kept = 0, moved = 0;
     for (std::uint32_t i = 0; i < items.merged; ++i) {
-      const auto from = static_cast<core::PointId>(items.merged_from[i]);
-      (void)deferred.forget(from);
       if (deferred.contains(static_cast<core::PointId>(items.merged_into[i]))) {
         merged_kept[moved++] = items.merged_from[i];
       } else {
@@ -510,6 +506,15 @@ struct Node::Impl {
     }
     items.merged = kept;
     return moved;
+  }
+
+  // After the edit succeeded: the deleted points and merge sources are
+  // forgotten (the VO removed them itself).
+  void forget_edited_points(const MapEventItems& items, std::uint32_t into_excluded) {
+    const auto nd = static_cast<std::uint32_t>(event.num_deleted_points);
+    for (std::uint32_t i = 0; i < nd; ++i) (void)deferred.forget(static_cast<core::PointId>(event.deleted_point_id[i]));
+    for (std::uint32_t i = 0; i < items.merged; ++i) (void)deferred.forget(static_cast<core::PointId>(items.merged_from[i]));
+    for (std::uint32_t i = 0; i < into_excluded; ++i) (void)deferred.forget(static_cast<core::PointId>(merged_kept[i]));
   }
 
   // `cleared`: this event reset the window; `merges`: merges that changed it.
