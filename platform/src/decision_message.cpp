@@ -115,7 +115,8 @@ std::uint32_t defer_culls(keepless::decision_t& msg, core::DeferredCulls& deferr
     }
   }
   const std::uint32_t expired = deferred.expire(deleted);
-  std::copy_n(refused, n_refused, deleted + expired);
+  // Down to just after the expired ids (overlapping ranges: forward is safe).
+  if (expired != deferred.capacity()) std::copy_n(refused, n_refused, deleted + expired);
   const std::size_t n_deleted = expired + n_refused;
   std::sort(deleted, deleted + n_deleted);  // as unsigned
   msg.excluded_point_id.resize(n_excluded);
