@@ -80,6 +80,12 @@ std::string node_usage() {
          "                            been silent X s (default 1; 0 = never)\n"
          "  --cull-memory N           culled point ids remembered against in-flight keyframes\n"
          "                            (default 0: the window's point capacity)\n"
+         "  --defer T                 deferred culling: a culled point is excluded from local BA at once\n"
+         "                            (decision_t.excluded_point_id) and deleted once T keyframes in a row\n"
+         "                            have not matched it (deleted_point_id); default 0: off, the culls are\n"
+         "                            culled_point_id as before\n"
+         "  --defer-memory N          excluded points held until deleted (default 0: the window's point\n"
+         "                            capacity); one that does not fit is deleted at once and counted\n"
          "  --M N                     pair -> sink capacity (default 100)\n"
          "  --keep-points K           keep budget instead of --M: the K evaluated points with the smallest\n"
          "                            keep threshold per window (ties to the smaller point id)\n"
@@ -257,6 +263,12 @@ ParseResult parse_node_arguments(int argc, const char* const* argv, NodeConfig& 
     } else if (flag == "--cull-memory") {
       if (!parse_u64(value, 0, 1u << 26, n)) return bad("expected an integer in 0..2^26");
       config.cull_memory = static_cast<std::uint32_t>(n);
+    } else if (flag == "--defer") {
+      if (!parse_u64(value, 0, 1u << 30, n)) return bad("expected an integer in 0..2^30");
+      config.params.defer_keyframes = static_cast<std::uint32_t>(n);
+    } else if (flag == "--defer-memory") {
+      if (!parse_u64(value, 0, 1u << 26, n)) return bad("expected an integer in 0..2^26");
+      config.defer_memory = static_cast<std::uint32_t>(n);
     } else if (flag == "--M") {
       if (!parse_u64(value, 1, 1u << 30, n)) return bad("expected an integer >= 1");
       config.params.pair_capacity = static_cast<std::int64_t>(n);
@@ -386,7 +398,15 @@ double estimate_node_bytes(const NodeConfig& config) {
   // Sliding-window scratch, message objects and buffers, decision arrays, cull memory.
   const double messages = 110.0 * config.max_observations + 124.0 * config.max_event_ids +
                           16.0 * (caps.max_points + caps.max_keyframes) + 8.0 * caps.max_points;
-  return model.bytes(caps) + messages + 40.0 * ids;
+  // Deferred culling: the held points (a 16-byte slot table at <= 1/2 load,
+  // id and last match) and the decision's two lists.
+  const double deferred = config.params.defer_keyframes == 0 ? 0.0
+                          : (config.defer_memory != 0 ? config.defer_memory : caps.max_points);
+  double slots = 2;
+  while (slots < 2 * deferred) slots *= 2;
+  const double deferred_bytes =
+      deferred > 0 ? 16.0 * slots + 16.0 * deferred + 8.0 * (2.0 * caps.max_points + deferred) : 0.0;
+  return model.bytes(caps) + messages + 40.0 * ids + deferred_bytes;
 }
 
 }  // namespace keepless::platform

@@ -266,6 +266,22 @@ TEST(NodeConfig, ParsesTheMaturityGuard) {
   }
 }
 
+TEST(NodeConfig, ParsesDeferredCulling) {
+  NodeConfig c;
+  std::string error;
+  ASSERT_EQ(parse({}, c, error), ParseResult::kOk);
+  EXPECT_EQ(c.params.defer_keyframes, 0u);  // off by default
+  EXPECT_EQ(c.defer_memory, 0u);
+  ASSERT_EQ(parse({"--defer", "3", "--defer-memory", "900"}, c, error), ParseResult::kOk) << error;
+  EXPECT_EQ(c.params.defer_keyframes, 3u);
+  EXPECT_EQ(c.defer_memory, 900u);
+  for (const char* bad : {"-1", "x", "2000000000"}) {
+    NodeConfig d;
+    EXPECT_EQ(parse({"--defer", bad}, d, error), ParseResult::kError) << bad;
+    EXPECT_EQ(parse({"--defer-memory", bad}, d, error), ParseResult::kError) << bad;
+  }
+}
+
 TEST(NodeConfig, ParsesTheReliabilityFlags) {
   NodeConfig c;
   std::string error;
@@ -308,6 +324,19 @@ TEST(NodeConfig, MemoryEstimateMatchesTheNode) {
     const double estimate = keepless::platform::estimate_node_bytes(c);
     EXPECT_NEAR(estimate / actual, 1.0, 0.05) << "window " << window << " obs " << obs << ": " << estimate
                                                 << " estimated, " << actual << " actual";
+  }
+  // Deferred culling adds its memory of excluded points and the decision's
+  // two lists: the estimate follows, and the node reports it.
+  for (const std::uint32_t memory : {0u, 20000u}) {
+    NodeConfig c;
+    c.url = "memq://";
+    lcm::LCM bus("memq://");
+    const double off = static_cast<double>(keepless::platform::Node(bus, c).memory_bytes());
+    c.params.defer_keyframes = 2;
+    c.defer_memory = memory;
+    const double on = static_cast<double>(keepless::platform::Node(bus, c).memory_bytes());
+    EXPECT_GT(on, off);
+    EXPECT_NEAR(keepless::platform::estimate_node_bytes(c) / on, 1.0, 0.05) << "defer memory " << memory;
   }
   // Issue 15, defect 6: passed flag validation, then aborted in bad_alloc.
   NodeConfig huge;

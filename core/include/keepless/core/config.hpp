@@ -117,6 +117,13 @@ struct Params {
   // the newest (none while the window holds A keyframes or fewer). 0: off.
   // (A keyframe's tracked flags, Keyframe::tracked, need no parameter.)
   std::uint32_t maturity_keyframes = 0;
+  // Deferred culling (DeferredCulls, keepless/core/deferred_culls.hpp): T.
+  // A culled point is excluded from local BA at once and deleted only once
+  // T keyframes in a row have not matched it (none of the newest T observes
+  // it). 0: off, a culled point is deleted at once (the decisions and
+  // everything else unchanged). Read by the callers that hold the culls (the
+  // node, the adapter's users), not by the Sparsifier.
+  std::uint32_t defer_keyframes = 0;
 };
 
 // The options' names as command lines spell them: "window", "newest";

@@ -45,6 +45,9 @@ struct NodeConfig {
   // Culled point ids remembered (a keyframe already in flight cannot bring
   // them back); 0: the window's point capacity.
   std::uint32_t cull_memory = 0;
+  // Deferred culling (params.defer_keyframes = T > 0, --defer T): excluded
+  // points held until the rule deletes them; 0: the window's point capacity.
+  std::uint32_t defer_memory = 0;
 
   core::Params params;  // M, theta, box, scope, floor, cost model
   std::uint64_t budget_work_units = std::numeric_limits<std::uint64_t>::max();
