@@ -1,6 +1,7 @@
 #include "keepless/core/keep_thresholds.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <vector>
 
 namespace keepless::core {
@@ -279,6 +280,50 @@ std::size_t KeepThresholds::memory_bytes() const {
          s.listed.capacity() * sizeof(Impl::Listed) + s.units.capacity() * sizeof(Impl::Unit) +
          s.by_pair.capacity() * sizeof(std::int32_t) + s.scratch.capacity() * sizeof(std::uint32_t) +
          s.bins.capacity() * sizeof(std::uint32_t) + s.node_of.capacity() * sizeof(solver::NodeId);
+}
+
+FractionBudget::FractionBudget(std::uint32_t max_points) : held_(max_points), next_(max_points) {}
+
+std::size_t FractionBudget::memory_bytes() const {
+  return sizeof(FractionBudget) + (held_.capacity() + next_.capacity()) * sizeof(Entry);
+}
+
+void FractionBudget::clear() {
+  count_ = 0;
+  evaluated_ = granted_ = 0;
+}
+
+std::uint32_t FractionBudget::take(double fraction, const PointDecision* d, std::uint32_t n) {
+  std::uint32_t candidates = 0, kept_before = 0, fresh = 0;
+  std::uint32_t h = 0;
+  for (std::uint32_t i = 0; i < n; ++i) {
+    while (h < count_ && held_[h].point < d[i].point) ++h;
+    if (d[i].verdict == Verdict::kSkip) continue;
+    ++candidates;
+    const bool known = h < count_ && held_[h].point == d[i].point;
+    kept_before += known && held_[h].kept ? 1 : 0;
+    fresh += known ? 0 : 1;
+  }
+  evaluated_ += fresh;
+  const auto due = static_cast<std::uint64_t>(std::floor(fraction * static_cast<double>(evaluated_) + 0.5));
+  const std::uint64_t grant = due > granted_ ? due - granted_ : 0;
+  granted_ += grant;
+  return static_cast<std::uint32_t>(std::min<std::uint64_t>(kept_before + grant, candidates));
+}
+
+void FractionBudget::record(const PointDecision* d, std::uint32_t n) {
+  std::uint32_t h = 0, m = 0;
+  const auto cap = static_cast<std::uint32_t>(next_.size());
+  for (std::uint32_t i = 0; i < n && m < cap; ++i) {
+    while (h < count_ && held_[h].point < d[i].point) ++h;
+    if (d[i].verdict != Verdict::kSkip) {
+      next_[m++] = Entry{d[i].point, d[i].verdict == Verdict::kKeep};
+    } else if (h < count_ && held_[h].point == d[i].point) {
+      next_[m++] = held_[h];
+    }
+  }
+  held_.swap(next_);
+  count_ = m;
 }
 
 }  // namespace keepless::core

@@ -77,6 +77,7 @@ struct Sparsifier::Impl {
   // candidates with M* <= b, b <= curve_top; M* = kNever counts in none),
   // a counting sort's cursors and the candidates by (M*, id).
   std::unique_ptr<KeepThresholds> thresholds;
+  std::unique_ptr<FractionBudget> fraction;  // kFraction: what earlier decisions kept
   std::vector<std::uint32_t> threshold_of;  // [max_points]
   std::vector<std::uint32_t> curve;         // [max_points + 4]
   std::vector<std::uint32_t> cursor;        // [max_points + 4]
@@ -114,6 +115,7 @@ struct Sparsifier::Impl {
       ranked.resize(c.max_points);
       head_of.resize(c.max_points);
     }
+    if (p.budget.kind == BudgetKind::kFraction) fraction = std::make_unique<FractionBudget>(c.max_points);
     // The policies' scratch only where they are on (Params are fixed).
     if (p.scope == Scope::kNewest) in_scope.resize(c.max_points);
     if (p.coverage_floor > 0 || p.maturity_keyframes > 0) {
@@ -243,9 +245,8 @@ struct Sparsifier::Impl {
     std::uint64_t observations = 0;
     if (b.kind == BudgetKind::kPoints) {
       take = static_cast<std::uint32_t>(std::min<std::uint64_t>(b.count, candidates));
-    } else if (b.kind == BudgetKind::kFraction) {
-      const double want = std::floor(b.fraction * static_cast<double>(candidates) + 0.5);
-      take = static_cast<std::uint32_t>(std::min(want, static_cast<double>(candidates)));
+    } else if (b.kind == BudgetKind::kFraction) {  // F of the points new to the budget (FractionBudget)
+      take = fraction->take(b.fraction, decisions.data(), count);
     } else {  // kObservations: the longest prefix within B
       while (take < candidates && observations + net.point_views(ranked[take]) <= b.count) {
         observations += net.point_views(ranked[take++]);
@@ -259,6 +260,7 @@ struct Sparsifier::Impl {
       observations += net.point_views(i);
       kept_top = std::max(kept_top, std::min(threshold_of[i], never));
     }
+    if (fraction) fraction->record(decisions.data(), count);
     sum.kept += take;
     sum.culled -= take;
     sum.budget_observations = observations;
@@ -620,6 +622,7 @@ std::size_t Sparsifier::memory_bytes() const {
   return sizeof(Sparsifier) + sizeof(Impl) + (s.network ? s.network->memory_bytes() : 0) +
          (s.incremental ? s.incremental->memory_bytes() : 0) + s.solver.memory_bytes() +
          s.pairwise.memory_bytes() + (s.thresholds ? s.thresholds->memory_bytes() : 0) +
+         (s.fraction ? s.fraction->memory_bytes() : 0) +
          (s.threshold_of.capacity() + s.curve.capacity() + s.cursor.capacity() +
           s.ranked.capacity()) * sizeof(std::uint32_t) + s.head_of.capacity() * sizeof(solver::NodeId) +
          s.decisions.capacity() * sizeof(PointDecision) +

@@ -66,6 +66,10 @@ struct RealRunResult {
   // the last tracked pose; SE(3) for RGB-D, Sim(3) monocular.
   double ate_m = 0, ate_r_deg = 0;
   double mean_kept_fraction = 1;    // of the new keyframes' evaluated points (>= 2 views in the window), over windows
+  // With a kept fraction: the points the selector evaluated (first time),
+  // so 1 - points_culled_by_selector / points_evaluated is the share of
+  // them the map holds (core::FractionBudget aims it at F).
+  std::int64_t points_evaluated = 0;
   std::vector<Pose> estimate, ground_truth;       // tracked frames, aligned estimate
   std::vector<KeypointMark> marks;                // one keyframe's keypoints (the window with most culls)
   int marked_frame = -1;
