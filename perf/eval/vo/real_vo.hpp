@@ -18,8 +18,8 @@ namespace keepless::eval::vo {
 // What decides before each local BA. kOriginal: nothing (ORB-SLAM2's own
 // culling only). The baselines cull exactly as many of the new keyframe's
 // evaluated points as keepless culls on the same window; with a kept
-// fraction (params.budget) every selector keeps floor(F x E + 0.5) of the E
-// evaluated points of the new keyframe, counted on its own window.
+// fraction (params.budget) every selector keeps the count core::FractionBudget
+// gives on its own map: F of the points new to it plus those it kept before.
 enum class Selector : std::uint8_t { kOriginal, kKeepless, kRandom, kLongestTrack, kAnms };
 const char* to_string(Selector s);
 
