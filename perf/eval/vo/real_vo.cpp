@@ -8,9 +8,9 @@
 #include <cstdio>
 #include <functional>
 #include <map>
+#include <numeric>
 #include <string>
 #include <utility>
-#include <numeric>
 
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core/eigen.hpp>
