@@ -282,10 +282,11 @@ std::size_t KeepThresholds::memory_bytes() const {
          s.bins.capacity() * sizeof(std::uint32_t) + s.node_of.capacity() * sizeof(solver::NodeId);
 }
 
-FractionBudget::FractionBudget(std::uint32_t max_points) : held_(max_points), next_(max_points) {}
+FractionBudget::FractionBudget(std::uint32_t max_points)
+    : held_(max_points), next_(max_points), known_(max_points) {}
 
 std::size_t FractionBudget::memory_bytes() const {
-  return sizeof(FractionBudget) + (held_.capacity() + next_.capacity()) * sizeof(Entry);
+  return sizeof(FractionBudget) + (held_.capacity() + next_.capacity()) * sizeof(Entry) + known_.capacity();
 }
 
 void FractionBudget::clear() {
@@ -293,15 +294,19 @@ void FractionBudget::clear() {
   evaluated_ = granted_ = 0;
 }
 
+// One merge of the decisions with what is remembered (both by ascending id);
+// what it finds is kept per decision for record().
 std::uint32_t FractionBudget::take(double fraction, const PointDecision* d, std::uint32_t n) {
+  n = std::min(n, static_cast<std::uint32_t>(known_.size()));
   std::uint32_t candidates = 0, kept_before = 0, fresh = 0;
   std::uint32_t h = 0;
   for (std::uint32_t i = 0; i < n; ++i) {
     while (h < count_ && held_[h].point < d[i].point) ++h;
+    const bool known = h < count_ && held_[h].point == d[i].point;
+    known_[i] = known ? (held_[h].kept ? kKnownKept : kKnown) : kFresh;
     if (d[i].verdict == Verdict::kSkip) continue;
     ++candidates;
-    const bool known = h < count_ && held_[h].point == d[i].point;
-    kept_before += known && held_[h].kept ? 1 : 0;
+    kept_before += known_[i] == kKnownKept ? 1 : 0;
     fresh += known ? 0 : 1;
   }
   evaluated_ += fresh;
@@ -312,14 +317,13 @@ std::uint32_t FractionBudget::take(double fraction, const PointDecision* d, std:
 }
 
 void FractionBudget::record(const PointDecision* d, std::uint32_t n) {
-  std::uint32_t h = 0, m = 0;
-  const auto cap = static_cast<std::uint32_t>(next_.size());
-  for (std::uint32_t i = 0; i < n && m < cap; ++i) {
-    while (h < count_ && held_[h].point < d[i].point) ++h;
+  n = std::min(n, static_cast<std::uint32_t>(known_.size()));
+  std::uint32_t m = 0;
+  for (std::uint32_t i = 0; i < n; ++i) {
     if (d[i].verdict != Verdict::kSkip) {
       next_[m++] = Entry{d[i].point, d[i].verdict == Verdict::kKeep};
-    } else if (h < count_ && held_[h].point == d[i].point) {
-      next_[m++] = held_[h];
+    } else if (known_[i] != kFresh) {
+      next_[m++] = Entry{d[i].point, known_[i] == kKnownKept};
     }
   }
   held_.swap(next_);

@@ -69,7 +69,7 @@ class FractionBudget {
 
   // K for a decision: `d` lists every window point (ascending ids, at most
   // max_points), its candidates with any verdict but kSkip. Counts the new
-  // ones as evaluated; call record() after selecting.
+  // ones as evaluated; call record() with the same points after selecting.
   std::uint32_t take(double fraction, const PointDecision* d, std::uint32_t n);
   // After selecting: candidates with verdict kKeep were kept by the budget,
   // the other candidates were not; points skipped this time keep what was
@@ -86,7 +86,9 @@ class FractionBudget {
     PointId point;
     bool kept;
   };
-  std::vector<Entry> held_, next_;  // [max_points] by ascending id
+  static constexpr std::uint8_t kFresh = 0, kKnown = 1, kKnownKept = 2;
+  std::vector<Entry> held_, next_;    // [max_points] by ascending id
+  std::vector<std::uint8_t> known_;   // [max_points] per decision of the last take()
   std::uint32_t count_ = 0;
   std::uint64_t evaluated_ = 0;
   std::uint64_t granted_ = 0;
