@@ -1,6 +1,7 @@
 #include "keepless/core/keep_thresholds.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <vector>
 
 namespace keepless::core {
@@ -10,10 +11,9 @@ struct KeepThresholds::Impl {
     std::int32_t rank = -1;  // in the tie order; -1: not a point
     std::int32_t cost = 0;   // c_c
   };
-  struct Unit {              // one point -> pair arc, grouped by point
+  struct Unit {              // one point -> pair arc
     std::uint32_t cost;      // c_c + c_s
     solver::NodeId pair;
-    std::uint32_t position;  // in its pair's order, from 0
   };
   struct Listed {            // the same in arc order
     std::uint32_t cost;
@@ -21,17 +21,22 @@ struct KeepThresholds::Impl {
     solver::NodeId pair;
   };
   static constexpr std::uint32_t kBins = 1024;
+  static constexpr std::int32_t kSmall = 32;  // a point's positions selected without nth_element
+  static constexpr std::int64_t kNeeded = 64;
+  std::int64_t need[kNeeded] = {};             // needed(c, theta) for c < kNeeded
 
   std::vector<Point> point;            // [max_nodes] by node
   std::vector<std::uint32_t> thr;      // [max_nodes] M* by node
   std::vector<std::int64_t> flow;      // [max_nodes] by node, after evaluate_at
   std::vector<solver::ArcId> out;      // [max_nodes] a pair's sink arc
   std::vector<std::int32_t> at;        // [max_nodes + 1] a point's units (by rank)
-  std::vector<std::int32_t> first;     // [max_nodes + 1] a pair's units (by node)
+  std::vector<std::int32_t> first;     // [max_nodes + 1] a pair's units (by node); its cells
+  std::vector<std::uint32_t> lo, hi;   // [max_nodes] a pair's unit costs
   std::vector<Listed> listed;          // [max_arcs]
   std::vector<Unit> units;             // [max_arcs] grouped by point rank
-  std::vector<std::int32_t> by_pair;   // [max_arcs] indices into units, by pair, rank order
-  std::vector<std::uint32_t> scratch;  // [max_arcs] one point's positions
+  std::vector<std::uint32_t> pos;      // [max_arcs] each unit's position in its pair, from 0
+  std::vector<std::int32_t> by_pair;   // [max_arcs] units by pair (rank order); or (pair, cost) cells
+  std::vector<std::uint32_t> scratch;  // [max_arcs] one point's positions, for nth_element
   std::vector<std::uint32_t> bins;     // [kBins + 1]
   std::vector<solver::NodeId> node_of; // [max_nodes] a rank's node
   std::int32_t points = 0;
@@ -49,8 +54,11 @@ struct KeepThresholds::Impl {
     out.resize(n);
     at.resize(n + 1);
     first.resize(n + 1);
+    lo.resize(n);
+    hi.resize(n);
     listed.resize(m);
     units.resize(m);
+    pos.resize(m);
     by_pair.resize(m);
     scratch.resize(m);
     bins.resize(kBins + 1);
@@ -68,34 +76,96 @@ struct KeepThresholds::Impl {
     return f;
   }
 
-  // Each unit's position in its pair: units by rank, then grouped by pair
-  // (stable, so rank order within a pair), then counted by cost.
-  void positions(std::int32_t pair_nodes_end) {
-    for (std::int32_t q = 0; q < pair_nodes_end; ++q) {
-      const std::int32_t* begin = by_pair.data() + first[q];
-      const std::int32_t* end = by_pair.data() + first[q + 1];
-      if (begin == end) continue;
-      std::uint32_t lo = ~0u, hi = 0;
-      for (const std::int32_t* u = begin; u != end; ++u) {
-        lo = std::min(lo, units[*u].cost);
-        hi = std::max(hi, units[*u].cost);
+  // Each unit's position in its pair, by (cost, rank). Pairs are few and
+  // their costs narrow, so one counter per (pair, cost) fits in the cache:
+  // counted, then handed out to the units in rank order (ties by rank),
+  // all in passes over the units in order. Returns false if the cells
+  // would not fit in by_pair (costs too spread).
+  bool positions_by_cells(std::int32_t listed_count) {
+    std::int64_t cells = 0;
+    for (std::int32_t v = 0; v < nodes; ++v) {
+      const std::int32_t units_of = first[v + 1];   // counted, not yet summed
+      first[v] = static_cast<std::int32_t>(cells);  // the pair's first cell
+      cells += units_of > 0 ? std::int64_t{hi[v]} - lo[v] + 1 : 0;
+    }
+    if (cells > static_cast<std::int64_t>(by_pair.size())) return false;
+    std::int32_t* cell = by_pair.data();
+    std::fill(cell, cell + cells, 0);
+    for (std::int32_t u = 0; u < listed_count; ++u) {  // pos[] holds the unit's cell until handed out
+      const Unit& unit = units[u];
+      const auto c = static_cast<std::uint32_t>(first[unit.pair]) + (unit.cost - lo[unit.pair]);
+      pos[u] = c;
+      ++cell[c];
+    }
+    for (std::int32_t v = 0; v < nodes; ++v) {  // exclusive prefix within each pair
+      const std::int32_t b = first[v];
+      const std::int32_t e = v + 1 < nodes ? first[v + 1] : static_cast<std::int32_t>(cells);
+      std::int32_t sum = 0;
+      for (std::int32_t c = b; c < e; ++c) {
+        const std::int32_t n = cell[c];
+        cell[c] = sum;
+        sum += n;
       }
-      if (hi - lo < kBins) {
-        std::fill(bins.begin(), bins.begin() + (hi - lo + 2), 0u);
-        for (const std::int32_t* u = begin; u != end; ++u) ++bins[units[*u].cost - lo + 1];
-        for (std::uint32_t b = 0; b + 1 <= hi - lo; ++b) bins[b + 1] += bins[b];
-        for (const std::int32_t* u = begin; u != end; ++u) {
-          units[*u].position = bins[units[*u].cost - lo]++;
-        }
-      } else {  // costs too spread for bins: sort (indices ascend with rank)
-        std::int32_t* b = by_pair.data() + first[q];
-        std::int32_t* e = by_pair.data() + first[q + 1];
+    }
+    for (std::int32_t u = 0; u < listed_count; ++u) pos[u] = static_cast<std::uint32_t>(cell[pos[u]]++);
+    return true;
+  }
+
+  // The same where costs are spread: units grouped by pair (stable, so in
+  // rank order), then counted by cost, or sorted where even one pair's
+  // costs span more than kBins.
+  void positions_by_pair(std::int32_t listed_count) {
+    for (std::int32_t v = 0; v < nodes; ++v) first[v + 1] += first[v];
+    for (std::int32_t u = 0; u < listed_count; ++u) by_pair[first[units[u].pair]++] = u;
+    for (std::int32_t v = nodes; v > 0; --v) first[v] = first[v - 1];
+    first[0] = 0;
+    for (std::int32_t q = 0; q < nodes; ++q) {
+      std::int32_t* b = by_pair.data() + first[q];
+      std::int32_t* e = by_pair.data() + first[q + 1];
+      if (b == e) continue;
+      const std::uint32_t low = lo[q], span = hi[q] - lo[q];
+      if (span < kBins) {
+        std::fill(bins.begin(), bins.begin() + (span + 2), 0u);
+        for (const std::int32_t* u = b; u != e; ++u) ++bins[units[*u].cost - low + 1];
+        for (std::uint32_t c = 0; c + 1 <= span; ++c) bins[c + 1] += bins[c];
+        for (const std::int32_t* u = b; u != e; ++u) pos[*u] = bins[units[*u].cost - low]++;
+      } else {  // indices ascend with rank
         std::sort(b, e, [this](std::int32_t x, std::int32_t y) {
           return units[x].cost != units[y].cost ? units[x].cost < units[y].cost : x < y;
         });
-        for (std::int32_t* u = b; u != e; ++u) units[*u].position = static_cast<std::uint32_t>(u - b);
+        for (std::int32_t* u = b; u != e; ++u) pos[*u] = static_cast<std::uint32_t>(u - b);
       }
     }
+  }
+
+  // The t-th smallest (t >= 1) of n positions. Points have few pairs, so
+  // for n <= kSmall each position's rank among them is counted, without
+  // branches (keys position * 32 + index are distinct, and int32 compares
+  // vectorise on any x86-64 or NEON); nth_element on a copy otherwise.
+  std::uint32_t select(const std::uint32_t* s, std::int32_t n, std::int64_t t) {
+    if (n == 1) return s[0];
+    if (n == 3 && t == 2) return std::max(std::min(s[0], s[1]), std::min(std::max(s[0], s[1]), s[2]));
+    if (n <= kSmall) {
+      std::int32_t key[kSmall];
+      std::uint32_t any = 0;
+      for (std::int32_t i = 0; i < n; ++i) {
+        key[i] = static_cast<std::int32_t>(s[i] << 5 | static_cast<std::uint32_t>(i));
+        any |= s[i];
+      }
+      if (any < (1u << 26)) {
+        std::int32_t found = 0;
+        for (std::int32_t i = 0; i < n; ++i) {
+          std::int32_t below = 0;
+          for (std::int32_t j = 0; j < n; ++j) below += key[j] < key[i] ? 1 : 0;
+          found = below == t - 1 ? key[i] : found;
+        }
+        return static_cast<std::uint32_t>(found) >> 5;
+      }
+    }
+    std::uint32_t* c = scratch.data();
+    std::copy(s, s + n, c);
+    std::nth_element(c, c + (t - 1), c + n);
+    return c[t - 1];
   }
 
   void compute(const solver::MinCostFlow& solver, solver::NodeId sink, const solver::ArcId* order,
@@ -107,6 +177,8 @@ struct KeepThresholds::Impl {
     std::fill(thr.begin(), thr.begin() + nodes, kNever);
     std::fill(out.begin(), out.begin() + nodes, -1);
     std::fill(first.begin(), first.begin() + nodes + 1, 0);
+    std::fill(lo.begin(), lo.begin() + nodes, ~0u);
+    std::fill(hi.begin(), hi.begin() + nodes, 0u);
     points = count;
     std::fill(at.begin(), at.begin() + count + 1, 0);
     for (std::int32_t k = 0; k < count; ++k) {
@@ -115,47 +187,52 @@ struct KeepThresholds::Impl {
       if (e.capacity == 0) continue;
       point[e.head] = Point{k, e.cost};
     }
+    // One pass over the arcs, without branches on an arc's kind (an
+    // incrementally edited network scatters the kinds over the ids, as in
+    // PairwiseStart): a pair's sink arc is its way out, a point's pair arc
+    // becomes a unit; per pair its unit count and cost range.
     std::int32_t listed_count = 0;
     for (solver::ArcId a = 0; a < arcs; ++a) {
       const solver::Arc e = arc[a];
-      if (e.capacity == 0) continue;
-      if (e.head == sink) {
-        out[e.tail] = a;
-        continue;
-      }
+      const bool live = e.capacity != 0;
+      const bool way_out = live && e.head == sink;
+      if (way_out) out[e.tail] = a;  // one per pair: predictable
       const Point p = point[e.tail];
-      if (p.rank < 0) continue;  // a source arc
-      listed[listed_count++] = Listed{static_cast<std::uint32_t>(p.cost) + static_cast<std::uint32_t>(e.cost),
-                                      p.rank, e.head};
-      ++at[p.rank + 1];
-      ++first[e.head + 1];
+      const bool unit = live && !way_out && p.rank >= 0;
+      const std::uint32_t cost = static_cast<std::uint32_t>(p.cost) + static_cast<std::uint32_t>(e.cost);
+      listed[listed_count] = Listed{cost, p.rank, e.head};
+      listed_count += unit ? 1 : 0;
+      const solver::NodeId q = unit ? e.head : sink;  // the sink collects what is not a unit
+      at[unit ? p.rank + 1 : 0] += unit ? 1 : 0;
+      first[q + 1] += unit ? 1 : 0;
+      lo[q] = std::min(lo[q], cost);
+      hi[q] = std::max(hi[q], cost);
     }
     for (std::int32_t k = 0; k < count; ++k) at[k + 1] += at[k];
-    for (std::int32_t v = 0; v < nodes; ++v) first[v + 1] += first[v];
     // Group by rank (at[] advances to each group's end, then is restored).
     for (std::int32_t u = 0; u < listed_count; ++u) {
       const Listed& l = listed[u];
-      units[at[l.rank]++] = Unit{l.cost, l.pair, 0};
+      units[at[l.rank]++] = Unit{l.cost, l.pair};
     }
     for (std::int32_t k = count; k > 0; --k) at[k] = at[k - 1];
     at[0] = 0;
-    // Then by pair, keeping rank order.
-    for (std::int32_t u = 0; u < listed_count; ++u) by_pair[first[units[u].pair]++] = u;
-    for (std::int32_t v = nodes; v > 0; --v) first[v] = first[v - 1];
-    first[0] = 0;
-    positions(nodes);
-    // Each point's threshold: the t-th smallest of its positions, plus one.
+    if (!positions_by_cells(listed_count)) {
+      // first[] now holds cell offsets: recount the pairs' units.
+      std::fill(first.begin(), first.begin() + nodes + 1, 0);
+      for (std::int32_t u = 0; u < listed_count; ++u) ++first[units[u].pair + 1];
+      positions_by_pair(listed_count);
+    }
+    // Each point's threshold: the t-th smallest of its positions, plus one
+    // (t from a table for the usual capacities, n(n-1)/2 of a few views).
+    for (std::int64_t c = 0; c < kNeeded; ++c) need[c] = needed(c, theta);
     for (std::int32_t k = 0; k < count; ++k) {
       const solver::NodeId node = node_of[k];
       if (node < 0) continue;
       const std::int64_t capacity = arc[order[k]].capacity;
-      const std::int64_t t = needed(capacity, theta);
+      const std::int64_t t = capacity < kNeeded ? need[capacity] : needed(capacity, theta);
       const std::int32_t n = at[k + 1] - at[k];
       if (t > n) continue;  // kNever
-      std::uint32_t* s = scratch.data();
-      for (std::int32_t u = 0; u < n; ++u) s[u] = units[at[k] + u].position;
-      std::nth_element(s, s + (t - 1), s + n);
-      thr[node] = s[t - 1] + 1;
+      thr[node] = select(pos.data() + at[k], n, t) + 1;
     }
   }
 
@@ -166,12 +243,13 @@ struct KeepThresholds::Impl {
       const solver::NodeId node = node_of[k];
       if (node < 0) continue;
       std::int64_t f = 0;
-      for (std::int32_t u = at[k]; u < at[k + 1]; ++u) {
+      for (std::int32_t u = at[k]; u < at[k + 1]; ++u) {  // no branch on the (unpredictable) cut
+        const bool carried = static_cast<std::int64_t>(pos[u]) < m;
         const Unit& unit = units[u];
-        if (static_cast<std::int64_t>(unit.position) >= m) continue;
-        ++f;
         const solver::ArcId way_out = out[unit.pair];
-        total_cost += static_cast<std::int64_t>(unit.cost) + (way_out >= 0 ? arc[way_out].cost : 0);
+        const std::int64_t cost = static_cast<std::int64_t>(unit.cost) + (way_out >= 0 ? arc[way_out].cost : 0);
+        f += carried ? 1 : 0;
+        total_cost += carried ? cost : 0;
       }
       flow[node] = f;
       max_flow += f;
@@ -198,9 +276,58 @@ std::size_t KeepThresholds::memory_bytes() const {
          s.thr.capacity() * sizeof(std::uint32_t) + s.flow.capacity() * sizeof(std::int64_t) +
          s.out.capacity() * sizeof(solver::ArcId) +
          (s.at.capacity() + s.first.capacity()) * sizeof(std::int32_t) +
+         (s.lo.capacity() + s.hi.capacity() + s.pos.capacity()) * sizeof(std::uint32_t) +
          s.listed.capacity() * sizeof(Impl::Listed) + s.units.capacity() * sizeof(Impl::Unit) +
          s.by_pair.capacity() * sizeof(std::int32_t) + s.scratch.capacity() * sizeof(std::uint32_t) +
          s.bins.capacity() * sizeof(std::uint32_t) + s.node_of.capacity() * sizeof(solver::NodeId);
+}
+
+FractionBudget::FractionBudget(std::uint32_t max_points)
+    : held_(max_points), next_(max_points), known_(max_points) {}
+
+std::size_t FractionBudget::memory_bytes() const {
+  return sizeof(FractionBudget) + (held_.capacity() + next_.capacity()) * sizeof(Entry) + known_.capacity();
+}
+
+void FractionBudget::clear() {
+  count_ = 0;
+  evaluated_ = granted_ = 0;
+}
+
+// One merge of the decisions with what is remembered (both by ascending id);
+// what it finds is kept per decision for record().
+std::uint32_t FractionBudget::take(double fraction, const PointDecision* d, std::uint32_t n) {
+  n = std::min(n, static_cast<std::uint32_t>(known_.size()));
+  std::uint32_t candidates = 0, kept_before = 0, fresh = 0;
+  std::uint32_t h = 0;
+  for (std::uint32_t i = 0; i < n; ++i) {
+    while (h < count_ && held_[h].point < d[i].point) ++h;
+    const bool known = h < count_ && held_[h].point == d[i].point;
+    known_[i] = known ? (held_[h].kept ? kKnownKept : kKnown) : kFresh;
+    if (d[i].verdict == Verdict::kSkip) continue;
+    ++candidates;
+    kept_before += known_[i] == kKnownKept ? 1 : 0;
+    fresh += known ? 0 : 1;
+  }
+  evaluated_ += fresh;
+  const auto due = static_cast<std::uint64_t>(std::floor(fraction * static_cast<double>(evaluated_) + 0.5));
+  const std::uint64_t grant = due > granted_ ? due - granted_ : 0;
+  granted_ += grant;
+  return static_cast<std::uint32_t>(std::min<std::uint64_t>(kept_before + grant, candidates));
+}
+
+void FractionBudget::record(const PointDecision* d, std::uint32_t n) {
+  n = std::min(n, static_cast<std::uint32_t>(known_.size()));
+  std::uint32_t m = 0;
+  for (std::uint32_t i = 0; i < n; ++i) {
+    if (d[i].verdict != Verdict::kSkip) {
+      next_[m++] = Entry{d[i].point, d[i].verdict == Verdict::kKeep};
+    } else if (known_[i] != kFresh) {
+      next_[m++] = Entry{d[i].point, known_[i] == kKnownKept};
+    }
+  }
+  held_.swap(next_);
+  count_ = m;
 }
 
 }  // namespace keepless::core

@@ -74,13 +74,16 @@ struct Sparsifier::Impl {
   std::vector<std::uint32_t> candidates;   // [max_observations]
   // Keep budgets (Params::budget, kind != kNone): the thresholds, each
   // decision's M* (0: skipped), the kept-count curve (curve[b + 1]: the
-  // candidates with M* <= b, b <= max_points; M* = kNever counts in none),
+  // candidates with M* <= b, b <= curve_top; M* = kNever counts in none),
   // a counting sort's cursors and the candidates by (M*, id).
   std::unique_ptr<KeepThresholds> thresholds;
+  std::unique_ptr<FractionBudget> fraction;  // kFraction: what earlier decisions kept
   std::vector<std::uint32_t> threshold_of;  // [max_points]
-  std::vector<std::uint32_t> curve;         // [max_points + 3]
-  std::vector<std::uint32_t> cursor;        // [max_points + 3]
+  std::vector<std::uint32_t> curve;         // [max_points + 4]
+  std::vector<std::uint32_t> cursor;        // [max_points + 4]
   std::vector<std::uint32_t> ranked;        // [max_points]
+  std::vector<solver::NodeId> head_of;      // [max_points] a decision's point node
+  std::uint32_t curve_top = 0;              // the curve's last bucket: the largest finite M*
   std::uint32_t max_points = 0;
   bool budgeted = false;
   std::uint32_t count = 0;
@@ -107,10 +110,12 @@ struct Sparsifier::Impl {
     if (budgeted) {
       thresholds = std::make_unique<KeepThresholds>(solver.capacity_limits());
       threshold_of.resize(c.max_points);
-      curve.resize(std::size_t{c.max_points} + 3);
-      cursor.resize(std::size_t{c.max_points} + 3);
+      curve.resize(std::size_t{c.max_points} + 4);
+      cursor.resize(std::size_t{c.max_points} + 4);
       ranked.resize(c.max_points);
+      head_of.resize(c.max_points);
     }
+    if (p.budget.kind == BudgetKind::kFraction) fraction = std::make_unique<FractionBudget>(c.max_points);
     // The policies' scratch only where they are on (Params are fixed).
     if (p.scope == Scope::kNewest) in_scope.resize(c.max_points);
     if (p.coverage_floor > 0 || p.maturity_keyframes > 0) {
@@ -192,6 +197,7 @@ struct Sparsifier::Impl {
     thresholds->compute(solver, net.sink(), net.canonical_order(),
                         static_cast<std::int32_t>(net.evaluated_count()), params.theta);
     count = net.point_count();
+    std::uint32_t top = 0;  // the largest finite M*
     for (std::uint32_t i = 0; i < count; ++i) {
       PointDecision& d = decisions[i];
       d.point = net.point_id(i);
@@ -207,7 +213,9 @@ struct Sparsifier::Impl {
       const std::int64_t n = net.point_views(i);
       d.capacity = n * (n - 1) / 2;
       d.verdict = Verdict::kCull;
-      threshold_of[i] = thresholds->threshold(arc[a].head);
+      head_of[i] = arc[a].head;
+      threshold_of[i] = thresholds->threshold(head_of[i]);
+      if (threshold_of[i] != KeepThresholds::kNever) top = std::max(top, threshold_of[i]);
       ++sum.culled;
     }
     sum.points = count;
@@ -217,51 +225,51 @@ struct Sparsifier::Impl {
     // The budget is taken from what the tracking guard and the scope leave.
     protect_and_scope(window, net, window.keyframe_count());
 
-    // Candidates by (M*, id): a stable counting sort (decisions ascend by id).
-    const std::uint32_t never = max_points + 1;
-    const auto bucket = [&](std::uint32_t i) { return std::min(threshold_of[i], never); };
-    std::fill(curve.begin(), curve.begin() + never + 2, 0u);
-    std::uint32_t candidates = 0;
-    for (std::uint32_t i = 0; i < count; ++i) {
-      if (decisions[i].verdict != Verdict::kCull) continue;
-      ++curve[bucket(i) + 1];
-      ++candidates;
-    }
+    // Candidates by (M*, id): a stable counting sort (decisions ascend by id)
+    // over buckets 0 .. top, `never` (M* = kNever) and, last, the skipped
+    // (no branch on the verdict: they sort after every candidate).
+    curve_top = top;
+    const std::uint32_t never = top + 1;
+    const auto bucket = [&](std::uint32_t i) {
+      return decisions[i].verdict == Verdict::kCull ? std::min(threshold_of[i], never) : never + 1;
+    };
+    std::fill(curve.begin(), curve.begin() + never + 3, 0u);
+    for (std::uint32_t i = 0; i < count; ++i) ++curve[bucket(i) + 1];
     for (std::uint32_t b = 0; b <= never; ++b) curve[b + 1] += curve[b];
+    const std::uint32_t candidates = curve[never + 1];
     std::copy(curve.begin(), curve.begin() + never + 2, cursor.begin());
-    for (std::uint32_t i = 0; i < count; ++i) {
-      if (decisions[i].verdict == Verdict::kCull) ranked[cursor[bucket(i)]++] = i;
-    }
+    for (std::uint32_t i = 0; i < count; ++i) ranked[cursor[bucket(i)]++] = i;
 
     const KeepBudget& b = params.budget;
     std::uint32_t take = 0;
     std::uint64_t observations = 0;
     if (b.kind == BudgetKind::kPoints) {
       take = static_cast<std::uint32_t>(std::min<std::uint64_t>(b.count, candidates));
-    } else if (b.kind == BudgetKind::kFraction) {
-      const double want = std::floor(b.fraction * static_cast<double>(candidates) + 0.5);
-      take = static_cast<std::uint32_t>(std::min(want, static_cast<double>(candidates)));
+    } else if (b.kind == BudgetKind::kFraction) {  // F of the points new to the budget (FractionBudget)
+      take = fraction->take(b.fraction, decisions.data(), count);
     } else {  // kObservations: the longest prefix within B
       while (take < candidates && observations + net.point_views(ranked[take]) <= b.count) {
         observations += net.point_views(ranked[take++]);
       }
     }
     observations = 0;
-    std::uint32_t top = 0;
+    std::uint32_t kept_top = 0;
     for (std::uint32_t j = 0; j < take; ++j) {
       const std::uint32_t i = ranked[j];
       decisions[i].verdict = Verdict::kKeep;
       observations += net.point_views(i);
-      top = std::max(top, bucket(i));
+      kept_top = std::max(kept_top, std::min(threshold_of[i], never));
     }
+    if (fraction) fraction->record(decisions.data(), count);
     sum.kept += take;
     sum.culled -= take;
     sum.budget_observations = observations;
-    sum.budget_m = top == never ? static_cast<std::int64_t>(never) : top;
+    // M = kNever's bucket reports as max_points + 1, as before the buckets were bounded.
+    sum.budget_m = kept_top == never ? static_cast<std::int64_t>(max_points) + 1 : kept_top;
     thresholds->evaluate_at(sum.budget_m);
     for (std::uint32_t i = 0; i < count; ++i) {
       if (decisions[i].verdict == Verdict::kSkip) continue;
-      decisions[i].flow = thresholds->flow_at(arc[net.point_source_arc(i)].head);
+      decisions[i].flow = thresholds->flow_at(head_of[i]);
     }
     sum.max_flow = thresholds->max_flow();
     sum.total_cost = thresholds->total_cost();
@@ -269,7 +277,7 @@ struct Sparsifier::Impl {
 
   std::uint32_t kept_at(std::int64_t m) const {
     if (!budgeted || m < 1) return 0;
-    const std::uint32_t b = static_cast<std::uint32_t>(std::min<std::int64_t>(m, max_points));
+    const std::uint32_t b = static_cast<std::uint32_t>(std::min<std::int64_t>(m, curve_top));
     return curve[b + 1];
   }
 
@@ -596,6 +604,9 @@ std::uint32_t Sparsifier::kept_at(std::int64_t m) const { return impl_->kept_at(
 const std::uint32_t* Sparsifier::keep_thresholds() const {
   return impl_->budgeted ? impl_->threshold_of.data() : nullptr;
 }
+void Sparsifier::forget_history() {
+  if (impl_->fraction) impl_->fraction->clear();
+}
 const Params& Sparsifier::params() const { return impl_->params; }
 const PaperNetwork& Sparsifier::network() const {
   if (impl_->network) return *impl_->network;
@@ -614,8 +625,9 @@ std::size_t Sparsifier::memory_bytes() const {
   return sizeof(Sparsifier) + sizeof(Impl) + (s.network ? s.network->memory_bytes() : 0) +
          (s.incremental ? s.incremental->memory_bytes() : 0) + s.solver.memory_bytes() +
          s.pairwise.memory_bytes() + (s.thresholds ? s.thresholds->memory_bytes() : 0) +
+         (s.fraction ? s.fraction->memory_bytes() : 0) +
          (s.threshold_of.capacity() + s.curve.capacity() + s.cursor.capacity() +
-          s.ranked.capacity()) * sizeof(std::uint32_t) +
+          s.ranked.capacity()) * sizeof(std::uint32_t) + s.head_of.capacity() * sizeof(solver::NodeId) +
          s.decisions.capacity() * sizeof(PointDecision) +
          s.in_scope.capacity() +
          (s.slots_at.capacity() + s.slots.capacity() + s.covered.capacity() +

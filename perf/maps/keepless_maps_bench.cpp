@@ -235,7 +235,7 @@ int main(int argc, char** argv) {
       {"--colmap", "BIN", "the colmap executable (default colmap, on PATH)"},
       {"--M", "LIST", "comma-separated pair capacities (default 30,100,200)"},
       {"--keep-fraction", "LIST", "comma-separated keep budgets F in [0, 1] instead of --M (keepless\n"
-                                  "and every baseline keep F of each window's evaluated points)"},
+                                  "keeps F of the points its replay evaluates, every baseline as many)"},
       {"--K", "N", "replay window in keyframes (default 20)"},
       {"--seeds", "N", "seeds of the random baseline (default 5)"},
       {"--work", "DIR", "where the models and BA runs go (default: a new /tmp/keepless_maps_bench_*)"},

@@ -72,7 +72,8 @@ const std::vector<keepless::cli::Flag> kFlags = {
     {"--decisions", "OUT", "write '<point_id> <keep|cull|skip> <flow> <capacity>' a line"},
     {"--M", "N", "pair -> sink capacity, 1..2147483647 (default 100)"},
     {"--keep-points", "K", "instead of --M: keep exactly K of the evaluated points (or all)"},
-    {"--keep-fraction", "F", "instead of --M: keep the share F in [0, 1] of the evaluated points"},
+    {"--keep-fraction", "F", "instead of --M: keep the share F in [0, 1] of the points evaluated over the\n"
+                             "windows (F of those new to each window, plus those kept before)"},
     {"--keep-observations", "B", "instead of --M: keep points while their observations sum to <= B"},
     {"--theta", "X", "keep iff flow > X * n(n-1)/2, in [0, 1] (default 0.5)"},
     {"--box", "WxH", "spatial-diversity box in pixels (default 64x48)"},

@@ -198,6 +198,7 @@ struct Node::Impl {
       sliding.clear();
       culls.clear();
       deferred.clear();
+      sparsifier.forget_history();
       if (!config.quiet) {
         std::fprintf(stderr, "keepless_node: %s at seq %lld (publisher %lld): window cleared\n",
                      v.takeover ? "window taken over" : "publisher restart recognised",
@@ -457,6 +458,7 @@ struct Node::Impl {
       sliding.clear();
       culls.clear();
       deferred.clear();
+      sparsifier.forget_history();
       cleared = true;
     } else if (r == RejectReason::kNone) {
       split_map_event(event, sliding.window(), &culls, id_scratch.data(), items);

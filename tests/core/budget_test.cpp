@@ -5,7 +5,8 @@
 // successive shortest paths from zero flow keep at that M; each point's
 // threshold M* says exactly at which M it is kept; a budget of K points
 // keeps exactly min(K, candidates), the set {M* <= M} wherever kept(M) == K;
-// a fraction rounds as documented; an observations budget never exceeds B;
+// a fraction rounds as documented and, over a sequence of windows, holds its
+// share of every point it evaluated; an observations budget never exceeds B;
 // and update() decides what run() does.
 
 #include <gtest/gtest.h>
@@ -360,6 +361,133 @@ TEST(KeepBudgets, TakenFromWhatTheGuardLeaves) {
   }
   EXPECT_GT(windows, 200u);
   EXPECT_GT(guarded, 0u) << "the guard should have skipped points";
+}
+
+// The fraction budget over a sliding window whose culled points leave the
+// map, as a SLAM's do: each decision keeps (the candidates it kept before)
+// + the grant, the grants summing to floor(F x N + 0.5) over the N points
+// evaluated so far (an independent model of that count checks the
+// sparsifier's), those with the smallest thresholds; so the points the
+// budget holds, in the window or gone from it, stay exactly that share of
+// all it evaluated instead of F^k of those decided k times. update()
+// decides what run() does.
+TEST(KeepBudgets, FractionHoldsItsShareOverASequence) {
+  std::uint32_t windows = 0, redecided = 0;
+  for (std::uint64_t seed = 1; seed <= 45 && !HasFailure(); ++seed) {
+    test::RandomCase c = test::random_case(11000 + seed, 16, 160);
+    test::random_policies(c, 11000 + seed);
+    test::random_guard(c, 11000 + seed);
+    c.params.coverage_floor = 0;  // the floor's promotions come on top of the budget
+    const double fractions[] = {0.1, 0.3, 0.45, 0.6};
+    const double f = fractions[seed % 4];
+    c.params.budget = KeepBudget{BudgetKind::kFraction, 0, f};
+    Sparsifier run(kCaps, c.params);
+    Sparsifier update(kCaps, c.params, SolveMode::kIncremental, Start::kClosedForm);
+    const std::size_t size = 3 + seed % 6;
+    std::vector<test::RefKeyframe> held;  // the window's frames, culled points removed
+    std::set<PointId> culled;             // and those that left the window: no SLAM re-observes them here
+    std::set<PointId> in_window;
+    std::map<PointId, bool> remembered;   // the model: candidates before, and kept
+    std::set<PointId> holding;            // the budget's points still in the map
+    std::uint64_t evaluated = 0, granted = 0;
+    const auto without_culled = [&](const test::RefKeyframe& k) {
+      test::RefKeyframe out = k;
+      out.observations.clear();
+      out.tracked.clear();
+      for (std::size_t i = 0; i < k.observations.size(); ++i) {
+        if (culled.count(k.observations[i].point) > 0) continue;
+        out.observations.push_back(k.observations[i]);
+        if (!k.tracked.empty()) out.tracked.push_back(k.tracked[i]);
+      }
+      return out;
+    };
+    for (const auto& frame : c.frames) {
+      held.push_back(frame);
+      if (held.size() > size) held.erase(held.begin());
+      for (auto& k : held) k = without_culled(k);
+      Window window(kCaps);
+      ASSERT_TRUE(test::load(window, held));
+      std::set<PointId> now;
+      for (const auto& k : held) {
+        for (const auto& o : k.observations) now.insert(o.point);
+      }
+      for (PointId id : in_window) {
+        if (now.count(id) == 0) culled.insert(id);
+      }
+      in_window.swap(now);
+      ASSERT_EQ(run.run(window), Status::kOk);
+      ASSERT_EQ(update.update(window), Status::kOk);
+      ASSERT_TRUE(same(run, update)) << "seed " << seed << " keyframe " << frame.id;
+
+      // The model's K.
+      std::uint32_t kept_before = 0, fresh = 0, candidates = 0;
+      std::vector<std::pair<std::uint32_t, PointId>> order;  // (M*, id) of the candidates
+      for (std::uint32_t i = 0; i < run.decision_count(); ++i) {
+        const PointDecision& d = run.decisions()[i];
+        if (d.verdict == Verdict::kSkip) continue;
+        ++candidates;
+        const auto known = remembered.find(d.point);
+        fresh += known == remembered.end() ? 1 : 0;
+        kept_before += known != remembered.end() && known->second ? 1 : 0;
+        redecided += known != remembered.end() ? 1 : 0;
+        order.emplace_back(run.keep_thresholds()[i], d.point);
+      }
+      evaluated += fresh;
+      const auto due = static_cast<std::uint64_t>(std::floor(f * static_cast<double>(evaluated) + 0.5));
+      const std::uint64_t k = std::min<std::uint64_t>(kept_before + (due - granted), candidates);
+      granted = due;
+      ASSERT_EQ(run.summary().kept, k) << "seed " << seed << " keyframe " << frame.id;
+      std::sort(order.begin(), order.end());
+      std::set<PointId> expected;
+      for (std::size_t j = 0; j < k; ++j) expected.insert(order[j].second);
+      ASSERT_EQ(kept_of(run), expected) << "seed " << seed << " keyframe " << frame.id;
+
+      // The model's memory, the map, and the share held.
+      std::map<PointId, bool> next;
+      for (std::uint32_t i = 0; i < run.decision_count(); ++i) {
+        const PointDecision& d = run.decisions()[i];
+        if (d.verdict != Verdict::kSkip) {
+          next[d.point] = d.verdict == Verdict::kKeep;
+          if (d.verdict == Verdict::kKeep) holding.insert(d.point);
+          if (d.verdict == Verdict::kCull) culled.insert(d.point);
+          if (d.verdict == Verdict::kCull) holding.erase(d.point);
+        } else if (remembered.count(d.point) > 0) {
+          next[d.point] = remembered[d.point];
+        }
+      }
+      remembered.swap(next);
+      ASSERT_EQ(holding.size(), granted) << "seed " << seed << " keyframe " << frame.id;
+      ++windows;
+    }
+  }
+  EXPECT_GT(windows, 300u);
+  EXPECT_GT(redecided, 1000u) << "points should be decided again in later windows";
+}
+
+// A cleared window starts a new map whose point ids may repeat the old
+// map's: after forget_history() a kept fraction decides as a new Sparsifier
+// would; without it, what the old map kept still counts.
+TEST(KeepBudgets, ForgetHistoryStartsAFractionAfresh) {
+  std::uint32_t differed_without = 0;
+  for (std::uint64_t seed = 1; seed <= 30 && !HasFailure(); ++seed) {
+    test::RandomCase old_map = test::random_case(12000 + seed, 10, 120);
+    test::RandomCase new_map = test::random_case(12500 + seed, 10, 120);
+    Params params = old_map.params;
+    params.budget = KeepBudget{BudgetKind::kFraction, 0, 0.3};
+    Sparsifier reused(kCaps, params), kept_history(kCaps, params), fresh(kCaps, params);
+    Window before(kCaps), after(kCaps);
+    ASSERT_TRUE(test::load(before, old_map.frames));
+    ASSERT_TRUE(test::load(after, new_map.frames));
+    ASSERT_EQ(reused.run(before), Status::kOk);
+    ASSERT_EQ(kept_history.run(before), Status::kOk);
+    reused.forget_history();
+    ASSERT_EQ(reused.run(after), Status::kOk);
+    ASSERT_EQ(kept_history.run(after), Status::kOk);
+    ASSERT_EQ(fresh.run(after), Status::kOk);
+    EXPECT_TRUE(same(reused, fresh)) << "seed " << seed;
+    differed_without += same(kept_history, fresh) ? 0 : 1;
+  }
+  EXPECT_GT(differed_without, 0u);  // the case has teeth: reused ids were remembered
 }
 
 TEST(KeepBudgets, InvalidBudgets) {

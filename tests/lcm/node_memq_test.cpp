@@ -8,8 +8,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <deque>
 #include <limits>
+#include <map>
 #include <memory>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -606,30 +609,47 @@ TEST_F(NodeOnMemq, RejectsBadTrackedFlags) {
   EXPECT_NE(node_->window().keyframe(3).tracked, nullptr);
 }
 
-// --keep-fraction 0.3: every decision keeps exactly floor(0.3 x evaluated
-// + 0.5) points, the library's decisions on the same keyframes.
-TEST_F(NodeOnMemq, KeepFractionKeepsExactlyThatShare) {
+// --keep-fraction 0.3 over a sliding window whose culled points the VO
+// drops: the node decides what the library does on the same keyframes, the
+// first decision keeps floor(0.3 x evaluated + 0.5), and after every
+// decision the points kept are exactly floor(0.3 x N + 0.5) of the N points
+// evaluated so far (re-deciding a point does not compound the share).
+TEST_F(NodeOnMemq, KeepFractionHoldsThatShareOfTheMap) {
   NodeConfig c = default_config();
   c.params.budget = keepless::core::KeepBudget{keepless::core::BudgetKind::kFraction, 0, 0.3};
   make_node(c);
   kt::ReferenceNode ref(keepless::platform::window_capacities(config_), config_.params, config_.window);
-  std::vector<kt::ReferenceDecision> expected;
-  for (int i = 0; i < 8; ++i) {
-    keepless::keyframe_t m = kt::make_keyframe(i + 1, 100 + i, kt::id_range(i * 8, 40));
-    expected.push_back(ref.step(m));
+  std::set<std::int64_t> culled, evaluated;
+  std::deque<std::vector<std::int64_t>> window;  // the ids of the node's window keyframes
+  for (int i = 0; i < 12; ++i) {
+    std::vector<std::int64_t> ids;
+    for (std::int64_t id : kt::id_range(i * 8, 40)) {
+      if (culled.count(id) == 0) ids.push_back(id);
+    }
+    keepless::keyframe_t m = kt::make_keyframe(i + 1, 100 + i, ids);
+    const kt::ReferenceDecision expected = ref.step(m);
     send(m);
-  }
-  ASSERT_EQ(decisions_.size(), 8u);
-  std::int32_t culled = 0;
-  for (int i = 0; i < 8; ++i) {
+    ASSERT_EQ(decisions_.size(), static_cast<std::size_t>(i + 1));
     const std::string where = "keyframe " + std::to_string(i);
-    kt::expect_same(expected[i], decisions_[i], where.c_str());
-    const auto e = decisions_[i].evaluated;
-    EXPECT_EQ(decisions_[i].kept, static_cast<std::int32_t>(std::floor(0.3 * e + 0.5))) << where;
-    EXPECT_EQ(decisions_[i].culled, e - decisions_[i].kept) << where;
-    culled += decisions_[i].culled;
+    kt::expect_same(expected, decisions_[i], where.c_str());
+    window.push_back(ids);
+    if (window.size() > config_.window) window.pop_front();
+    std::map<std::int64_t, int> views;
+    for (const auto& k : window) {
+      for (std::int64_t id : k) ++views[id];
+    }
+    for (const auto& [id, n] : views) {
+      if (n >= 2) evaluated.insert(id);
+    }
+    if (i == 1) {
+      const auto e = decisions_[i].evaluated;
+      EXPECT_EQ(decisions_[i].kept, static_cast<std::int32_t>(std::floor(0.3 * e + 0.5))) << where;
+    }
+    for (std::int64_t id : decisions_[i].culled_point_id) culled.insert(id);
+    const auto n = static_cast<double>(evaluated.size());
+    EXPECT_EQ(evaluated.size() - culled.size(), static_cast<std::size_t>(std::floor(0.3 * n + 0.5))) << where;
   }
-  EXPECT_GT(culled, 0);
+  EXPECT_GT(culled.size(), 0u);
 }
 
 }  // namespace

@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <deque>
 #include <map>
+#include <memory>
 #include <set>
 #include <vector>
 
@@ -74,7 +75,10 @@ class ReferenceNode {
         ADD_FAILURE() << "reference window rejected keyframe " << fr.kf.id;
       }
     }
-    core::Sparsifier s(caps_, params_);
+    // One sparsifier for the run, as the node's: a fraction budget remembers
+    // what earlier decisions kept.
+    if (!sparsifier_) sparsifier_ = std::make_unique<core::Sparsifier>(caps_, params_);
+    core::Sparsifier& s = *sparsifier_;
     ReferenceDecision d;
     const core::Status st = s.run(w);
     d.status = st == core::Status::kOk ? keepless::decision_t::STATUS_OPTIMAL
@@ -150,6 +154,7 @@ class ReferenceNode {
   std::uint32_t k_;
   std::deque<Frame> frames_;
   std::set<core::PointId> ever_culled_;
+  std::unique_ptr<core::Sparsifier> sparsifier_;
 };
 
 // Field-by-field comparison with a node decision.

@@ -52,8 +52,9 @@ const std::vector<cli::Flag> kFlags = {
     {"--frames", "A:B", "frames numbered A..B inclusive, wherever the sequence starts\n"
                         "(default all; --quick: the first 60 frames)"},
     {"--bal", "FILE", "a BAL problem (repeatable)"},
-    {"--kept-fraction", "F[,F...]", "a keep budget: every selector keeps floor(F x E + 0.5) of the E\n"
-                                    "evaluated points of each window (default 0.3; a list sweeps)"},
+    {"--kept-fraction", "F[,F...]", "a keep budget: every selector keeps the share F of the points it\n"
+                                    "evaluates (F of those new to each window, plus those it kept\n"
+                                    "before; default 0.3; a list sweeps)"},
     {"--M", "N[,N...]", "pair capacities directly instead of --kept-fraction"},
     {"--seeds", "N", "seeds FIRST .. FIRST+N-1 (default 5, --quick 2); tables show mean +- sd"},
     {"--seed", "FIRST", "the first seed (default 1)"},

@@ -251,8 +251,9 @@ std::string sweep_tables(const EvalSummary& s) {
   for (const std::string& input : swept_inputs(s)) {
     std::string name;
     const std::vector<SweepSeries> series = sweep_of(s, input, &name);
-    o << "\n#### Budget sweep: " << name << " (every method keeps floor(F × E + 0.5) of each window's E evaluated "
-         "points; mean ± sd over seeds, failed runs included and counted)\n\n"
+    o << "\n#### Budget sweep: " << name << " (every method keeps the share F of the points it evaluates: F of "
+         "those new to each window plus those it kept before; mean ± sd over seeds, failed runs included and "
+         "counted)\n\n"
          "| F | method | failed | frames tracked | ATE (m) | local-BA observations | local-BA CPU (s) | map points | "
          "keyframes |\n|---:|---|---:|---:|---:|---:|---:|---:|---:|\n";
     for (const SweepSeries& se : series)

@@ -10,6 +10,7 @@
 #include <memory>
 #include <unordered_map>
 
+#include "keepless/core/keep_thresholds.hpp"
 #include "keepless/core/sparsifier.hpp"
 #include "keepless/core/window.hpp"
 #include "local_ba.hpp"
@@ -119,6 +120,7 @@ class Engine {
     if (spec_.selector != Selector::kKeepless) params.cost_terms = core::Params{}.cost_terms;  // the count to match
     window_ = std::make_unique<core::Window>(caps);
     sparsifier_ = std::make_unique<core::Sparsifier>(caps, params);
+    fraction_budget_ = std::make_unique<core::FractionBudget>(caps.max_points);
     obs_buffer_.reserve(max_kp);
     unmapped_buffer_.reserve(caps.max_unmapped_keypoints);
   }
@@ -398,17 +400,25 @@ class Engine {
       }
     // Baselines keep exactly as many of the evaluated points as keepless
     // keeps on this same window, by their own rule.
-    // With a kept fraction (a keep budget) the count is the budget's,
-    // floor(F x E + 0.5) of this window's E evaluated points, never one
+    // With a kept fraction (a keep budget) the count is the budget's rule
+    // (core::FractionBudget) on the baseline's own decisions, never one
     // copied from another run.
     if (spec_.selector != Selector::kKeepless) {
       const core::KeepBudget& budget = spec_.params.budget;
-      const auto keep = budget.kind == core::BudgetKind::kFraction
-                            ? static_cast<std::uint32_t>(std::floor(budget.fraction * double(evaluated.size()) + 0.5))
-                            : static_cast<std::uint32_t>(std::count(kept.begin(), kept.end(), 1));
+      const bool fraction = budget.kind == core::BudgetKind::kFraction;
+      std::vector<core::PointDecision> view(d, d + nd);
+      const auto keep = fraction ? fraction_budget_->take(budget.fraction, view.data(), nd)
+                                 : static_cast<std::uint32_t>(std::count(kept.begin(), kept.end(), 1));
       std::fill(kept.begin(), kept.end(), 0);
       if (spec_.selector == Selector::kAnms) anms_keep(window, evaluated, keep, &kept);
       else priority_keep(evaluated, keep, &kept);
+      if (fraction) {
+        for (std::uint32_t i = 0, j = 0; i < nd; ++i) {
+          if (view[i].verdict == core::Verdict::kSkip) continue;
+          view[i].verdict = kept[j++] ? core::Verdict::kKeep : core::Verdict::kCull;
+        }
+        fraction_budget_->record(view.data(), nd);
+      }
     }
     for (std::size_t i = 0; i < evaluated.size(); ++i)
       if (!kept[i]) {
@@ -633,6 +643,7 @@ class Engine {
   std::uint32_t stamp_ = 0;
   std::unique_ptr<core::Window> window_;
   std::unique_ptr<core::Sparsifier> sparsifier_;
+  std::unique_ptr<core::FractionBudget> fraction_budget_;  // a kept fraction's count for a baseline
   std::vector<core::Observation> obs_buffer_;
   std::vector<core::Keypoint> unmapped_buffer_;
 };

@@ -50,6 +50,7 @@ class OrbExtractor {
   // around it is valid and agrees (7-Scenes depth is not registered to the
   // colour image pixel for pixel, so edges would give wrong depths).
   void extract(const cv::Mat& grey, const cv::Mat* depth, Frame* out) const;
+  int features() const { return features_; }
 
  private:
   int features_;

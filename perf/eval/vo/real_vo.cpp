@@ -7,12 +7,16 @@
 #include <cmath>
 #include <cstdio>
 #include <functional>
+#include <map>
 #include <numeric>
+#include <string>
+#include <utility>
 
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core/eigen.hpp>
 
 #include "keepless/core/deferred_culls.hpp"
+#include "keepless/core/keep_thresholds.hpp"
 #include "keepless/core/sparsifier.hpp"
 #include "keepless/opencv/keyframe_adapter.hpp"
 #include "matching.hpp"
@@ -127,7 +131,8 @@ class Vo {
         extractor_(o.features > 0 ? o.features : (s.rgbd ? 1000 : 2000), s.camera),
         rng_(mix(o.seed, 0x5eed)), adapter_(window_capacities()), window_(window_capacities()),
         sparsifier_(window_capacities(), vo_params(o.params, s.camera)),
-        deferred_(window_capacities().max_points, o.params.defer_keyframes) {
+        deferred_(window_capacities().max_points, o.params.defer_keyframes),
+        fraction_budget_(window_capacities().max_points) {
     K_ << cam_.fx, 0, cam_.cx, 0, cam_.fy, cam_.cy, 0, 0, 1;
     cv::eigen2cv(K_, Kcv_);
   }
@@ -163,6 +168,7 @@ class Vo {
   void retriangulate_excluded(const std::vector<int>& local);
   void keyframe_culling(int kf);
   Eigen::Isometry3d final_pose(int kf) const;
+  bool features_of(int i, Frame* out);
   int neighbours() const { return seq_.rgbd ? 10 : 20; }
 
   const RealSequence& seq_;
@@ -188,6 +194,7 @@ class Vo {
   core::Window window_;
   core::Sparsifier sparsifier_;
   core::DeferredCulls deferred_;  // params.defer_keyframes: excluded points until deleted
+  core::FractionBudget fraction_budget_;  // a kept fraction's count for this run's selector (keepless's is the core's)
   double kept_fraction_sum_ = 0;
   std::unique_ptr<Replay> replay_local_, replay_sliding_;  // measure_windows with replay_capacities
   std::size_t marked_culls_ = 0;
@@ -707,13 +714,23 @@ void Vo::select_points(int kf, const std::vector<int>& local) {
       own_culls.push_back(id);
     }
   }
-  // With a kept fraction every selector keeps K = floor(F x E + 0.5) of the
-  // E candidates, computed on its own window (core::KeepBudget's rounding);
-  // keepless's budget does exactly that (its floor may promote on top).
-  if (opt_.params.budget.kind == core::BudgetKind::kFraction && opt_.selector != Selector::kKeepless) {
-    const auto keep = static_cast<std::size_t>(
-        std::floor(opt_.params.budget.fraction * static_cast<double>(candidates.size()) + 0.5));
-    cull = candidates.size() - std::min(keep, candidates.size());
+  // With a kept fraction every selector keeps the count core::FractionBudget
+  // gives on its own map: the share F of the points new to it plus those it
+  // kept before (keepless's budget is that rule; its floor may promote on
+  // top). Keepless's verdicts go through it too, to count what it evaluated.
+  const bool fraction = opt_.params.budget.kind == core::BudgetKind::kFraction && opt_.selector != Selector::kOriginal;
+  std::vector<core::PointDecision> budget_view;
+  if (fraction) {
+    std::vector<core::PointId> ids;
+    for (const Candidate& c : candidates) ids.push_back(c.id);
+    std::sort(ids.begin(), ids.end());
+    budget_view.assign(sparsifier_.decisions(), sparsifier_.decisions() + sparsifier_.decision_count());
+    for (core::PointDecision& d : budget_view) {
+      d.verdict = std::binary_search(ids.begin(), ids.end(), d.point) ? core::Verdict::kCull : core::Verdict::kSkip;
+    }
+    const std::uint32_t keep =
+        fraction_budget_.take(opt_.params.budget.fraction, budget_view.data(), static_cast<std::uint32_t>(budget_view.size()));
+    if (opt_.selector != Selector::kKeepless) cull = candidates.size() - std::min<std::size_t>(keep, candidates.size());
   }
   kept_fraction_sum_ += candidates.empty() ? 1.0 : 1.0 - double(cull) / double(candidates.size());
   std::vector<core::PointId> culls;
@@ -734,6 +751,17 @@ void Vo::select_points(int kf, const std::vector<int>& local) {
       }
       result_.marks.push_back(mark);
     }
+  }
+  if (fraction) {
+    std::vector<core::PointId> sorted = culls;
+    std::sort(sorted.begin(), sorted.end());
+    for (core::PointDecision& d : budget_view) {
+      if (d.verdict == core::Verdict::kCull && !std::binary_search(sorted.begin(), sorted.end(), d.point)) {
+        d.verdict = core::Verdict::kKeep;
+      }
+    }
+    fraction_budget_.record(budget_view.data(), static_cast<std::uint32_t>(budget_view.size()));
+    result_.points_evaluated = static_cast<std::int64_t>(fraction_budget_.evaluated());
   }
   if (deferring()) {
     // Out of local BA now, out of the map when the rule says (core::DeferredCulls).
@@ -1098,6 +1126,28 @@ bool Vo::initialize_monocular(TrackedFrame& cur) {
   return true;
 }
 
+// A frame's features depend on its image and the extractor's settings only
+// (never on the seed or the selector), and every run of a process reads the
+// same frames: each is extracted once per process (an eval process runs the
+// original and every selector at every fraction on one sequence).
+bool Vo::features_of(int i, Frame* out) {
+  static std::map<std::pair<std::string, int>, Frame> cache;  // (image file, features) -> features
+  const std::pair<std::string, int> key{seq_.image_files[static_cast<std::size_t>(i)], extractor_.features()};
+  const auto hit = cache.find(key);
+  if (hit != cache.end()) {
+    *out = hit->second;
+    out->descriptors = hit->second.descriptors.clone();
+    return true;
+  }
+  cv::Mat grey, depth;
+  if (!seq_.load(static_cast<std::size_t>(i), &grey, &depth, &result_.error)) return false;
+  extractor_.extract(grey, seq_.rgbd ? &depth : nullptr, out);
+  Frame& kept = cache[key];
+  kept = *out;
+  kept.descriptors = out->descriptors.clone();
+  return true;
+}
+
 Eigen::Isometry3d Vo::final_pose(int kf) const {
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
   for (int hops = 0; kf >= 0 && hops < 10000; ++hops) {
@@ -1114,11 +1164,9 @@ RealRunResult Vo::run() {
   result_.frames = static_cast<int>(seq_.image_files.size());
   bool was_tracked = false;
   for (int i = 0; i < result_.frames; ++i) {
-    cv::Mat grey, depth;
-    if (!seq_.load(static_cast<std::size_t>(i), &grey, &depth, &result_.error)) return result_;
     TrackedFrame cur;
     cur.index = i;
-    extractor_.extract(grey, seq_.rgbd ? &depth : nullptr, &cur.f);
+    if (!features_of(i, &cur.f)) return result_;
     bool tracked = false;
     if (!initialised_) {
       if (seq_.rgbd) {

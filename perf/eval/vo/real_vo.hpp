@@ -18,8 +18,8 @@ namespace keepless::eval::vo {
 // What decides before each local BA. kOriginal: nothing (ORB-SLAM2's own
 // culling only). The baselines cull exactly as many of the new keyframe's
 // evaluated points as keepless culls on the same window; with a kept
-// fraction (params.budget) every selector keeps floor(F x E + 0.5) of the E
-// evaluated points of the new keyframe, counted on its own window.
+// fraction (params.budget) every selector keeps the count core::FractionBudget
+// gives on its own map: F of the points new to it plus those it kept before.
 enum class Selector : std::uint8_t { kOriginal, kKeepless, kRandom, kLongestTrack, kAnms };
 const char* to_string(Selector s);
 
@@ -70,6 +70,10 @@ struct RealRunResult {
   // the last tracked pose; SE(3) for RGB-D, Sim(3) monocular.
   double ate_m = 0, ate_r_deg = 0;
   double mean_kept_fraction = 1;    // of the new keyframes' evaluated points (>= 2 views in the window), over windows
+  // With a kept fraction: the points the selector evaluated (first time),
+  // so 1 - points_culled_by_selector / points_evaluated is the share of
+  // them the map holds (core::FractionBudget aims it at F).
+  std::int64_t points_evaluated = 0;
   std::vector<Pose> estimate, ground_truth;       // tracked frames, aligned estimate
   std::vector<KeypointMark> marks;                // one keyframe's keypoints (the window with most culls)
   int marked_frame = -1;

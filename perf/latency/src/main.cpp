@@ -99,7 +99,8 @@ const std::vector<cli::Flag> kFlags = {
     {"--unmapped", "N", "unmapped keypoints per keyframe (default: half the workload's\n"
                         "observations per keyframe with --cost authors, else 0)"},
     {"--keep-points", "K", "a keep budget instead of M (keepless_node's flag): K points"},
-    {"--keep-fraction", "F", "a keep budget: the share F of the evaluated points"},
+    {"--keep-fraction", "F", "a keep budget: the share F of the points evaluated (F of those new to\n"
+                             "each decision, plus those kept before)"},
     {"--keep-observations", "B", "a keep budget: points while their observations sum to <= B;\n"
                                  "with a budget the paper's M = 100 is the reference"},
     {"--profile", "small|default|large", "also report keepless_node's fixed memory with that --profile\n"

@@ -70,7 +70,13 @@ enum class CostModel : std::uint8_t { kPaper, kAuthors, kInformation };
 // smallest M at which it is kept (Sparsifier, "Keep budgets"); a budget
 // keeps the points with the smallest M*, ties to the smaller point id:
 //   kPoints: exactly min(count, candidates) points;
-//   kFraction: K = floor(fraction * candidates + 0.5) points, fraction in [0, 1];
+//   kFraction: the share F (fraction, in [0, 1]) of the points evaluated,
+//     over the sequence of one Sparsifier's decisions: K = (the candidates
+//     it kept when they were last decided) + (floor(F x N + 0.5) minus that
+//     of the decision before), N the points evaluated for the first time so
+//     far (FractionBudget). A point stays in a sliding window for several
+//     decisions; so the budget's points stay F of what it evaluated instead
+//     of F^k after k decisions. A first decision keeps floor(F x candidates + 0.5);
 //   kObservations: the longest prefix of that order whose window
 //     observations (n per point) sum to at most `count`.
 // Candidates are the evaluated points within Params::scope. The coverage

@@ -15,7 +15,9 @@
 #include <cstddef>
 #include <cstdint>
 #include <memory>
+#include <vector>
 
+#include "keepless/core/decision.hpp"
 #include "keepless/solver/min_cost_flow.hpp"
 
 namespace keepless::core {
@@ -48,6 +50,48 @@ class KeepThresholds {
  private:
   struct Impl;
   std::unique_ptr<Impl> impl_;
+};
+
+// The fraction budget (BudgetKind::kFraction) over a sequence of decisions.
+// A point stays in a sliding window for several decisions; keeping the share
+// F of every decision's candidates would keep F^k of the points decided k
+// times. So F applies to the points evaluated for the first time: a decision
+// keeps K = (its candidates the budget kept the last time they were
+// candidates) + a grant, the grants summing to floor(F x N + 0.5) over the
+// N points first evaluated so far. The budget's points are then the share F
+// of every point it has evaluated (not culled by it since); the map holds F
+// of what it would without culling. A point is remembered, by id, while it
+// stays in the window: one that leaves and comes back counts as new.
+// Allocation-free after construction.
+class FractionBudget {
+ public:
+  explicit FractionBudget(std::uint32_t max_points);
+
+  // K for a decision: `d` lists every window point (ascending ids, at most
+  // max_points), its candidates with any verdict but kSkip. Counts the new
+  // ones as evaluated; call record() with the same points after selecting.
+  std::uint32_t take(double fraction, const PointDecision* d, std::uint32_t n);
+  // After selecting: candidates with verdict kKeep were kept by the budget,
+  // the other candidates were not; points skipped this time keep what was
+  // remembered of them; points no longer in the window are forgotten.
+  void record(const PointDecision* d, std::uint32_t n);
+  void clear();
+
+  std::uint64_t evaluated() const { return evaluated_; }  // points first evaluated so far
+  std::uint64_t granted() const { return granted_; }      // floor(F x evaluated() + 0.5)
+  std::size_t memory_bytes() const;
+
+ private:
+  struct Entry {
+    PointId point;
+    bool kept;
+  };
+  static constexpr std::uint8_t kFresh = 0, kKnown = 1, kKnownKept = 2;
+  std::vector<Entry> held_, next_;    // [max_points] by ascending id
+  std::vector<std::uint8_t> known_;   // [max_points] per decision of the last take()
+  std::uint32_t count_ = 0;
+  std::uint64_t evaluated_ = 0;
+  std::uint64_t granted_ = 0;
 };
 
 }  // namespace keepless::core

@@ -108,6 +108,10 @@ class Sparsifier {
   [[nodiscard]] Status update(const Window& window, const solver::Budget& budget = {});
   // The last update() was deferred (see above).
   bool deferred() const;
+  // A new map (the caller cleared its window): a kept fraction counts its
+  // points from nothing again, so reused point ids are not taken for points
+  // an earlier map kept.
+  void forget_history();
 
   // Times the stages of each run()/update() on `clock` (null: not timed).
   void set_clock(const solver::Clock* clock);
