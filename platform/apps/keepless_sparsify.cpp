@@ -78,7 +78,7 @@ const std::vector<keepless::cli::Flag> kFlags = {
     {"--box", "WxH", "spatial-diversity box in pixels (default 64x48)"},
     {"--scope", "window|newest", "decide every point, or only the newest keyframe's (default window)"},
     {"--floor", "L", "every keyframe keeps >= L of its evaluated points (default 0: off)"},
-    {"--cost", "paper|authors|information", "point -> pair costs (default paper)"},
+    {"--cost", "paper|authors|information|track", "point -> pair costs (default paper)"},
     {"--maturity", "A", "tracking-safe culling: points first seen in the newest A keyframes of a\n"
                         "window are not decided yet (default 0: off)"},
     {"--image", "WxH", "the image the authors' grid covers (default 640x480; COLMAP: its cameras')"},
@@ -201,7 +201,7 @@ int parse_args(int argc, char** argv, Options* opt, bool* help, bool* version) {
       opt->params.maturity_keyframes = static_cast<std::uint32_t>(maturity);
     } else if (flag == "--cost") {
       if (!core::parse_cost_model(value, &opt->params.cost_model)) {
-        return usage_error(bad + " (paper, authors or information)");
+        return usage_error(bad + " (paper, authors, information or track)");
       }
     } else if (flag == "--image") {
       int w = 0, h = 0;

@@ -90,7 +90,7 @@ std::string node_usage() {
          "  --box WxH                 spatial-diversity box in pixels (default 64x48)\n"
          "  --scope window|newest     decide every window point, or only the newest keyframe's (default window)\n"
          "  --floor L                 every keyframe keeps >= L of its evaluated points (default 0: off)\n"
-         "  --cost paper|authors|information\n"
+         "  --cost paper|authors|information|track\n"
          "                            point -> pair costs (default paper; docs/design/policies.md)\n"
          "  --image WxH               the image the authors' 64x48 grid covers (default 640x480)\n"
          "  --maturity A              points first seen in the newest A window keyframes are not decided\n"
@@ -287,7 +287,7 @@ ParseResult parse_node_arguments(int argc, const char* const* argv, NodeConfig& 
       config.params.coverage_floor = static_cast<std::uint32_t>(n);
     } else if (flag == "--cost") {
       if (!core::parse_cost_model(value.c_str(), &config.params.cost_model)) {
-        return bad("expected paper, authors or information");
+        return bad("expected paper, authors, information or track");
       }
     } else if (flag == "--maturity") {
       if (!parse_u64(value, 0, std::numeric_limits<std::uint32_t>::max(), n)) return bad("expected an integer >= 0");

@@ -42,6 +42,9 @@ struct NodeCounters {
   std::uint64_t not_owner = 0;            // refused: another publisher owns the window
   std::uint64_t stale_observations = 0;   // observations of recently culled points dropped
   std::uint64_t event_items_refused = 0;  // map-event items refused (acknowledged)
+  // --cost track: accepted keyframes without point quality (num_quality 0),
+  // priced by the window's connectivity alone.
+  std::uint64_t track_fallback = 0;
 };
 
 class Node {
