@@ -279,7 +279,9 @@ TEST(TrackCost, UpdateMatchesRunAndReference) {
     Sparsifier closed(kCaps, c.params, SolveMode::kIncremental, Start::kClosedForm);
     Sparsifier zero(kCaps, c.params, SolveMode::kIncremental, Start::kZeroFlow);
     for (const auto& f : c.frames) {
-      if (window.keyframe_count() == size) ASSERT_EQ(window.remove_keyframe(window.keyframe(0).id), Status::kOk);
+      if (window.keyframe_count() == size) {
+        ASSERT_EQ(window.remove_keyframe(window.keyframe(0).id), Status::kOk);
+      }
       ASSERT_EQ(test::add_frame(window, f), Status::kOk);
       ASSERT_EQ(run.run(window), Status::kOk);
       ASSERT_EQ(closed.update(window), Status::kOk);
@@ -317,7 +319,9 @@ TEST(TrackCost, BudgetKeepsWhatSomeMKeeps) {
     for (std::uint32_t i = 0; i < b.decision_count(); ++i) {
       if (b.decisions()[i].verdict != Verdict::kKeep) continue;
       for (const auto& p : ref.points) {
-        if (p.id == b.decisions()[i].point) ASSERT_EQ(p.verdict, Verdict::kKeep) << "seed " << seed;
+        if (p.id == b.decisions()[i].point) {
+          ASSERT_EQ(p.verdict, Verdict::kKeep) << "seed " << seed;
+        }
       }
     }
     ++checked;

@@ -59,6 +59,7 @@ constexpr std::size_t kKeyframeTrailerBytes = 12;
 // After the flags: int32 num_quality, then per observation int32
 // track_length, int32 age, float reprojection_error, float
 // triangulation_angle (four arrays of num_quality each).
+constexpr std::size_t kKeyframeQualityCountBytes = 4;
 constexpr std::size_t kKeyframeBytesPerQuality = 16;
 constexpr std::size_t kMapEventCountOffset = 25;          // 3 x int32: deleted, merged, removed
 constexpr std::size_t kMapEventHeaderBytes = 37;
