@@ -49,7 +49,7 @@ struct Window::Impl {
     pool.resize(c.max_observations);
     scratch.resize(c.max_observations);
     tracked.resize(c.max_observations);
-    quality.resize(c.max_observations);
+    if (c.hold_quality) quality.resize(c.max_observations);
     unmapped.resize(c.max_unmapped_keypoints);
   }
 
@@ -145,7 +145,7 @@ Status Window::add(const Keyframe& keyframe, const Observation* observations, st
   } else {
     w.keyframes[slot].tracked = nullptr;
   }
-  if (count > 0 && keyframe.quality != nullptr) {
+  if (count > 0 && keyframe.quality != nullptr && w.caps.hold_quality) {
     std::memcpy(w.quality.data() + w.total, keyframe.quality, count * sizeof(PointQuality));
     w.keyframes[slot].quality = w.quality.data() + w.total;
   } else {
@@ -178,8 +178,9 @@ Status Window::remove_keyframe(KeyframeId id) {
   if (tail > 0) {
     std::memmove(w.pool.data() + begin, w.pool.data() + begin + n, tail * sizeof(Observation));
     std::memmove(w.tracked.data() + begin, w.tracked.data() + begin + n, tail);
-    std::memmove(w.quality.data() + begin, w.quality.data() + begin + n,
-                 tail * sizeof(PointQuality));
+    if (w.caps.hold_quality) {
+      std::memmove(w.quality.data() + begin, w.quality.data() + begin + n, tail * sizeof(PointQuality));
+    }
   }
   const std::uint32_t dropped = w.keyframes[slot].unmapped_count;
   if (dropped > 0) {

@@ -32,7 +32,8 @@ MemoryModel probe_memory_model(const core::Params& params, core::SolveMode mode,
   // Points from 4097 to 8192 keep the tables' 16384 slots: a pure slope;
   // 4096 points halve them, which prices a slot.
   constexpr std::uint32_t kStep = 4096;
-  const core::Capacities base{8, kStep + 1, kStep, kStep};
+  core::Capacities base{8, kStep + 1, kStep, kStep};
+  base.hold_quality = params.cost_model == core::CostModel::kTrack;  // as window_capacities() sizes the node
   const double b = measure(base, params, mode, windows);
   const auto slope = [&](core::Capacities c, std::uint32_t core::Capacities::*field, std::uint32_t step) {
     c.*field += step;

@@ -60,6 +60,7 @@ void add_totals(const core::Summary& s, core::Summary* t) {
   t->floor_short += s.floor_short;
   t->guarded += s.guarded;  // tracking-safe culling's counts, likewise
   t->tracked += s.tracked;
+  t->track_fallback += s.track_fallback;  // keyframes without point quality, per slide
 }
 
 // Final counts over the decisions.
@@ -88,6 +89,7 @@ core::Status whole(const core::WindowFile& f, const core::Params& params, ModeRe
   const core::Status s = sparsifier.run(window);
   if (s != core::Status::kOk) return s;
   out->decisions.assign(sparsifier.decisions(), sparsifier.decisions() + sparsifier.decision_count());
+  if (const std::uint32_t* t = sparsifier.keep_thresholds()) out->thresholds.assign(t, t + sparsifier.decision_count());
   out->totals = sparsifier.summary();
   out->slides = 1;
   out->capacities = caps;

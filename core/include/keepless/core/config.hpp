@@ -18,6 +18,10 @@ struct Capacities {
   // Keyframe::unmapped keypoints held over the window (16 bytes each), for
   // CostModel::kAuthors; 0: keyframes carrying any are refused.
   std::uint32_t max_unmapped_keypoints = 0;
+  // Hold Keyframe::quality (16 bytes per observation, max_observations of
+  // them), for CostModel::kTrack; false: a keyframe's quality is not held
+  // (the window's keyframes carry none, and kTrack ranks by the window).
+  bool hold_quality = true;
 };
 
 // Bits of Params::cost_terms.

@@ -48,8 +48,9 @@ struct Keyframe {
   // points at the window's copy.
   const std::uint8_t* tracked = nullptr;
   // Optional point quality, one per observation in add_keyframe's order
-  // (null: none; CostModel::kTrack). Copied like `tracked`; a non-finite
-  // error or angle is refused.
+  // (null: none; CostModel::kTrack). Copied like `tracked` (unless
+  // Capacities::hold_quality is false); a non-finite error or angle is
+  // refused.
   const PointQuality* quality = nullptr;
 };
 
