@@ -16,6 +16,7 @@
 #include "keepless/io/colmap_model.hpp"
 #include "keepless/io/keyframes.hpp"
 #include "maps_support.hpp"
+#include "sparsify/exact_count.hpp"
 #include "sparsify/modes.hpp"
 
 namespace keepless {
@@ -314,6 +315,53 @@ TEST(BalBridge, TrackLengthIsEachPointsObservations) {
     }
   }
   EXPECT_EQ(checked, p.observations.size() - k.duplicates);
+}
+
+// The whole model at exactly the requested count with every image's floor:
+// on the fixture with the track cost, each count is met exactly, every
+// image keeps at least the floor, and the points taken by the order are a
+// prefix of the budget's order (smallest M* first) up to the floor's.
+TEST(ExactCount, KeepsExactlyTheCountWithEveryImagesFloor) {
+  KEEPLESS_MAPS_NEED(maps_test::fixture("sparse/images.bin"));
+  const Fixture f = read_fixture();
+  ASSERT_FALSE(::testing::Test::HasFailure());
+  const io::Keyframes k = io::keyframes_from_colmap(f.model, io::KeyframeOrder::kName, f.sim);
+  std::unordered_map<std::uint32_t, const io::ColmapImage*> by_id;
+  for (const auto& im : f.model.images) by_id[im.id] = &im;
+  std::vector<std::vector<core::PointId>> images;
+  for (const core::Keyframe& kf : k.file.keyframes) {
+    auto& ids = images.emplace_back();
+    for (const auto& p : by_id.at(static_cast<std::uint32_t>(kf.id))->points2D) {
+      if (p.point3D_id != io::kNoPoint3D) ids.push_back(p.point3D_id);
+    }
+  }
+  constexpr std::uint32_t kFloor = 30;
+  for (const std::uint64_t count : {800u, 2000u, 5000u}) {
+    core::Params p = params_for(f.model, core::CostModel::kTrack);
+    p.budget = {core::BudgetKind::kPoints, count, 0.0};
+    sparsify::ModeResult r;
+    ASSERT_EQ(sparsify::decide(k.file, sparsify::Mode::kWhole, p, 20, &r), core::Status::kOk);
+    ASSERT_EQ(r.thresholds.size(), r.decisions.size());
+    const sparsify::ExactCount e = sparsify::keep_exactly(images, kFloor, count, r.thresholds, &r.decisions);
+    EXPECT_TRUE(e.floor_fits) << count;
+    std::uint64_t kept = 0;
+    for (const auto& d : r.decisions) kept += d.verdict != core::Verdict::kCull;
+    EXPECT_EQ(kept, count);
+    EXPECT_EQ(e.kept, count);
+    const std::vector<std::uint32_t> per_image = sparsify::kept_observations(images, r.decisions);
+    for (std::size_t i = 0; i < images.size(); ++i) {
+      EXPECT_GE(per_image[i], std::min<std::size_t>(kFloor, images[i].size())) << "image " << i << ", count " << count;
+    }
+    EXPECT_GT(e.from_order, 0u);
+  }
+  // A count below what the floor needs: the floor's set, said so.
+  core::Params p = params_for(f.model, core::CostModel::kTrack);
+  p.budget = {core::BudgetKind::kPoints, 10, 0.0};
+  sparsify::ModeResult r;
+  ASSERT_EQ(sparsify::decide(k.file, sparsify::Mode::kWhole, p, 20, &r), core::Status::kOk);
+  const sparsify::ExactCount e = sparsify::keep_exactly(images, kFloor, 10, r.thresholds, &r.decisions);
+  EXPECT_FALSE(e.floor_fits);
+  EXPECT_GT(e.kept, 10u);
 }
 
 class CostModelsCli : public maps_test::MapsTest {};
