@@ -1,7 +1,6 @@
 #pragma once
 // A whole model kept at exactly a requested count of points with every
-// image's floor (keepless_sparsify --mode whole --keep-points/--keep-fraction
-// with --obs-floor; keepless_maps_bench's exact rows).
+// image's floor (keepless_maps_bench's keepless_exact rows).
 
 #include <cstdint>
 #include <vector>
