@@ -198,6 +198,15 @@ TEST(TrackCost, WindowCopiesQualityAndRefusesNonFinite) {
     q[1].triangulation_angle = 1.f;
   }
   EXPECT_EQ(w.keyframe_count(), 3u);
+  // A window that does not hold quality takes the keyframe without it.
+  Capacities caps = kCaps;
+  caps.hold_quality = false;
+  Window bare(caps);
+  q[1].reprojection_error = 1.f;
+  kf.quality = q;
+  ASSERT_EQ(bare.add_keyframe(kf, obs, 2), Status::kOk);
+  EXPECT_EQ(bare.keyframe(0).quality, nullptr);
+  EXPECT_LT(bare.memory_bytes(), w.memory_bytes());
 }
 
 TEST(TrackCost, TermNames) {

@@ -64,7 +64,6 @@ void information_levels(const Keyframe& kf, const Observation* observations, std
 //   reprojection error e: < 0.5 px 0, < 1 1, < 2 2, < 4 3, else 4;
 //   triangulation angle: >= 8 deg 0, >= 4 1, >= 2 2, >= 1 3, else 4.
 // Integer shifts and comparisons with constants only: exact everywhere.
-constexpr std::uint32_t kTrackTermLevels = 5;
 constexpr std::uint32_t kNeutralTrackLevel = 2;
 void track_levels(const Keyframe& kf, std::uint32_t count, std::uint8_t terms,
                   std::uint32_t* out);
