@@ -51,6 +51,16 @@ class ObservationScorer {
   std::vector<std::uint32_t> cells_;
 };
 
+// Every keyframe of `window` within what a scorer sized for `caps` holds
+// (keyframe_observation_limit).
+inline bool keyframes_fit(const Window& window, const Capacities& caps) {
+  const std::uint32_t limit = keyframe_observation_limit(caps);
+  for (std::uint32_t s = 0; s < window.keyframe_count(); ++s) {
+    if (window.observation_count(s) > limit) return false;
+  }
+  return true;
+}
+
 // Point -> pair cost from the two observations' scores (0 with the spatial
 // term off).
 inline std::int64_t pair_arc_cost(const Params& params, std::uint32_t a, std::uint32_t b) {

@@ -124,7 +124,8 @@ struct IncrementalNetwork::Impl {
   std::vector<std::uint32_t> pool_point;  // point slot of each
   std::uint32_t pool_top = 0;
   ObservationScorer scorer;
-  std::vector<std::uint32_t> counts;  // N (or information level) of the keyframe being added
+  // N (or information level) of the keyframe being added, [keyframe_observation_limit].
+  std::vector<std::uint32_t> counts;
 
   IdTable slot_of;  // point id -> slot
   std::vector<Point> points;
@@ -207,7 +208,7 @@ struct IncrementalNetwork::Impl {
   explicit Impl(const Capacities& c)
       : caps(c),
         room(IncrementalNetwork::solver_capacity(c)),
-        scorer(c.max_observations),
+        scorer(keyframe_observation_limit(c)),
         slot_of(c.max_points) {
     frame_slots = std::max<std::uint32_t>(2, 2 * c.max_keyframes);
     const std::size_t s = frame_slots;
@@ -218,7 +219,7 @@ struct IncrementalNetwork::Impl {
     by_begin.resize(s);
     pool.resize(2 * std::size_t{c.max_observations});
     pool_point.resize(pool.size());
-    counts.resize(c.max_observations);
+    counts.resize(keyframe_observation_limit(c));
     points.resize(c.max_points);
     views.assign(c.max_points, 0);
     source_of.assign(c.max_points, -1);
@@ -951,7 +952,7 @@ Status IncrementalNetwork::Impl::update(const Window& window, const Params& p,
   }
   if (window.keyframe_count() > caps.max_keyframes ||
       window.total_observations() > caps.max_observations ||
-      window.distinct_points() > caps.max_points) {
+      window.distinct_points() > caps.max_points || !keyframes_fit(window, caps)) {
     return Status::kCapacityExceeded;
   }
   changes = Changes{};

@@ -52,7 +52,7 @@ struct PaperNetwork::Impl {
   std::uint32_t points = 0, evaluated = 0, pairs = 0, arcs = 0, m = 0;
   solver::NodeId sink = 1;
 
-  explicit Impl(const Capacities& c) : caps(c), scorer(c.max_observations) {
+  explicit Impl(const Capacities& c) : caps(c), scorer(keyframe_observation_limit(c)) {
     const std::size_t k = c.max_keyframes;
     const std::size_t q = k * (k - (k > 0 ? 1 : 0)) / 2;
     records.resize(c.max_observations);
@@ -106,7 +106,7 @@ Status PaperNetwork::build(const Window& window, const Params& params,
   const std::uint32_t k = window.keyframe_count();
   const std::uint32_t total = window.total_observations();
   if (k > n.caps.max_keyframes || total > n.caps.max_observations ||
-      window.distinct_points() > n.caps.max_points) {
+      window.distinct_points() > n.caps.max_points || !keyframes_fit(window, n.caps)) {
     return Status::kCapacityExceeded;
   }
 

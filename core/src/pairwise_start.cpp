@@ -6,10 +6,12 @@
 namespace keepless::core {
 
 struct PairwiseStart::Impl {
+  // 12 bytes: the units are the start's largest array (one per pair arc).
+  // Ordered by (cost, rank); a pair's units have distinct ranks.
   struct Unit {
-    std::uint64_t key;  // unit cost << 32 | the point's rank in the tie order
+    std::uint32_t cost;  // unit cost, c_c + c_s (each at most 2^30)
+    std::uint32_t rank;  // the point's rank in the tie order
     solver::ArcId arc;
-    solver::NodeId pair;
   };
   struct Point {  // read together for every pair arc
     std::int32_t rank = -1;  // in the tie order; -1: not a point (source, pairs)
@@ -20,8 +22,8 @@ struct PairwiseStart::Impl {
   std::vector<Point> point;             // [max_nodes]
   std::vector<solver::ArcId> out;       // [max_nodes] a pair's sink arc
   std::vector<std::int32_t> first;      // [max_nodes + 1] a pair's first unit in `units`
-  std::vector<Unit> listed;             // [max_arcs] units in arc order; later, ties at a cut
-  std::vector<Unit> units;              // [max_arcs] the same, grouped by pair
+  std::vector<Unit> units;              // [max_arcs + 1] grouped by pair, arc order within one
+  std::vector<Unit> ties;               // [max_nodes] one pair's units at the cut
   static constexpr std::uint64_t kBins = 1024;
   std::vector<std::uint32_t> bins;      // [kBins] unit costs of a pair, from its cheapest
 
@@ -33,8 +35,8 @@ struct PairwiseStart::Impl {
     point.resize(n);
     out.resize(n);
     first.resize(n + 1);
-    listed.resize(m);
-    units.resize(m);
+    units.resize(m + 1);  // + the dump slot (compute)
+    ties.resize(n);
     bins.resize(kBins);
   }
   void take_cheapest(Unit* begin, Unit* end, std::int64_t take);
@@ -57,48 +59,51 @@ std::size_t PairwiseStart::memory_bytes() const {
   return sizeof(Impl) + s.flow.capacity() * sizeof(solver::Flow) +
          s.potential.capacity() * sizeof(solver::Cost) + s.point.capacity() * sizeof(Impl::Point) +
          s.out.capacity() * sizeof(solver::ArcId) + s.first.capacity() * sizeof(std::int32_t) +
-         (s.listed.capacity() + s.units.capacity()) * sizeof(Impl::Unit) +
+         (s.units.capacity() + s.ties.capacity()) * sizeof(Impl::Unit) +
          s.bins.capacity() * sizeof(std::uint32_t);
 }
 
-// Moves the `take` smallest keys of [begin, end) to its front, in any
-// order. Unit costs are small integers here (c_c + c_s), so a histogram
-// finds the cost at the cut in two passes, and only the units at that cost
-// need ordering by key (rank); a pair whose costs span more bins than there
-// are takes nth_element.
+// Moves the `take` smallest units of [begin, end) (by cost, then rank) to
+// its front, in any order. Unit costs are small integers here (c_c + c_s),
+// so a histogram finds the cost at the cut in two passes, and only the units
+// at that cost need ordering by rank; a pair whose costs span more bins than
+// there are, or with more units than `ties` holds, takes nth_element. The
+// set taken is the same either way: a pair's units have distinct ranks.
 void PairwiseStart::Impl::take_cheapest(Unit* begin, Unit* end, std::int64_t take) {
-  const auto by_key = [](const Unit& a, const Unit& b) { return a.key < b.key; };
-  std::uint64_t lo = ~std::uint64_t{0}, hi = 0;
+  const auto by_key = [](const Unit& a, const Unit& b) {
+    return a.cost != b.cost ? a.cost < b.cost : a.rank < b.rank;
+  };
+  std::uint32_t lo = ~std::uint32_t{0}, hi = 0;
   for (const Unit* u = begin; u != end; ++u) {
-    lo = std::min(lo, u->key >> 32);
-    hi = std::max(hi, u->key >> 32);
+    lo = std::min(lo, u->cost);
+    hi = std::max(hi, u->cost);
   }
-  if (hi - lo >= kBins) {
+  if (hi - lo >= kBins || end - begin > static_cast<std::ptrdiff_t>(ties.size())) {
     std::nth_element(begin, begin + take, end, by_key);
     return;
   }
   std::fill(bins.begin(), bins.begin() + static_cast<std::ptrdiff_t>(hi - lo + 1), 0u);
-  for (const Unit* u = begin; u != end; ++u) ++bins[(u->key >> 32) - lo];
-  std::uint64_t cut = 0;
+  for (const Unit* u = begin; u != end; ++u) ++bins[u->cost - lo];
+  std::uint32_t cut = 0;
   std::int64_t below = 0;
   while (below + bins[cut] < take) below += bins[cut++];
   cut += lo;
   // Below the cut to the front (in place: never ahead of the reader), those
   // at it aside; then the cheapest ranks among those at it.
   Unit* front = begin;
-  Unit* ties = listed.data();
+  Unit* at_cut = ties.data();
   std::int64_t tied = 0;
   for (const Unit* u = begin; u != end; ++u) {
-    const std::uint64_t c = u->key >> 32;
+    const std::uint32_t c = u->cost;
     const Unit unit = *u;
     *front = unit;
     front += c < cut ? 1 : 0;
-    ties[tied] = unit;
+    at_cut[tied] = unit;
     tied += c == cut ? 1 : 0;
   }
   const std::int64_t need = take - below;
-  if (need < tied) std::nth_element(ties, ties + need, ties + tied, by_key);
-  std::copy(ties, ties + need, front);
+  if (need < tied) std::nth_element(at_cut, at_cut + need, at_cut + tied, by_key);
+  std::copy(at_cut, at_cut + need, front);
 }
 
 void PairwiseStart::Impl::compute(const solver::MinCostFlow& solver, solver::NodeId sink,
@@ -118,28 +123,32 @@ void PairwiseStart::Impl::compute(const solver::MinCostFlow& solver, solver::Nod
     point[e.head] = Point{k, e.cost};
     potential[e.head] = e.cost;
   }
-  // One pass over the arcs: a pair's sink arc is its way out, a point's
-  // pair arc becomes a unit, and the largest cost bounds every path's. No
-  // branches on an arc's kind (an incrementally edited network scatters the
-  // kinds over the ids): every arc is written out, units advance the list.
-  // Then a counting sort groups the units by pair.
+  // Two passes over the arcs: the first finds each pair's sink arc (its way
+  // out) and how many units (a point's pair arcs) it has, and the largest
+  // cost, which bounds every path's; the second writes each unit into its
+  // pair's group (a counting sort, arc order within a pair). No branches on
+  // an arc's kind (an incrementally edited network scatters the kinds over
+  // the ids): a non-unit is written to the dump slot past the end.
   solver::Cost max_cost = 0;
-  std::int32_t listed_count = 0;
   for (solver::ArcId a = 0; a < arcs; ++a) {
     const solver::Arc e = arc[a];
     const bool live = e.capacity != 0;
     const bool way_out = live && e.head == sink;
     if (way_out) out[e.tail] = a;  // one per pair: predictable
     max_cost = std::max<solver::Cost>(max_cost, live ? e.cost : 0);
-    const Point p = point[e.tail];
-    const bool unit = live && !way_out && p.rank >= 0;
-    const auto unit_cost = static_cast<std::uint64_t>(p.cost) + static_cast<std::uint64_t>(e.cost);
-    listed[listed_count] = Unit{unit_cost << 32 | static_cast<std::uint32_t>(p.rank), a, e.head};
-    listed_count += unit ? 1 : 0;
-    first[e.head + 1] += unit ? 1 : 0;
+    first[e.head + 1] += live && !way_out && point[e.tail].rank >= 0 ? 1 : 0;
   }
   for (std::int32_t v = 0; v < nodes; ++v) first[v + 1] += first[v];
-  for (std::int32_t u = 0; u < listed_count; ++u) units[first[listed[u].pair]++] = listed[u];
+  const auto dump = static_cast<std::int32_t>(units.size() - 1);
+  for (solver::ArcId a = 0; a < arcs; ++a) {
+    const solver::Arc e = arc[a];
+    const Point p = point[e.tail];
+    const bool unit = e.capacity != 0 && e.head != sink && p.rank >= 0;
+    std::int32_t& at = first[e.head];
+    const auto cost = static_cast<std::uint32_t>(p.cost) + static_cast<std::uint32_t>(e.cost);
+    units[unit ? at : dump] = Unit{cost, static_cast<std::uint32_t>(p.rank), a};
+    at += unit ? 1 : 0;
+  }
   for (std::int32_t v = nodes; v > 0; --v) first[v] = first[v - 1];
   first[0] = 0;
 
@@ -153,11 +162,11 @@ void PairwiseStart::Impl::compute(const solver::MinCostFlow& solver, solver::Nod
     const std::int64_t room = way_out >= 0 ? arc[way_out].capacity : 0;
     const std::int64_t take = std::min<std::int64_t>(room, end - begin);
     if (take < end - begin) take_cheapest(begin, end, take);
-    std::uint64_t marginal = 0;
+    std::uint32_t marginal = 0;
     for (const Unit* u = begin; u != begin + take; ++u) {
       flow[u->arc] = 1;
-      ++flow[order[static_cast<std::uint32_t>(u->key)]];  // the point's source arc
-      marginal = std::max(marginal, u->key >> 32);
+      ++flow[order[u->rank]];  // the point's source arc
+      marginal = std::max(marginal, u->cost);
     }
     if (way_out < 0) continue;  // nothing carried: potential 0 <= every unit's cost
     flow[way_out] = take;

@@ -32,7 +32,7 @@ struct Window::Impl {
   std::vector<std::uint32_t> obs_begin;  // [max_keyframes]
   std::vector<std::uint32_t> obs_count;  // [max_keyframes]
   std::vector<Observation> pool;         // [max_observations], contiguous in slot order
-  std::vector<PointId> scratch;          // [max_observations], duplicate check
+  std::vector<PointId> scratch;          // [keyframe_observation_limit], duplicate check
   std::vector<std::uint8_t> tracked;     // [max_observations], beside pool (Keyframe::tracked)
   std::vector<PointQuality> quality;     // [max_observations], beside pool (Keyframe::quality)
   std::vector<Keypoint> unmapped;        // [max_unmapped_keypoints], contiguous in slot order
@@ -47,7 +47,7 @@ struct Window::Impl {
     obs_begin.resize(c.max_keyframes);
     obs_count.resize(c.max_keyframes);
     pool.resize(c.max_observations);
-    scratch.resize(c.max_observations);
+    scratch.resize(keyframe_observation_limit(c));
     tracked.resize(c.max_observations);
     if (c.hold_quality) quality.resize(c.max_observations);
     unmapped.resize(c.max_unmapped_keypoints);
@@ -94,7 +94,9 @@ Status Window::add(const Keyframe& keyframe, const Observation* observations, st
   Impl& w = *impl_;
   // Validate everything first; commit only when nothing can fail.
   if (w.count >= w.caps.max_keyframes) return Status::kCapacityExceeded;
-  if (count > w.caps.max_observations - w.total) return Status::kCapacityExceeded;
+  if (count > w.caps.max_observations - w.total || count > w.scratch.size()) {
+    return Status::kCapacityExceeded;
+  }
   if (count > 0 && observations == nullptr) return Status::kInvalidArgument;
   if (keyframe.unmapped_count > w.caps.max_unmapped_keypoints - w.unmapped_total) {
     return Status::kCapacityExceeded;

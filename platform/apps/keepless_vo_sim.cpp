@@ -364,8 +364,12 @@ int main(int argc, char** argv) {
       rec.skipped = d.skipped;
       rec.latency_ms = static_cast<double>(heard.received_ns[seq] - sent_ns) / 1e6;
       latencies.push_back(rec.latency_ms);
-      // Closed loop: culled map points leave the VO's map for good.
+      // Closed loop: culled map points leave the VO's map for good; from a
+      // node with --defer, the deleted ones (the sim has no BA to exclude from).
       for (std::int64_t id : d.culled_point_id) {
+        if (world.cull(id, index)) ++culled_total;
+      }
+      for (std::int64_t id : d.deleted_point_id) {
         if (world.cull(id, index)) ++culled_total;
       }
       heard.decisions.erase(seq);

@@ -26,19 +26,36 @@ void clear_counts(keepless::decision_t& m) {
   m.max_flow = m.total_cost = 0;
   m.culled_point_id.resize(0);
   m.num_culled = 0;
+  m.excluded_point_id.resize(0);
+  m.num_excluded = 0;
+  m.deleted_point_id.resize(0);
+  m.num_deleted = 0;
 }
 
 }  // namespace
 
-std::size_t reserve_decision(keepless::decision_t& msg, const core::Capacities& c) {
+std::size_t reserve_decision(keepless::decision_t& msg, const core::Capacities& c,
+                             std::uint32_t deferred_capacity) {
   msg.window_keyframe_id.clear();
   msg.culled_point_id.clear();
+  msg.excluded_point_id.clear();
+  msg.deleted_point_id.clear();
   msg.window_keyframe_id.reserve(c.max_keyframes);
-  // A decision lists at most every window point.
+  // A decision lists at most every window point; with deferral it culls
+  // (excludes) those, and deletes at most what is held plus what it culls.
   msg.culled_point_id.reserve(c.max_points);
+  std::size_t ids = c.max_points;
+  if (deferred_capacity > 0) {
+    msg.excluded_point_id.reserve(c.max_points);
+    msg.deleted_point_id.reserve(std::size_t{c.max_points} + deferred_capacity);
+    // culled_point_id is then empty: excluded and deleted are the lists.
+    ids = std::size_t{c.max_points} + deferred_capacity;
+  }
   msg.num_window_keyframes = 0;
   msg.num_culled = 0;
-  return static_cast<std::size_t>(msg.getEncodedSize()) + 8 * (std::size_t{c.max_keyframes} + c.max_points);
+  msg.num_excluded = 0;
+  msg.num_deleted = 0;
+  return static_cast<std::size_t>(msg.getEncodedSize()) + 8 * (std::size_t{c.max_keyframes} + ids);
 }
 
 std::uint32_t fill_decision(keepless::decision_t& msg, const DecisionRequest& request,
@@ -76,6 +93,39 @@ std::uint32_t fill_decision(keepless::decision_t& msg, const DecisionRequest& re
   msg.culled_point_id.resize(n);
   msg.num_culled = static_cast<std::int32_t>(n);
   return n;
+}
+
+std::uint32_t defer_culls(keepless::decision_t& msg, core::DeferredCulls& deferred) {
+  // Within the reserve (reserve_decision with the deferred capacity).
+  const std::size_t culled = msg.culled_point_id.size();
+  msg.excluded_point_id.resize(culled);
+  msg.deleted_point_id.resize(msg.deleted_point_id.capacity());
+  // The ids travel as int64 bit patterns; int64 and uint64 may alias.
+  auto* deleted = reinterpret_cast<core::PointId*>(msg.deleted_point_id.data());
+  // Refused ids go past the first capacity() slots, which expire() fills
+  // (it lists at most what is held); then they join the expired ones.
+  core::PointId* refused = deleted + deferred.capacity();
+  std::size_t n_excluded = 0, n_refused = 0;
+  for (std::size_t i = 0; i < culled; ++i) {
+    const std::int64_t id = msg.culled_point_id[i];
+    if (deferred.exclude(static_cast<core::PointId>(id)) == core::Status::kOk) {
+      msg.excluded_point_id[n_excluded++] = id;
+    } else {
+      refused[n_refused++] = static_cast<core::PointId>(id);
+    }
+  }
+  const std::uint32_t expired = deferred.expire(deleted);
+  // Down to just after the expired ids (overlapping ranges: forward is safe).
+  if (expired != deferred.capacity()) std::copy_n(refused, n_refused, deleted + expired);
+  const std::size_t n_deleted = expired + n_refused;
+  std::sort(deleted, deleted + n_deleted);  // as unsigned
+  msg.excluded_point_id.resize(n_excluded);
+  msg.num_excluded = static_cast<std::int32_t>(n_excluded);
+  msg.deleted_point_id.resize(n_deleted);
+  msg.num_deleted = static_cast<std::int32_t>(n_deleted);
+  msg.culled_point_id.resize(0);
+  msg.num_culled = 0;
+  return static_cast<std::uint32_t>(n_deleted);
 }
 
 void fill_rejected_decision(keepless::decision_t& msg, const DecisionRequest& request,

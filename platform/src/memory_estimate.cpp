@@ -8,6 +8,7 @@ double MemoryModel::bytes(const core::Capacities& c) const {
   const double k = c.max_keyframes;
   return base + per_keyframe * k + per_keyframe_pair * k * (k - 1) / 2 + per_point * c.max_points +
          per_observation * c.max_observations + per_pair_arc * c.max_pair_arcs +
+         per_keyframe_observation * core::keyframe_observation_limit(c) +
          per_table_slot * table_slots(c.max_points);
 }
 
@@ -32,7 +33,8 @@ MemoryModel probe_memory_model(const core::Params& params, core::SolveMode mode,
   // Points from 4097 to 8192 keep the tables' 16384 slots: a pure slope;
   // 4096 points halve them, which prices a slot.
   constexpr std::uint32_t kStep = 4096;
-  core::Capacities base{8, kStep + 1, kStep, kStep};
+  // One keyframe's limit half the window's, so that the window's slope leaves it alone.
+  core::Capacities base{8, kStep + 1, kStep, kStep, 0, kStep / 2};
   base.hold_quality = params.cost_model == core::CostModel::kTrack;  // as window_capacities() sizes the node
   const double b = measure(base, params, mode, windows);
   const auto slope = [&](core::Capacities c, std::uint32_t core::Capacities::*field, std::uint32_t step) {
@@ -47,6 +49,7 @@ MemoryModel probe_memory_model(const core::Params& params, core::SolveMode mode,
                      (MemoryModel::table_slots(kStep + 1) - MemoryModel::table_slots(kStep));
   m.per_observation = slope(base, &core::Capacities::max_observations, kStep);
   m.per_pair_arc = slope(base, &core::Capacities::max_pair_arcs, kStep);
+  m.per_keyframe_observation = slope(base, &core::Capacities::max_keyframe_observations, kStep / 2);
   // Keyframes: f(8), f(16), f(24) fix a linear and a pair term.
   core::Capacities c16 = base, c24 = base;
   c16.max_keyframes = 16;
@@ -60,7 +63,7 @@ MemoryModel probe_memory_model(const core::Params& params, core::SolveMode mode,
   m.per_keyframe = (d1 - m.per_keyframe_pair * p1) / 8;
   m.base = b - m.per_keyframe * 8 - m.per_keyframe_pair * pairs(8) - m.per_point * base.max_points -
            m.per_table_slot * MemoryModel::table_slots(base.max_points) - m.per_observation * kStep -
-           m.per_pair_arc * kStep;
+           m.per_pair_arc * kStep - m.per_keyframe_observation * base.max_keyframe_observations;
   return m;
 }
 

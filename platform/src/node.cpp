@@ -10,6 +10,7 @@
 #include <ctime>
 #include <vector>
 
+#include "keepless/core/deferred_culls.hpp"
 #include "keepless/core/sparsifier.hpp"
 #include "keepless/decision_t.hpp"
 #include "keepless/decision_timing_t.hpp"
@@ -55,7 +56,10 @@ struct Node::Impl {
         clock(injected != nullptr ? injected : &own_clock),
         empty_window(tiny_capacities()),
         order(order_bounds(c)),
-        culls(c.cull_memory != 0 ? c.cull_memory : capacities.max_points) {
+        culls(c.cull_memory != 0 ? c.cull_memory : capacities.max_points),
+        deferring(c.params.defer_keyframes > 0),
+        deferred(deferring ? (c.defer_memory != 0 ? c.defer_memory : capacities.max_points) : 0,
+                 c.params.defer_keyframes) {
     limits.max_observations = c.max_observations;
     limits.max_event_ids = c.max_event_ids;
     limits.max_unmapped = c.max_unmapped;
@@ -89,7 +93,8 @@ struct Node::Impl {
     ack.num_refused = static_cast<std::int32_t>(ack.refused_id.size());
     ack_out.resize(static_cast<std::size_t>(ack.getEncodedSize()));
     pending_window.resize(capacities.max_keyframes);
-    max_decision = reserve_decision(decision, capacities);
+    max_decision = reserve_decision(decision, capacities, deferring ? deferred.capacity() : 0);
+    merged_kept.resize(c.max_event_ids);
     observations.resize(c.max_observations);
     id_scratch.resize(std::max<std::size_t>(c.max_observations, 2 * std::size_t{c.max_event_ids}));
     out.resize(max_decision);
@@ -197,6 +202,7 @@ struct Node::Impl {
     if (v.takeover || v.restart) {
       sliding.clear();
       culls.clear();
+      deferred.clear();
       if (!config.quiet) {
         std::fprintf(stderr, "keepless_node: %s at seq %lld (publisher %lld): window cleared\n",
                      v.takeover ? "window taken over" : "publisher restart recognised",
@@ -204,10 +210,15 @@ struct Node::Impl {
       }
     }
     const auto n = static_cast<std::uint32_t>(kf.num_observations);
-    std::uint32_t kept = 0;
+    std::uint32_t kept = 0, excluded = 0;
     for (std::uint32_t i = 0; i < n; ++i) {
       const auto point = static_cast<core::PointId>(kf.point_id[i]);
       if (culls.contains(point)) continue;
+      // An excluded point (deferred culling) stays out of the window: decided already, out of BA.
+      if (deferring && deferred.contains(point)) {
+        ++excluded;
+        continue;
+      }
       observations[kept].point = point;
       observations[kept].u = static_cast<double>(kf.u[i]);
       observations[kept].v = static_cast<double>(kf.v[i]);
@@ -240,7 +251,16 @@ struct Node::Impl {
     const core::Status s = sliding.push(keyframe, observations.data(), kept, evicted);
     if (s != core::Status::kOk) return reason_of(s);
     if (*evicted > 0) note_window_overflow(kf.sequence);
-    counters.stale_observations += n - kept;
+    counters.stale_observations += n - kept - excluded;
+    counters.deferred_observations += excluded;
+    if (deferring) {
+      // One tick per admitted keyframe; its matched observations (tracked
+      // flag 1, or every one without flags) refresh the excluded points.
+      deferred.begin_keyframe();
+      for (std::uint32_t i = 0; i < n; ++i) {
+        (void)deferred.observe(static_cast<core::PointId>(kf.point_id[i]), kf.num_tracked == 0 || kf.tracked[i] != 0);
+      }
+    }
     if (kf.num_quality == 0 && config.params.cost_model == core::CostModel::kTrack &&
         counters.track_fallback++ == 0 && !config.quiet) {
       std::fprintf(stderr,
@@ -356,7 +376,12 @@ struct Node::Impl {
     const core::Status run =
         evicted > 0 ? core::Status::kCapacityExceeded : sparsifier.update(sliding.window(), budget);
     const std::uint64_t t3 = clock->now_ns();
-    const std::uint32_t n_culled = fill_decision(decision, req, sliding.window(), sparsifier, run);
+    std::uint32_t n_culled = fill_decision(decision, req, sliding.window(), sparsifier, run);
+    std::uint32_t n_deleted = 0;
+    if (deferring) {
+      n_deleted = defer_culls(decision, deferred);
+      n_culled = static_cast<std::uint32_t>(decision.num_excluded);
+    }
     if (run == core::Status::kBudgetExhausted) ++counters.budget_exhaustions;
     if (evicted == 0 && run == core::Status::kCapacityExceeded) {
       // The network's pair arcs (the window's own capacities held it).
@@ -367,16 +392,36 @@ struct Node::Impl {
                    static_cast<long long>(req.sequence), core::to_string(run));
     }
     publish_decision();
-    counters.points_culled += n_culled;
+    counters.points_culled += deferring ? 0 : n_culled;
+    if (deferring) {
+      counters.points_excluded += n_culled;
+      counters.points_deleted += n_deleted;
+    }
     finish_timing(req, arrival, t0, t1, t2, t3, sparsifier.solver().stats().work_units,
                   sparsifier.solver().stats().phases);
 
     // The VO deletes culled points; so does the window, off the latency path.
     // The ids are the decision's own (int64 and uint64 may alias).
-    if (n_culled > 0) {
-      const auto* culled = reinterpret_cast<const core::PointId*>(decision.culled_point_id.data());
-      for (std::uint32_t i = 0; i < n_culled; ++i) culls.insert(culled[i]);
-      const core::Status s = sliding.drop_points(culled, n_culled);
+    // Deferred: the excluded points leave the window too (they are decided,
+    // and out of BA), but not the cull memory: the VO still tracks them.
+    // Deleted ones join the cull memory; only those the memory could not
+    // hold are still in the window.
+    if (deferring) {
+      drop(reinterpret_cast<const core::PointId*>(decision.excluded_point_id.data()), n_culled, false);
+      drop(reinterpret_cast<const core::PointId*>(decision.deleted_point_id.data()), n_deleted, true);
+    } else {
+      drop(reinterpret_cast<const core::PointId*>(decision.culled_point_id.data()), n_culled, true);
+    }
+  }
+
+  // Drops points from the window (in chunks within its point capacity);
+  // `remember`: into the cull memory too.
+  void drop(const core::PointId* ids, std::uint32_t n, bool remember) {
+    if (remember) {
+      for (std::uint32_t i = 0; i < n; ++i) culls.insert(ids[i]);
+    }
+    for (std::uint32_t at = 0; at < n; at += capacities.max_points) {
+      const core::Status s = sliding.drop_points(ids + at, std::min(n - at, capacities.max_points));
       if (s != core::Status::kOk) {
         std::fprintf(stderr, "keepless_node: dropping culled points failed: %s\n", core::to_string(s));
       }
@@ -428,12 +473,15 @@ struct Node::Impl {
     items.refused_reason = ack.refused_reason.data();
     bool cleared = false;
     std::uint32_t merges_applied = 0;
+    std::uint32_t into_excluded = 0;  // merges into an excluded point: their sources leave the window
     if (r == RejectReason::kNone && event.reset) {
       sliding.clear();
       culls.clear();
+      deferred.clear();
       cleared = true;
     } else if (r == RejectReason::kNone) {
       split_map_event(event, sliding.window(), &culls, id_scratch.data(), items);
+      if (deferring) into_excluded = split_merges_into_excluded(items);
       SlidingWindow::Edit e;
       e.deleted = reinterpret_cast<const core::PointId*>(event.deleted_point_id.data());
       e.deleted_count = static_cast<std::uint32_t>(event.num_deleted_points);
@@ -442,9 +490,14 @@ struct Node::Impl {
       e.merged_count = items.merged;
       e.removed = reinterpret_cast<const core::KeyframeId*>(items.removed);
       e.removed_count = items.removed_count;
-      const core::Status s = sliding.edit(e);
-      if (s != core::Status::kOk) r = reason_of(s);
+      core::Status s = sliding.edit(e);
       merges_applied = sliding.merges_effective();
+      if (s == core::Status::kOk && into_excluded > 0) {
+        s = sliding.drop_points(reinterpret_cast<const core::PointId*>(merged_kept.data()), into_excluded);
+        merges_applied += into_excluded;
+      }
+      if (s != core::Status::kOk) r = reason_of(s);
+      if (s == core::Status::kOk && deferring) forget_edited_points(items, into_excluded);
     }
     if (r != RejectReason::kNone) {
       reject("map_event_t", config.event_channel, size, r, true, event.sequence, 0);
@@ -455,6 +508,34 @@ struct Node::Impl {
     order.accept(v, event.publisher_id, event.sequence, event.utime, arrival);
     counters.event_items_refused += items.refused;
     publish_ack(r, items, cleared, merges_applied);
+  }
+
+  // Deferred culling and a map event's valid items: a merge into an excluded
+  // point is taken out of the merges and its source moved to merged_kept, to
+  // be dropped from the window (its observations now belong to a point out
+  // of BA). Returns how many were.
+  std::uint32_t split_merges_into_excluded(MapEventItems& items) {
+    std::uint32_t kept = 0, moved = 0;
+    for (std::uint32_t i = 0; i < items.merged; ++i) {
+      if (deferred.contains(static_cast<core::PointId>(items.merged_into[i]))) {
+        merged_kept[moved++] = items.merged_from[i];
+      } else {
+        items.merged_from[kept] = items.merged_from[i];
+        items.merged_into[kept] = items.merged_into[i];
+        ++kept;
+      }
+    }
+    items.merged = kept;
+    return moved;
+  }
+
+  // After the edit succeeded: the deleted points and merge sources are
+  // forgotten (the VO removed them itself).
+  void forget_edited_points(const MapEventItems& items, std::uint32_t into_excluded) {
+    const auto nd = static_cast<std::uint32_t>(event.num_deleted_points);
+    for (std::uint32_t i = 0; i < nd; ++i) (void)deferred.forget(static_cast<core::PointId>(event.deleted_point_id[i]));
+    for (std::uint32_t i = 0; i < items.merged; ++i) (void)deferred.forget(static_cast<core::PointId>(items.merged_from[i]));
+    for (std::uint32_t i = 0; i < into_excluded; ++i) (void)deferred.forget(static_cast<core::PointId>(merged_kept[i]));
   }
 
   // `cleared`: this event reset the window; `merges`: merges that changed it.
@@ -519,6 +600,11 @@ struct Node::Impl {
     status.latency_p50_ns = static_cast<std::int64_t>(latency.quantile(0.5));
     status.latency_p99_ns = static_cast<std::int64_t>(latency.quantile(0.99));
     status.latency_max_ns = static_cast<std::int64_t>(latency.max());
+    status.points_excluded = static_cast<std::int64_t>(counters.points_excluded);
+    status.points_deleted = static_cast<std::int64_t>(counters.points_deleted);
+    status.deferred_points = static_cast<std::int32_t>(deferred.size());
+    status.capacity_deferred = static_cast<std::int32_t>(deferring ? deferred.capacity() : 0);
+    status.deferred_refused = static_cast<std::int64_t>(deferred.refused());
     const int len = status.encode(small.data(), 0, static_cast<int>(small.size()));
     if (len > 0) lcm.publish(config.status_channel, small.data(), static_cast<unsigned>(len));
     next_status_ns = now + std::uint64_t{config.status_period_ms} * 1000000ull;
@@ -535,7 +621,9 @@ struct Node::Impl {
             event.merged_into_id.capacity() + event.removed_keyframe_id.capacity()) * 8 +
            (decision.window_keyframe_id.capacity() + decision.culled_point_id.capacity()) * 8 +
            (merged_from.size() + merged_into.size() + removed.size()) * 8 + ack.refused_id.capacity() * 9 +
-           ack_out.size() + pending_window.size() * 8 + culls.memory_bytes() + order.memory_bytes();
+           ack_out.size() + pending_window.size() * 8 + culls.memory_bytes() + order.memory_bytes() +
+           (decision.excluded_point_id.capacity() + decision.deleted_point_id.capacity() + merged_kept.size()) * 8 +
+           deferred.memory_bytes();
   }
 
   // The arrival stamp: when the handler runs, moved back by the time the
@@ -591,6 +679,9 @@ struct Node::Impl {
   std::size_t max_decision = 0;
   OrderTracker order;
   RecentIds culls;
+  bool deferring;                  // --defer T
+  core::DeferredCulls deferred;    // excluded points not yet deleted (capacity 0 unless deferring)
+  std::vector<std::int64_t> merged_kept;  // [max_event_ids] merge sources into excluded points
   keepless::map_event_ack_t ack{};
   std::vector<std::uint8_t> ack_out;
   std::vector<std::int64_t> merged_from, merged_into, removed;  // a map event's items to apply
@@ -669,6 +760,7 @@ const NodeCounters& Node::counters() const { return impl_->counters; }
 const LatencyHistogram& Node::latency() const { return impl_->latency; }
 const OrderTracker& Node::order() const { return impl_->order; }
 const RecentIds& Node::cull_memory() const { return impl_->culls; }
+const core::DeferredCulls& Node::deferred_culls() const { return impl_->deferred; }
 std::size_t Node::memory_bytes() const { return impl_->memory_bytes(); }
 std::size_t Node::max_decision_bytes() const { return impl_->max_decision; }
 

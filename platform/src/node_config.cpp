@@ -64,12 +64,12 @@ std::string node_usage() {
          "                            counts them)\n"
          "  --profile NAME            a set of the capacities above and below, applied before the other flags:\n"
          "                            small (K 10, N 1000, 2000 points, 4500 observations, 7000 pair arcs;\n"
-         "                            3.8 MB), default (K 20, N 2000, 5800, 17000, 45000; 15.6 MB),\n"
-         "                            large (K 40, N 2000, 8100, 37000, 117000; 33.2 MB)\n"
-         "  --max-points N            distinct points the window holds (default 5800; 0: K*N)\n"
-         "  --max-window-observations N  observations the window holds (default 17000; 0: K*N)\n"
+         "                            3.4 MB), default (K 20, N 2000, 6600, 19100, 51000; 15.5 MB),\n"
+         "                            large (K 40, N 2000, 8100, 37000, 117000; 28.7 MB)\n"
+         "  --max-points N            distinct points the window holds (default 6600; 0: K*N)\n"
+         "  --max-window-observations N  observations the window holds (default 19100; 0: K*N)\n"
          "  --max-pair-arcs N         point -> pair arcs of the window's network, sum of n(n-1)/2 over its points\n"
-         "                            (default 45000; 0: worst case K*N*(K-1)/2). A window beyond a capacity is\n"
+         "                            (default 51000; 0: worst case K*N*(K-1)/2). A window beyond a capacity is\n"
          "                            answered 'capacity exceeded' (status_t says which, needed and held)\n"
          "  --max-memory-mb N         refuse to start when the fixed memory would exceed N MB (default 1024)\n"
          "  --max-sequence-jump N     refuse a sequence more than N above the publisher's last (default 1000000)\n"
@@ -80,6 +80,12 @@ std::string node_usage() {
          "                            been silent X s (default 1; 0 = never)\n"
          "  --cull-memory N           culled point ids remembered against in-flight keyframes\n"
          "                            (default 0: the window's point capacity)\n"
+         "  --defer T                 deferred culling: a culled point is excluded from local BA at once\n"
+         "                            (decision_t.excluded_point_id) and deleted once T keyframes in a row\n"
+         "                            have not matched it (deleted_point_id); default 0: off, the culls are\n"
+         "                            culled_point_id as before\n"
+         "  --defer-memory N          excluded points held until deleted (default 0: the window's point\n"
+         "                            capacity); one that does not fit is deleted at once and counted\n"
          "  --M N                     pair -> sink capacity (default 100)\n"
          "  --keep-points K           keep budget instead of --M: the K evaluated points with the smallest\n"
          "                            keep threshold per window (ties to the smaller point id)\n"
@@ -141,7 +147,7 @@ ParseResult parse_profile(int argc, const char* const* argv, NodeConfig& config,
 
 bool apply_profile(const std::string& name, NodeConfig& config) {
   // Sized from the largest windows of the real sequences (7-Scenes, KITTI 00
-  // and 06) at that K: default about 1.75x them within 16 MB, large 2x,
+  // and 06) at that K: default and large 2x them (default within 16 MB),
   // small what fits 4 MB. NodeConfig's defaults are "default".
   struct Profile {
     const char* name;
@@ -149,7 +155,7 @@ bool apply_profile(const std::string& name, NodeConfig& config) {
   };
   static const Profile kProfiles[] = {
       {"small", 10, 1000, 2000, 4500, 7000},
-      {"default", 20, 2000, 5800, 17000, 45000},
+      {"default", 20, 2000, 6600, 19100, 51000},
       {"large", 40, 2000, 8100, 37000, 117000},
   };
   for (const Profile& p : kProfiles) {
@@ -259,6 +265,12 @@ ParseResult parse_node_arguments(int argc, const char* const* argv, NodeConfig& 
     } else if (flag == "--cull-memory") {
       if (!parse_u64(value, 0, 1u << 26, n)) return bad("expected an integer in 0..2^26");
       config.cull_memory = static_cast<std::uint32_t>(n);
+    } else if (flag == "--defer") {
+      if (!parse_u64(value, 0, 1u << 30, n)) return bad("expected an integer in 0..2^30");
+      config.params.defer_keyframes = static_cast<std::uint32_t>(n);
+    } else if (flag == "--defer-memory") {
+      if (!parse_u64(value, 0, 1u << 26, n)) return bad("expected an integer in 0..2^26");
+      config.defer_memory = static_cast<std::uint32_t>(n);
     } else if (flag == "--M") {
       if (!parse_u64(value, 1, 1u << 30, n)) return bad("expected an integer >= 1");
       config.params.pair_capacity = static_cast<std::int64_t>(n);
@@ -373,6 +385,7 @@ core::Capacities window_capacities(const NodeConfig& config) {
   c.max_observations = capped(config.max_window_observations);
   c.max_points = capped(config.max_points);
   c.max_unmapped_keypoints = static_cast<std::uint32_t>(k * config.max_unmapped);
+  c.max_keyframe_observations = config.max_observations;  // a keyframe_t's, refused beyond
   c.hold_quality = config.params.cost_model == core::CostModel::kTrack;  // only --cost track reads it
   // Sum over points of n(n-1)/2 with sum n <= observations and n <= K.
   const std::uint64_t worst_arcs = std::uint64_t{c.max_observations} * (k - 1) / 2;
@@ -392,7 +405,15 @@ double estimate_node_bytes(const NodeConfig& config) {
   // Sliding-window scratch, message objects and buffers, decision arrays, cull memory.
   const double messages = 158.0 * config.max_observations + 124.0 * config.max_event_ids +
                           16.0 * (caps.max_points + caps.max_keyframes) + 8.0 * caps.max_points;
-  return model.bytes(caps) + messages + 40.0 * ids;
+  // Deferred culling: the held points (a 16-byte slot table at <= 1/2 load,
+  // id and last match) and the decision's two lists.
+  const double deferred = config.params.defer_keyframes == 0 ? 0.0
+                          : (config.defer_memory != 0 ? config.defer_memory : caps.max_points);
+  double slots = 2;
+  while (slots < 2 * deferred) slots *= 2;
+  const double deferred_bytes =
+      deferred > 0 ? 16.0 * slots + 16.0 * deferred + 8.0 * (2.0 * caps.max_points + deferred) : 0.0;
+  return model.bytes(caps) + messages + 40.0 * ids + deferred_bytes;
 }
 
 }  // namespace keepless::platform

@@ -2,6 +2,7 @@
 
 #include <fcntl.h>
 #include <sys/stat.h>
+#include <sys/types.h>
 #include <unistd.h>
 
 #include <cerrno>
@@ -9,6 +10,10 @@
 #include <cstring>
 
 namespace keepless::platform {
+
+// Window files may exceed 2 GiB: 32-bit builds define _FILE_OFFSET_BITS=64
+// (top-level CMakeLists.txt), or open/fstat would fail with EOVERFLOW.
+static_assert(sizeof(off_t) == 8, "64-bit file offsets needed (_FILE_OFFSET_BITS=64 on 32-bit targets)");
 
 namespace {
 

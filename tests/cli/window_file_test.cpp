@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cerrno>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -12,6 +13,7 @@
 #include <string>
 
 #include <sys/stat.h>
+#include <sys/types.h>
 #include <unistd.h>
 
 namespace keepless::core {
@@ -426,6 +428,33 @@ TEST(WindowFileTest, ZeroOrNonUnitQuaternionIsRefused) {
   EXPECT_NE(parse_error("kf 1 0 0 0 0 0 0 0\n").find("not a unit quaternion"), std::string::npos);
   EXPECT_NE(parse_error("kf 1 0 0 0 1 1 0 0\n").find("not a unit quaternion"), std::string::npos);
   parse_ok("kf 1 0 0 0 0.70710678 0 0.70710678 0\n");
+}
+
+// A file beyond 2 GiB is opened and read like any other (64-bit offsets on
+// 32-bit targets too: without them open() fails with EOVERFLOW). Sparse: a
+// valid keyframe, then a hole of zeros (no disk blocks) up to 2 GiB + 4 KiB;
+// reading stops at the first chunk of zeros, which is not a window line.
+TEST(WindowFileTest, FilesBeyondTwoGigabytesAreRead) {
+  static_assert(sizeof(off_t) == 8, "64-bit file offsets");
+  char dir[] = "/tmp/keepless_wf_XXXXXX";
+  ASSERT_NE(::mkdtemp(dir), nullptr);
+  const std::string path = std::string(dir) + "/large.txt";
+  const std::string head = "kf 1 0 0 0\nobs 1 7 10 20\n";
+  std::FILE* f = std::fopen(path.c_str(), "wb");
+  ASSERT_NE(f, nullptr);
+  ASSERT_EQ(std::fwrite(head.data(), 1, head.size(), f), head.size());
+  ASSERT_EQ(std::fclose(f), 0);
+  const off_t size = (off_t{1} << 31) + 4096;
+  ASSERT_EQ(::truncate(path.c_str(), size), 0) << std::strerror(errno);
+  struct stat st {};
+  ASSERT_EQ(::stat(path.c_str(), &st), 0) << std::strerror(errno);
+  EXPECT_EQ(st.st_size, size);
+  WindowFile w;
+  std::string error;
+  EXPECT_FALSE(platform::read_window_file(path, &w, &error));
+  EXPECT_EQ(error.rfind(path + ":3: ", 0), 0u) << error;  // the first line of zeros, not line 0 (open/stat)
+  ::unlink(path.c_str());
+  ::rmdir(dir);
 }
 
 TEST(WindowFileTest, NonRegularFilesAreRefusedWithoutBlocking) {

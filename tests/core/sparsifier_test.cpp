@@ -260,6 +260,34 @@ TEST(Sparsifier, PairArcCapacityIsCheckedAtBuild) {
   EXPECT_EQ(narrow.run(w), Status::kCapacityExceeded);
 }
 
+// A keyframe beyond the per-keyframe scratch (max_keyframe_observations) of
+// either network is refused before it is scored, never overrun; within it the
+// decisions are those of a sparsifier without the limit.
+TEST(Sparsifier, KeyframeObservationCapacityIsChecked) {
+  Window w(kCaps);
+  for (KeyframeId k = 0; k < 4; ++k) {
+    ASSERT_EQ(add(w, k, static_cast<double>(k), 0, 0, {{1, 10, 10}, {2, 50, 50}, {3, 90, 90}}), Status::kOk);
+  }
+  Capacities tight = kCaps;
+  tight.max_keyframe_observations = 2;
+  for (const SolveMode mode : {SolveMode::kFromScratch, SolveMode::kIncremental}) {
+    Sparsifier refused(tight, Params{}, mode);
+    EXPECT_EQ(mode == SolveMode::kIncremental ? refused.update(w) : refused.run(w), Status::kCapacityExceeded);
+    EXPECT_EQ(refused.decision_count(), 0u);
+  }
+  tight.max_keyframe_observations = 3;
+  Sparsifier limited(tight, Params{}, SolveMode::kIncremental);
+  Sparsifier unlimited(kCaps, Params{}, SolveMode::kIncremental);
+  ASSERT_EQ(limited.update(w), Status::kOk);
+  ASSERT_EQ(unlimited.update(w), Status::kOk);
+  ASSERT_EQ(limited.decision_count(), unlimited.decision_count());
+  for (std::uint32_t i = 0; i < limited.decision_count(); ++i) {
+    EXPECT_EQ(limited.decisions()[i].point, unlimited.decisions()[i].point);
+    EXPECT_EQ(limited.decisions()[i].verdict, unlimited.decisions()[i].verdict);
+    EXPECT_EQ(limited.decisions()[i].flow, unlimited.decisions()[i].flow);
+  }
+}
+
 TEST(Sparsifier, ExhaustedBudgetKeepsEveryEvaluatedPoint) {
   const auto c = test::random_case(7, 10, 60);
   Window w(Capacities{});

@@ -120,6 +120,29 @@ TEST(Window, ObservationCapacity) {
   EXPECT_EQ(w.keyframe_count(), 2u);
 }
 
+// One keyframe's limit (Capacities::max_keyframe_observations) sizes the
+// per-keyframe scratch: a keyframe beyond it is refused and changes nothing,
+// whatever room the window has left; one within it adds as usual.
+TEST(Window, KeyframeObservationCapacity) {
+  Capacities c = kSmall;
+  c.max_keyframe_observations = 3;
+  EXPECT_EQ(keyframe_observation_limit(c), 3u);
+  Window w(c);
+  ASSERT_EQ(add(w, kf(1), obs({1, 2, 3})), Status::kOk);
+  const Snapshot before = snapshot(w);
+  EXPECT_EQ(add(w, kf(2), obs({1, 2, 3, 4})), Status::kCapacityExceeded);  // 4 > 3, 7 <= 8
+  EXPECT_EQ(snapshot(w), before);
+  EXPECT_EQ(add(w, kf(2), obs({4, 5})), Status::kOk);
+  // 0 or a limit above the window's: the window's.
+  c.max_keyframe_observations = 0;
+  EXPECT_EQ(keyframe_observation_limit(c), kSmall.max_observations);
+  c.max_keyframe_observations = kSmall.max_observations + 1;
+  EXPECT_EQ(keyframe_observation_limit(c), kSmall.max_observations);
+  // The scratch is what one keyframe needs, not the window's.
+  c.max_keyframe_observations = 1;
+  EXPECT_LT(Window(c).memory_bytes(), Window(kSmall).memory_bytes());
+}
+
 TEST(Window, DistinctPointCapacity) {
   Window w(kSmall);
   ASSERT_EQ(add(w, kf(1), obs({1, 2, 3, 4})), Status::kOk);

@@ -138,3 +138,48 @@ TEST(RealVoQuick, FramesAreSelectedByNumberWhereverTheSequenceStarts) {
 }
 
 }  // namespace
+
+// Deferred culling in the real VO (--defer T), on a monocular KITTI slice:
+// the selector's culls are excluded first and deleted later by the rule, so
+// some are deleted and never more than were culled; without --defer none is.
+// (How well it tracks is evidence, in docs/design/policies.md, not asserted.)
+TEST(RealVoQuick, DeferredCullingDeletesWhatItExcludedLater) {
+  const std::string bin = KEEPLESS_EVAL_BIN;
+  const std::string data = std::string(KEEPLESS_EVAL_DATA) + "/kitti06_first51_niconielsen";
+  ASSERT_TRUE(std::filesystem::exists(bin)) << bin << " is missing: build target keepless_eval";
+  if (!std::filesystem::exists(data + "/image_l/000020.png")) {
+    GTEST_SKIP() << "no KITTI 06 data at " << data << " (set KEEPLESS_EVAL_DATA_DIR)";
+  }
+  // The "ours" line's culled and deleted counts.
+  const auto run = [&](const std::string& extra, long long* culled, long long* deleted) {
+    const std::string cmd = "'" + bin + "' --images '" + data + "/image_l' --calib '" + data + "/calib.txt' --poses '" +
+                            data + "/poses.txt' --frames 0:20 --seeds 1 --kept-fraction 0.2 --no-baselines " + extra +
+                            " 2>&1";
+    std::unique_ptr<FILE, int (*)(FILE*)> pipe(popen(cmd.c_str(), "r"), pclose);
+    ASSERT_NE(pipe, nullptr);
+    std::string all;
+    char buf[4096];
+    *culled = *deleted = -1;
+    while (std::fgets(buf, sizeof buf, pipe.get()) != nullptr) {
+      all += buf;
+      const std::string line(buf);
+      if (line.find(" ours M=") == std::string::npos) continue;
+      const std::size_t c = line.find("culled "), d = line.find("deleted ");
+      ASSERT_NE(c, std::string::npos) << line;
+      ASSERT_NE(d, std::string::npos) << line;
+      *culled = std::atoll(line.c_str() + c + 7);
+      *deleted = std::atoll(line.c_str() + d + 8);
+    }
+    const int status = pclose(pipe.release());
+    ASSERT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << all;
+    ASSERT_GE(*culled, 0) << "no 'ours' line:\n" << all;
+  };
+  long long culled = 0, deleted = 0;
+  run("", &culled, &deleted);
+  EXPECT_GT(culled, 0);
+  EXPECT_EQ(deleted, 0);
+  run("--defer 1", &culled, &deleted);
+  EXPECT_GT(culled, 0);
+  EXPECT_GT(deleted, 0);
+  EXPECT_LE(deleted, culled);
+}

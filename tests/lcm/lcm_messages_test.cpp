@@ -3,6 +3,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <limits>
 
 #include <cmath>
@@ -261,6 +262,40 @@ TEST(LcmMessages, DecisionRoundTrip) {
   EXPECT_EQ(static_cast<std::uint64_t>(d.culled_point_id[0]), ~std::uint64_t{0});
   EXPECT_EQ(d.total_cost, 99);
   EXPECT_EQ(kt::encode(d), bytes);
+}
+
+// Deferred culling's arrays are appended: every earlier field keeps its
+// bytes and offset, so a reader of the earlier layout (offsets, or code
+// generated from the earlier .lcm after regenerating) reads the same values;
+// with the mode off both lists are empty, 8 bytes of zero counts.
+TEST(LcmMessages, DecisionDeferredArraysAreAppended) {
+  keepless::decision_t m{};
+  m.sequence = 3;
+  m.keyframe_id = 9;
+  m.status = keepless::decision_t::STATUS_OPTIMAL;
+  m.reject_reason = -1;
+  m.window_keyframe_id = {8, 9};
+  m.num_window_keyframes = 2;
+  m.culled_point_id = {4};
+  m.num_culled = 1;
+  m.publisher_id = 77;
+  const auto off = kt::encode(m);
+  m.excluded_point_id = {5, 6};
+  m.num_excluded = 2;
+  m.deleted_point_id = {-1};
+  m.num_deleted = 1;
+  const auto on = kt::encode(m);
+  ASSERT_EQ(on.size(), off.size() + 3 * 8);
+  const std::size_t earlier = off.size() - 8;  // everything up to publisher_id
+  EXPECT_TRUE(std::equal(off.begin(), off.begin() + static_cast<std::ptrdiff_t>(earlier), on.begin()));
+  EXPECT_TRUE(std::all_of(off.begin() + static_cast<std::ptrdiff_t>(earlier), off.end(),
+                          [](std::uint8_t b) { return b == 0; }));
+  keepless::decision_t d{};
+  ASSERT_GT(d.decode(on.data(), 0, static_cast<int>(on.size())), 0);
+  EXPECT_EQ(d.culled_point_id, m.culled_point_id);
+  EXPECT_EQ(d.publisher_id, 77);
+  EXPECT_EQ(d.excluded_point_id, m.excluded_point_id);
+  EXPECT_EQ(static_cast<std::uint64_t>(d.deleted_point_id[0]), ~std::uint64_t{0});
 }
 
 TEST(LcmMessages, StatusAndTimingRoundTrip) {

@@ -108,9 +108,10 @@ TEST(NodeConfig, DefaultsFitSixteenMegabytes) {
   EXPECT_LE(keepless::platform::estimate_node_bytes(defaults), 16e6);
   const keepless::core::Capacities caps = keepless::platform::window_capacities(defaults);
   EXPECT_EQ(caps.max_keyframes, 20u);
-  EXPECT_EQ(caps.max_points, 5800u);
-  EXPECT_EQ(caps.max_observations, 17000u);
-  EXPECT_EQ(caps.max_pair_arcs, 45000u);
+  EXPECT_EQ(caps.max_points, 6600u);
+  EXPECT_EQ(caps.max_observations, 19100u);
+  EXPECT_EQ(caps.max_pair_arcs, 51000u);
+  EXPECT_EQ(caps.max_keyframe_observations, defaults.max_observations);
   NodeConfig profiled;
   std::string error;
   ASSERT_EQ(parse({"--profile", "default"}, profiled, error), ParseResult::kOk) << error;
@@ -127,9 +128,9 @@ TEST(NodeConfig, ProfilesParseAndSizeAsDocumented) {
     std::uint32_t window, per_keyframe, points, observations, pair_arcs;
     double max_bytes;
   };
-  for (const Expected& e : {Expected{"small", 10, 1000, 2000, 4500, 7000, 4e6},
-                            Expected{"default", 20, 2000, 5800, 17000, 45000, 16e6},
-                            Expected{"large", 40, 2000, 8100, 37000, 117000, 34e6}}) {
+  for (const Expected& e : {Expected{"small", 10, 1000, 2000, 4500, 7000, 3.6e6},
+                            Expected{"default", 20, 2000, 6600, 19100, 51000, 16e6},
+                            Expected{"large", 40, 2000, 8100, 37000, 117000, 30e6}}) {
     for (const std::vector<std::string>& args :
          {std::vector<std::string>{"--profile", e.name}, {std::string("--profile=") + e.name}}) {
       NodeConfig c;
@@ -273,6 +274,22 @@ TEST(NodeConfig, ParsesTheMaturityGuard) {
   }
 }
 
+TEST(NodeConfig, ParsesDeferredCulling) {
+  NodeConfig c;
+  std::string error;
+  ASSERT_EQ(parse({}, c, error), ParseResult::kOk);
+  EXPECT_EQ(c.params.defer_keyframes, 0u);  // off by default
+  EXPECT_EQ(c.defer_memory, 0u);
+  ASSERT_EQ(parse({"--defer", "3", "--defer-memory", "900"}, c, error), ParseResult::kOk) << error;
+  EXPECT_EQ(c.params.defer_keyframes, 3u);
+  EXPECT_EQ(c.defer_memory, 900u);
+  for (const char* bad : {"-1", "x", "2000000000"}) {
+    NodeConfig d;
+    EXPECT_EQ(parse({"--defer", bad}, d, error), ParseResult::kError) << bad;
+    EXPECT_EQ(parse({"--defer-memory", bad}, d, error), ParseResult::kError) << bad;
+  }
+}
+
 TEST(NodeConfig, ParsesTheReliabilityFlags) {
   NodeConfig c;
   std::string error;
@@ -315,6 +332,19 @@ TEST(NodeConfig, MemoryEstimateMatchesTheNode) {
     const double estimate = keepless::platform::estimate_node_bytes(c);
     EXPECT_NEAR(estimate / actual, 1.0, 0.05) << "window " << window << " obs " << obs << ": " << estimate
                                                 << " estimated, " << actual << " actual";
+  }
+  // Deferred culling adds its memory of excluded points and the decision's
+  // two lists: the estimate follows, and the node reports it.
+  for (const std::uint32_t memory : {0u, 20000u}) {
+    NodeConfig c;
+    c.url = "memq://";
+    lcm::LCM bus("memq://");
+    const double off = static_cast<double>(keepless::platform::Node(bus, c).memory_bytes());
+    c.params.defer_keyframes = 2;
+    c.defer_memory = memory;
+    const double on = static_cast<double>(keepless::platform::Node(bus, c).memory_bytes());
+    EXPECT_GT(on, off);
+    EXPECT_NEAR(keepless::platform::estimate_node_bytes(c) / on, 1.0, 0.05) << "defer memory " << memory;
   }
   // Issue 15, defect 6: passed flag validation, then aborted in bad_alloc.
   NodeConfig huge;

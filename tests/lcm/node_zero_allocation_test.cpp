@@ -18,8 +18,11 @@ namespace {
 
 namespace kt = keepless::testing;
 
-TEST(NodeZeroAllocation, SteadyStateReceivePathAllocatesNothing) {
+// `defer`: deferred culling's T (0: off); `defer_memory`: its capacity (0: the window's points).
+void steady_state(std::uint32_t defer, std::uint32_t defer_memory = 0) {
   keepless::platform::NodeConfig c;
+  c.params.defer_keyframes = defer;
+  c.defer_memory = defer_memory;
   c.latency_target_ms = 0;
   c.url = "memq://";
   c.window = 5;
@@ -94,8 +97,25 @@ TEST(NodeZeroAllocation, SteadyStateReceivePathAllocatesNothing) {
   EXPECT_EQ(allocations, 0u);
   EXPECT_EQ(node.counters().decisions_published, 40u + 14u);  // the 14 decodable bad ones are answered too
   EXPECT_EQ(node.counters().messages_rejected, 40u);
-  EXPECT_GT(node.counters().points_culled, 0u);
+  if (defer == 0) {
+    EXPECT_GT(node.counters().points_culled, 0u);
+  } else {
+    EXPECT_EQ(node.counters().points_culled, 0u);
+    EXPECT_GT(node.counters().points_excluded, 0u);
+    EXPECT_GT(node.counters().points_deleted, 0u);
+    if (defer_memory > 0) {
+      EXPECT_GT(node.deferred_culls().refused(), 0u);
+    }
+  }
 }
+
+TEST(NodeZeroAllocation, SteadyStateReceivePathAllocatesNothing) { steady_state(0); }
+
+// Deferred culling: excluding, observing excluded points, expiring, and map
+// events that delete or merge them.
+TEST(NodeZeroAllocation, DeferredCullingAllocatesNothing) { steady_state(2); }
+// ... and with a memory so small that excluded points are refused (deleted at once).
+TEST(NodeZeroAllocation, AFullDeferredMemoryAllocatesNothing) { steady_state(6, 4); }
 
 }  // namespace
 

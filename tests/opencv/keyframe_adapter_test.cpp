@@ -504,5 +504,30 @@ TEST(OpencvKeyframes, UnmappedIdsStayUniqueAcrossKeyframes) {
   EXPECT_EQ(window.distinct_points(), 40u + 2 * 12u + 3u * 40u * 3u);
 }
 
+// Deferred culling through the adapter: culls become excluded, a full
+// memory deletes at once, tracked flags decide what counts as matched.
+TEST(OpencvDeferred, CullsAreExcludedThenDeletedByTheRule) {
+  core::DeferredCulls deferred(2, 1);
+  std::vector<core::PointId> excluded, deleted;
+  ASSERT_EQ(note_keyframe(deferred, {1, 2, 3}, nullptr), Status::kOk);
+  defer_culls({9, 3, 7}, deferred, &excluded, &deleted);
+  EXPECT_EQ(excluded, (std::vector<core::PointId>{3, 9}));  // held, ascending
+  EXPECT_EQ(deleted, std::vector<core::PointId>{7});         // no room: deleted at once
+  EXPECT_EQ(deferred.refused(), 1u);
+  // 3 matched (flag 1), 9 observed unmatched (flag 0): 9 is deleted.
+  const std::vector<std::uint8_t> flags = {1, 0};
+  ASSERT_EQ(note_keyframe(deferred, {3, 9}, &flags), Status::kOk);
+  defer_culls({}, deferred, &excluded, &deleted);
+  EXPECT_TRUE(excluded.empty());
+  EXPECT_EQ(deleted, std::vector<core::PointId>{9});
+  const std::vector<std::uint8_t> short_flags = {1};
+  EXPECT_EQ(note_keyframe(deferred, {3, 9}, &short_flags), Status::kSizeMismatch);
+  EXPECT_EQ(deferred.tick(), 2u);  // the refused call changed nothing
+  ASSERT_EQ(note_keyframe(deferred, {}, nullptr), Status::kOk);
+  defer_culls({}, deferred, &excluded, &deleted);
+  EXPECT_EQ(deleted, std::vector<core::PointId>{3});
+  EXPECT_EQ(deferred.size(), 0u);
+}
+
 }  // namespace
 }  // namespace keepless::opencv

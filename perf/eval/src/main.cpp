@@ -84,6 +84,13 @@ const std::vector<cli::Flag> kFlags = {
                         "are not decided yet (core::Params maturity_keyframes); every selector\n"
                         "culls only what keepless decided, so the baselines get the same guard\n"
                         "(default 0: off)"},
+    {"--defer", "T", "deferred culling in the real VO, every selector alike: a culled point leaves\n"
+                     "local BA at once (kept for tracking, re-triangulated after each local BA)\n"
+                     "and the map once T keyframes in a row have not matched it\n"
+                     "(core::Params defer_keyframes)"},
+    {"--defer-fixed", nullptr, "with --defer: excluded points enter local BA as constant landmarks seen\n"
+                               "by its keyframes (their observations constrain the poses) instead of\n"
+                               "not at all"},
     {"--tracked-flags", nullptr, "the real VO sends the new keyframe's tracked flags (the points it\n"
                                  "matched in that frame), which no selector culls"},
     {"--window-sizes", nullptr, "instead of the comparison: the original run of the first seed on each\n"
@@ -129,6 +136,7 @@ struct Args {
   bool noise_free = false, baselines = true, ablation = true, ablation_all = false;
   keepless::core::Params policy;  // scope, coverage_floor, cost_model, maturity_keyframes, track_terms; the rest is set per variant
   bool tracked_flags = false;     // --tracked-flags (the real VO)
+  bool defer_fixed = false;       // --defer-fixed (the real VO)
 };
 
 [[noreturn]] void fail(const std::string& msg) {
@@ -237,6 +245,8 @@ Args parse(int argc, char** argv) {
     } else if (f == "--floor") a.policy.coverage_floor = static_cast<std::uint32_t>(parse_int(f, val(), 0, 100000));
     else if (f == "--maturity") a.policy.maturity_keyframes = static_cast<std::uint32_t>(parse_int(f, val(), 0, 1000));
     else if (f == "--tracked-flags") a.tracked_flags = true;
+    else if (f == "--defer") a.policy.defer_keyframes = static_cast<std::uint32_t>(parse_int(f, val(), 1, 1000));
+    else if (f == "--defer-fixed") a.defer_fixed = true;
     else if (f == "--cost") {
       const std::string v = val();
       if (!keepless::core::parse_cost_model(v.c_str(), &a.policy.cost_model))
@@ -464,6 +474,8 @@ int main(int argc, char** argv) {
                       std::to_string(summary.coverage_floor) + ", cost " + summary.cost_model;
   if (a.policy.maturity_keyframes > 0) summary.settings += ", maturity " + std::to_string(a.policy.maturity_keyframes);
   if (a.tracked_flags) summary.settings += ", tracked flags";
+  if (a.policy.defer_keyframes > 0) summary.settings += ", defer " + std::to_string(a.policy.defer_keyframes);
+  if (a.defer_fixed) summary.settings += ", excluded points fixed in BA";
   if (a.policy.cost_model == keepless::core::CostModel::kTrack) {
     summary.settings += ", track terms " + std::to_string(a.policy.track_terms);
   }
@@ -565,6 +577,7 @@ int main(int argc, char** argv) {
     vo.baselines = a.baselines;
     vo.policy = a.policy;
     vo.tracked_flags = a.tracked_flags;
+    vo.defer_fixed = a.defer_fixed;
     vo.out = a.out;
     std::string err;
     for (const auto& in : a.vo)

@@ -12,6 +12,7 @@
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core/eigen.hpp>
 
+#include "keepless/core/deferred_culls.hpp"
 #include "keepless/core/sparsifier.hpp"
 #include "keepless/opencv/keyframe_adapter.hpp"
 #include "matching.hpp"
@@ -126,7 +127,8 @@ class Vo {
       : seq_(s), opt_(o), cam_(s.camera),
         extractor_(o.features > 0 ? o.features : (s.rgbd ? 1000 : 2000), s.camera),
         rng_(mix(o.seed, 0x5eed)), adapter_(window_capacities()), window_(window_capacities()),
-        sparsifier_(window_capacities(), vo_params(o.params, s.camera)) {
+        sparsifier_(window_capacities(), vo_params(o.params, s.camera)),
+        deferred_(window_capacities().max_points, o.params.defer_keyframes) {
     K_ << cam_.fx, 0, cam_.cx, 0, cam_.fy, cam_.cy, 0, 0, 1;
     cv::eigen2cv(K_, Kcv_);
   }
@@ -157,6 +159,9 @@ class Vo {
   void select_points(int kf, const std::vector<int>& local);
   // fix_first: hold local.front() too (the two-view start's gauge).
   void local_ba(const std::vector<int>& local, bool fix_first);
+  bool deferring() const { return opt_.params.defer_keyframes > 0 && opt_.selector != Selector::kOriginal; }
+  void note_matches(int kf);
+  void retriangulate_excluded(const std::vector<int>& local);
   void keyframe_culling(int kf);
   Eigen::Isometry3d final_pose(int kf) const;
   int neighbours() const { return seq_.rgbd ? 10 : 20; }
@@ -183,6 +188,7 @@ class Vo {
   opencv::KeyframeAdapter adapter_;
   core::Window window_;
   core::Sparsifier sparsifier_;
+  core::DeferredCulls deferred_;  // params.defer_keyframes: excluded points until deleted
   double kept_fraction_sum_ = 0;
   std::unique_ptr<Replay> replay_local_, replay_sliding_;  // measure_windows with replay_capacities
   std::size_t marked_culls_ = 0;
@@ -653,7 +659,9 @@ void Vo::select_points(int kf, const std::vector<int>& local) {
     const bool flags = opt_.tracked_flags && k == kf && f.tracked.size() == f.mp.size();
     extras.tracked = flags ? &tracked : nullptr;
     for (std::size_t i = 0; i < f.mp.size(); ++i) {
-      if (f.mp[i] >= 0 && !map_.points[static_cast<std::size_t>(f.mp[i])].bad) {
+      // An excluded point is decided already: a detection without a BA point.
+      if (f.mp[i] >= 0 && !map_.points[static_cast<std::size_t>(f.mp[i])].bad &&
+          !map_.points[static_cast<std::size_t>(f.mp[i])].excluded) {
         keypoints.push_back(f.f.keys[i]);
         ids.push_back(static_cast<core::PointId>(f.mp[i]));
         if (flags) tracked.push_back(f.tracked[i]);
@@ -733,7 +741,18 @@ void Vo::select_points(int kf, const std::vector<int>& local) {
       result_.marks.push_back(mark);
     }
   }
-  for (core::PointId id : culls) map_.set_bad(static_cast<int>(id));
+  if (deferring()) {
+    // Out of local BA now, out of the map when the rule says (core::DeferredCulls).
+    std::vector<core::PointId> excluded, deleted;
+    opencv::defer_culls(culls, deferred_, &excluded, &deleted);
+    for (core::PointId id : excluded) map_.points[static_cast<std::size_t>(id)].excluded = true;
+    for (core::PointId id : deleted) {
+      if (!map_.points[static_cast<std::size_t>(id)].bad) map_.set_bad(static_cast<int>(id));
+    }
+    result_.points_deleted_deferred += static_cast<std::int64_t>(deleted.size());
+  } else {
+    for (core::PointId id : culls) map_.set_bad(static_cast<int>(id));
+  }
   result_.points_culled_by_selector += static_cast<std::int64_t>(culls.size());
   result_.selector_seconds += seconds_since(start);
 }
@@ -749,13 +768,24 @@ void Vo::local_ba(const std::vector<int>& local, bool fix_first) {
     problem.pose_fixed.push_back(k == 0 || (fix_first && k == local.front()));
     kf_of_pose.push_back(k);
   }
-  const std::vector<int> points = map_.points_of(local);
+  std::vector<int> points = map_.points_of(local);
+  // Excluded points (deferred culling) are not in the point blocks: left
+  // out, or (defer_fixed) constant landmarks seen only by the local keyframes.
+  if (!opt_.defer_fixed) {
+    points.erase(std::remove_if(points.begin(), points.end(),
+                                [&](int p) { return map_.points[static_cast<std::size_t>(p)].excluded; }),
+                 points.end());
+  }
+  std::vector<char> is_local(map_.kfs.size(), 0);
+  for (int k : local) is_local[static_cast<std::size_t>(k)] = 1;
   std::vector<std::pair<int, int>> obs_of;  // (point, kf) per observation
   for (std::size_t pi = 0; pi < points.size(); ++pi) {
     const MapPoint& m = map_.points[static_cast<std::size_t>(points[pi])];
     problem.points.push_back(m.X);
+    problem.point_fixed.push_back(m.excluded);
     for (const auto& [k, i] : m.obs) {
       if (map_.kfs[static_cast<std::size_t>(k)].bad) continue;
+      if (m.excluded && !is_local[static_cast<std::size_t>(k)]) continue;
       if (pose_of[static_cast<std::size_t>(k)] < 0) {  // a fixed observer
         pose_of[static_cast<std::size_t>(k)] = static_cast<int>(problem.poses.size());
         problem.poses.push_back(to_block(map_.kfs[static_cast<std::size_t>(k)].Tcw));
@@ -777,7 +807,9 @@ void Vo::local_ba(const std::vector<int>& local, bool fix_first) {
     if (!problem.pose_fixed[q]) map_.kfs[static_cast<std::size_t>(kf_of_pose[q])].Tcw = from_block(problem.poses[q]);
   }
   for (std::size_t pi = 0; pi < points.size(); ++pi) {
-    if (problem.points[pi].allFinite()) map_.points[static_cast<std::size_t>(points[pi])].X = problem.points[pi];
+    if (!problem.point_fixed[pi] && problem.points[pi].allFinite()) {
+      map_.points[static_cast<std::size_t>(points[pi])].X = problem.points[pi];
+    }
   }
   for (std::size_t o = 0; o < outlier.size(); ++o) {
     if (outlier[o] && !map_.points[static_cast<std::size_t>(obs_of[o].first)].bad) {
@@ -787,6 +819,54 @@ void Vo::local_ba(const std::vector<int>& local, bool fix_first) {
   for (int p : points) map_.update_point(p);
   result_.local_ba_seconds += seconds_since(start);
   ++result_.local_bas;
+}
+
+// Deferred culling's clock: one tick per keyframe; the points its tracker
+// matched (its tracked flags) are matched at this tick.
+void Vo::note_matches(int kf) {
+  const KeyFrame& f = map_.kfs[static_cast<std::size_t>(kf)];
+  std::vector<core::PointId> ids;
+  std::vector<std::uint8_t> tracked;
+  for (std::size_t i = 0; i < f.mp.size() && i < f.tracked.size(); ++i) {
+    const int p = f.mp[i] >= 0 ? map_.resolve(f.mp[i]) : -1;
+    if (p < 0) continue;
+    ids.push_back(static_cast<core::PointId>(p));
+    tracked.push_back(f.tracked[i]);
+  }
+  (void)opencv::note_keyframe(deferred_, ids, &tracked);  // the lengths agree
+}
+
+// Excluded points left out of the local BA keep a refined structure: each
+// one the local keyframes observe is re-triangulated from all its
+// observations with the adjusted poses (N-view DLT); a solution behind a
+// camera or not finite leaves it where it was.
+void Vo::retriangulate_excluded(const std::vector<int>& local) {
+  for (int p : map_.points_of(local)) {
+    MapPoint& m = map_.points[static_cast<std::size_t>(p)];
+    if (!m.excluded || m.bad) continue;
+    Eigen::MatrixXd A(2 * m.obs.size(), 4);
+    Eigen::Index rows = 0;
+    for (const auto& [k, i] : m.obs) {
+      const KeyFrame& f = map_.kfs[static_cast<std::size_t>(k)];
+      if (f.bad) continue;
+      const Eigen::Matrix<double, 3, 4> P = K_ * f.Tcw.matrix().topRows<3>();
+      const cv::Point2f& x = f.f.keys[static_cast<std::size_t>(i)].pt;
+      A.row(rows++) = x.x * P.row(2) - P.row(0);
+      A.row(rows++) = x.y * P.row(2) - P.row(1);
+    }
+    if (rows < 4) continue;
+    Eigen::JacobiSVD<Eigen::MatrixXd> svd(A.topRows(rows), Eigen::ComputeFullV);
+    const Eigen::Vector4d h = svd.matrixV().col(3);
+    if (std::abs(h(3)) < 1e-12) continue;
+    const Eigen::Vector3d X = h.head<3>() / h(3);
+    bool in_front = X.allFinite();
+    for (const auto& [k, i] : m.obs) {
+      if (!map_.kfs[static_cast<std::size_t>(k)].bad) in_front = in_front && (map_.kfs[static_cast<std::size_t>(k)].Tcw * X).z() > 0;
+    }
+    if (!in_front) continue;
+    m.X = X;
+    map_.update_point(p);
+  }
 }
 
 void Vo::keyframe_culling(int kf) {
@@ -819,8 +899,10 @@ void Vo::local_mapping(int kf) {
   search_in_neighbours(kf);
   const std::vector<int> local = local_keyframes(kf, opt_.max_local_keyframes);
   if (opt_.measure_windows) measure_windows(kf);
+  if (deferring()) note_matches(kf);
   if (opt_.selector != Selector::kOriginal) select_points(kf, local);
   local_ba(local, false);
+  if (deferring()) retriangulate_excluded(local);
   keyframe_culling(kf);
 }
 

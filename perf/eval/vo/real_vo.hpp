@@ -33,6 +33,9 @@ struct RealVoOptions {
   // Send the new keyframe's tracked flags (core::Keyframe::tracked: the map
   // points the tracker matched in that frame) with its window.
   bool tracked_flags = false;
+  // Deferred culling (params.defer_keyframes > 0): excluded points enter local
+  // BA as constant landmarks seen by the local keyframes, instead of not at all.
+  bool defer_fixed = false;
   int max_local_keyframes = 20;      // local BA / keepless window: the new keyframe and its best covisibles
   bool measure_windows = false;  // fill RealRunResult::window_sizes (window_sizes.hpp)
   // With measure_windows: replay the K = 20 windows at these capacities
@@ -56,6 +59,7 @@ struct RealRunResult {
   int keyframes_created = 0;
   std::int64_t observations = 0;  // of the alive points at the end
   std::int64_t points_culled_by_selector = 0;
+  std::int64_t points_deleted_deferred = 0;  // params.defer_keyframes: excluded points the rule deleted
   int local_bas = 0;
   int window_rejections = 0;  // windows the adapter or Sparsifier refused (nothing culled there)
   SelectorCounts selector;  // windows the selector decided, its Sparsifier's floor counts over them

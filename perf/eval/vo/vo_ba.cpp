@@ -143,6 +143,11 @@ std::vector<bool> solve_local_ba(const PinholeCamera& cam, LocalBaProblem* p) {
         problem.SetParameterBlockConstant(p->poses[k].data());
       }
     }
+    for (std::size_t q = 0; q < p->point_fixed.size(); ++q) {
+      if (p->point_fixed[q] && problem.HasParameterBlock(p->points[q].data())) {
+        problem.SetParameterBlockConstant(p->points[q].data());
+      }
+    }
     ceres::Solver::Summary summary;
     ceres::Solve(options(stage == 0 ? 5 : 10), &problem, &summary);
     for (std::size_t i = 0; i < p->observations.size(); ++i) {

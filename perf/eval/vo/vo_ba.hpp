@@ -38,6 +38,7 @@ struct LocalBaProblem {
   std::vector<PoseBlock> poses;
   std::vector<bool> pose_fixed;
   std::vector<Eigen::Vector3d> points;
+  std::vector<bool> point_fixed;  // per point (empty: none): held constant, a landmark
   std::vector<BaObservation> observations;
 };
 

@@ -29,8 +29,9 @@ struct VoEvalOptions {
   // --scope, --floor, --cost: only scope, coverage_floor and cost_model are
   // read. A kept fraction runs keepless with that keep budget over the new
   // keyframe's points (scope newest: the points the VO culls).
-  core::Params policy;  // and maturity_keyframes
+  core::Params policy;  // and maturity_keyframes, defer_keyframes
   bool tracked_flags = false;  // RealVoOptions::tracked_flags
+  bool defer_fixed = false;    // RealVoOptions::defer_fixed
   std::string out;  // non-empty: NAME_trajectory.svg and NAME_keypoints.svg there
 };
 

@@ -26,6 +26,9 @@ struct MapPoint {
   Eigen::Vector3d normal = Eigen::Vector3d::Zero();
   double min_distance = 0, max_distance = 0;
   int last_seen_frame = -1;                // tracking scratch
+  // Deferred culling: culled, kept for tracking but out of local BA's point
+  // blocks (re-triangulated after each local BA) until deleted.
+  bool excluded = false;
 };
 
 struct KeyFrame {

@@ -1,5 +1,6 @@
 #include "keepless/io/atomic_file.hpp"
 
+#include <sys/types.h>
 #include <unistd.h>
 
 #include <cerrno>
@@ -7,6 +8,11 @@
 #include <cstring>
 
 namespace keepless::io {
+
+// COLMAP models, BAL problems and keyframe files may exceed 2 GiB: 32-bit
+// builds define _FILE_OFFSET_BITS=64 (top-level CMakeLists.txt), or fopen
+// would fail with EOVERFLOW.
+static_assert(sizeof(off_t) == 8, "64-bit file offsets needed (_FILE_OFFSET_BITS=64 on 32-bit targets)");
 
 bool read_file(const std::string& path, std::string* out, std::string* error) {
   std::FILE* f = std::fopen(path.c_str(), "rb");

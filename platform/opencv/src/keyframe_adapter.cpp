@@ -195,4 +195,32 @@ void points_with_verdict(const core::Sparsifier& sparsifier, core::Verdict verdi
   }
 }
 
+Status note_keyframe(core::DeferredCulls& deferred, const std::vector<core::PointId>& point_ids,
+                     const std::vector<std::uint8_t>* tracked) {
+  if (tracked != nullptr && tracked->size() != point_ids.size()) return Status::kSizeMismatch;
+  deferred.begin_keyframe();
+  for (std::size_t i = 0; i < point_ids.size(); ++i) {
+    (void)deferred.observe(point_ids[i], tracked == nullptr || (*tracked)[i] != 0);
+  }
+  return Status::kOk;
+}
+
+void defer_culls(const std::vector<core::PointId>& culled, core::DeferredCulls& deferred,
+                 std::vector<core::PointId>* excluded, std::vector<core::PointId>* deleted) {
+  excluded->clear();
+  deleted->clear();
+  for (const core::PointId id : culled) {
+    if (deferred.exclude(id) == core::Status::kOk) {
+      excluded->push_back(id);
+    } else {
+      deleted->push_back(id);
+    }
+  }
+  const std::size_t refused = deleted->size();
+  deleted->resize(refused + deferred.capacity());
+  deleted->resize(refused + deferred.expire(deleted->data() + refused));
+  std::sort(excluded->begin(), excluded->end());
+  std::sort(deleted->begin(), deleted->end());
+}
+
 }  // namespace keepless::opencv

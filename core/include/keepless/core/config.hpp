@@ -18,11 +18,22 @@ struct Capacities {
   // Keyframe::unmapped keypoints held over the window (16 bytes each), for
   // CostModel::kAuthors; 0: keyframes carrying any are refused.
   std::uint32_t max_unmapped_keypoints = 0;
+  // Observations of one keyframe; 0: max_observations. The per-keyframe
+  // scratch (duplicate check, N(p, f)) is sized by it, not by the window's.
+  std::uint32_t max_keyframe_observations = 0;
   // Hold Keyframe::quality (16 bytes per observation, max_observations of
   // them), for CostModel::kTrack; false: a keyframe's quality is not held
   // (the window's keyframes carry none, and kTrack ranks by the window).
   bool hold_quality = true;
 };
+
+// What one keyframe may carry: max_keyframe_observations, at most the
+// window's max_observations.
+inline std::uint32_t keyframe_observation_limit(const Capacities& c) {
+  return c.max_keyframe_observations != 0 && c.max_keyframe_observations < c.max_observations
+             ? c.max_keyframe_observations
+             : c.max_observations;
+}
 
 // Bits of Params::cost_terms.
 enum CostTerm : std::uint8_t { kConnectivityCost = 1, kSpatialCost = 2, kBaselineCost = 4 };
@@ -127,6 +138,13 @@ struct Params {
   // the newest (none while the window holds A keyframes or fewer). 0: off.
   // (A keyframe's tracked flags, Keyframe::tracked, need no parameter.)
   std::uint32_t maturity_keyframes = 0;
+  // Deferred culling (DeferredCulls, keepless/core/deferred_culls.hpp): T.
+  // A culled point is excluded from local BA at once and deleted only once
+  // T keyframes in a row have not matched it (none of the newest T observes
+  // it). 0: off, a culled point is deleted at once (the decisions and
+  // everything else unchanged). Read by the callers that hold the culls (the
+  // node, the adapter's users), not by the Sparsifier.
+  std::uint32_t defer_keyframes = 0;
   // The qualities CostModel::kTrack sums (TrackTerm bits; 0: every arc
   // costs the same c_s, only c_c ranks).
   std::uint8_t track_terms = kTrackLength | kTrackAge | kTrackError | kTrackAngle;

@@ -9,6 +9,7 @@
 #include <cstdint>
 
 #include "keepless/core/config.hpp"
+#include "keepless/core/deferred_culls.hpp"
 #include "keepless/core/sparsifier.hpp"
 #include "keepless/core/status.hpp"
 #include "keepless/core/window.hpp"
@@ -25,9 +26,11 @@ struct DecisionRequest {
   std::int64_t publisher_id = 0;
 };
 
-// Reserves `msg`'s arrays for a window within `capacities` (the only
-// allocation here) and returns the largest encoded decision, in bytes.
-std::size_t reserve_decision(keepless::decision_t& msg, const core::Capacities& capacities);
+// Reserves `msg`'s arrays for a window within `capacities` and, for
+// deferred culling, `deferred_capacity` excluded points held (the only
+// allocation here), and returns the largest encoded decision, in bytes.
+std::size_t reserve_decision(keepless::decision_t& msg, const core::Capacities& capacities,
+                             std::uint32_t deferred_capacity = 0);
 
 // The answer to `request` after Sparsifier::run() or update() returned
 // `result` on `window` (the window as it is now, before culled points are
@@ -39,6 +42,13 @@ std::size_t reserve_decision(keepless::decision_t& msg, const core::Capacities& 
 std::uint32_t fill_decision(keepless::decision_t& msg, const DecisionRequest& request,
                             const core::Window& window, const core::Sparsifier& sparsifier,
                             core::Status result);
+
+// Deferred culling, after fill_decision: the decision's culled ids become
+// excluded (`excluded_point_id`; culled_point_id is emptied), those
+// `deferred` cannot hold are deleted at once, and the excluded points its
+// rule deletes at this tick join them (`deleted_point_id`, ascending).
+// Returns the number deleted.
+std::uint32_t defer_culls(keepless::decision_t& msg, core::DeferredCulls& deferred);
 
 // The answer to a keyframe refused before the sparsifier ran (`reason` not
 // kNone): STATUS_CAPACITY_EXCEEDED for kWindowCapacity, else

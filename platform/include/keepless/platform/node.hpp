@@ -12,6 +12,7 @@
 #include <cstdint>
 #include <memory>
 
+#include "keepless/core/deferred_culls.hpp"
 #include "keepless/core/window.hpp"
 #include "keepless/platform/latency_histogram.hpp"
 #include "keepless/platform/message_validation.hpp"
@@ -42,6 +43,11 @@ struct NodeCounters {
   std::uint64_t not_owner = 0;            // refused: another publisher owns the window
   std::uint64_t stale_observations = 0;   // observations of recently culled points dropped
   std::uint64_t event_items_refused = 0;  // map-event items refused (acknowledged)
+  // Deferred culling (--defer T): points excluded, points deleted, and
+  // observations of excluded points kept out of the window.
+  std::uint64_t points_excluded = 0;
+  std::uint64_t points_deleted = 0;
+  std::uint64_t deferred_observations = 0;
   // --cost track: accepted keyframes without point quality (num_quality 0),
   // priced by the window's connectivity alone.
   std::uint64_t track_fallback = 0;
@@ -76,6 +82,7 @@ class Node {
   const LatencyHistogram& latency() const;
   const OrderTracker& order() const;
   const RecentIds& cull_memory() const;
+  const core::DeferredCulls& deferred_culls() const;
   std::size_t memory_bytes() const;
   // Largest decision_t this node can publish, bytes.
   std::size_t max_decision_bytes() const;

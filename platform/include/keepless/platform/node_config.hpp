@@ -29,9 +29,9 @@ struct NodeConfig {
   std::uint32_t max_observations = 2000;   // per keyframe_t; larger messages are refused unread
   std::uint32_t max_event_ids = 1024;      // per list of a map_event_t
   std::uint32_t max_unmapped = 0;          // unmapped keypoints per keyframe_t (cost authors); more: refused
-  std::uint32_t max_points = 5800;         // distinct points in the window
-  std::uint32_t max_window_observations = 17000;  // observations in the window
-  std::uint32_t max_pair_arcs = 45000;     // point -> pair arcs (sum over points of n(n-1)/2)
+  std::uint32_t max_points = 6600;         // distinct points in the window
+  std::uint32_t max_window_observations = 19100;  // observations in the window
+  std::uint32_t max_pair_arcs = 51000;     // point -> pair arcs (sum over points of n(n-1)/2)
   // Refused at start (exit 2) when the fixed memory would exceed it.
   std::uint64_t max_memory_mb = 1024;
 
@@ -45,6 +45,9 @@ struct NodeConfig {
   // Culled point ids remembered (a keyframe already in flight cannot bring
   // them back); 0: the window's point capacity.
   std::uint32_t cull_memory = 0;
+  // Deferred culling (params.defer_keyframes = T > 0, --defer T): excluded
+  // points held until the rule deletes them; 0: the window's point capacity.
+  std::uint32_t defer_memory = 0;
 
   core::Params params;  // M, theta, box, scope, floor, cost model
   std::uint64_t budget_work_units = std::numeric_limits<std::uint64_t>::max();

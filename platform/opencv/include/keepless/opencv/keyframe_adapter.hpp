@@ -26,6 +26,7 @@
 #include <opencv2/core.hpp>
 
 #include "keepless/core/config.hpp"
+#include "keepless/core/deferred_culls.hpp"
 #include "keepless/core/sparsifier.hpp"
 #include "keepless/core/status.hpp"
 #include "keepless/core/window.hpp"
@@ -163,5 +164,22 @@ void points_with_verdict(const core::Sparsifier& sparsifier, core::Verdict verdi
 inline void culled_points(const core::Sparsifier& s, std::vector<core::PointId>* out) {
   points_with_verdict(s, core::Verdict::kCull, out);
 }
+
+// Deferred culling (core::Params::defer_keyframes, core::DeferredCulls; the
+// rule is in keepless/core/deferred_culls.hpp). Leave `deferred`'s excluded
+// points out of the windows you build (they are decided, and out of BA).
+//
+// A new keyframe: one tick of the clock; each of its map points the tracker
+// matched (tracked[i] nonzero, in point_ids' order; every one when `tracked`
+// is null) is matched now. kSizeMismatch (nothing changed) for a `tracked`
+// of another length.
+[[nodiscard]] Status note_keyframe(core::DeferredCulls& deferred, const std::vector<core::PointId>& point_ids,
+                                   const std::vector<std::uint8_t>* tracked);
+// After a decision: the `culled` map points become excluded (`excluded`:
+// leave them out of local BA, keep them for tracking); those `deferred`
+// cannot hold, and those its rule deletes at this tick, are `deleted`
+// (remove them from the map). Both ascending; outputs replaced.
+void defer_culls(const std::vector<core::PointId>& culled, core::DeferredCulls& deferred,
+                 std::vector<core::PointId>* excluded, std::vector<core::PointId>* deleted);
 
 }  // namespace keepless::opencv

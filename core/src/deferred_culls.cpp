@@ -1,0 +1,100 @@
+#include "keepless/core/deferred_culls.hpp"
+
+#include <algorithm>
+#include <vector>
+
+#include "id_table.hpp"
+
+namespace keepless::core {
+
+// Dense arrays of the held points (id, last match) and an id -> index table;
+// removal moves the last entry into the hole, so every pass is over size().
+struct DeferredCulls::Impl {
+  Impl(std::uint32_t capacity, std::uint32_t t) : index(capacity), ids(capacity), last(capacity), defer(t) {}
+
+  void remove_at(std::uint32_t i) {
+    const std::uint32_t back = size - 1;
+    (void)index.erase(ids[i]);
+    if (i != back) {
+      ids[i] = ids[back];
+      last[i] = last[back];
+      *index.find(ids[i]) = i;
+    }
+    size = back;
+  }
+
+  IdTable index;
+  std::vector<PointId> ids;
+  std::vector<std::uint64_t> last;
+  std::uint32_t size = 0;
+  std::uint32_t defer = 0;
+  std::uint64_t clock = 0;
+  std::uint64_t refused = 0;
+};
+
+DeferredCulls::DeferredCulls(std::uint32_t capacity, std::uint32_t defer_keyframes)
+    : impl_(std::make_unique<Impl>(capacity, defer_keyframes)) {}
+DeferredCulls::~DeferredCulls() = default;
+
+void DeferredCulls::begin_keyframe() { ++impl_->clock; }
+
+bool DeferredCulls::observe(PointId point, bool matched) {
+  const std::uint32_t* i = impl_->index.find(point);
+  if (i == nullptr) return false;
+  if (matched) impl_->last[*i] = impl_->clock;
+  return true;
+}
+
+Status DeferredCulls::exclude(PointId point) {
+  Impl& d = *impl_;
+  if (d.index.find(point) != nullptr) return Status::kOk;
+  if (d.index.insert(point, d.size) == nullptr) {
+    ++d.refused;
+    return Status::kCapacityExceeded;
+  }
+  d.ids[d.size] = point;
+  d.last[d.size] = d.clock;
+  ++d.size;
+  return Status::kOk;
+}
+
+std::uint32_t DeferredCulls::expire(PointId* out) {
+  Impl& d = *impl_;
+  std::uint32_t n = 0;
+  for (std::uint32_t i = 0; i < d.size;) {
+    if (d.clock - d.last[i] >= d.defer) {
+      out[n++] = d.ids[i];
+      d.remove_at(i);  // the last entry moved into i: look at i again
+    } else {
+      ++i;
+    }
+  }
+  std::sort(out, out + n);
+  return n;
+}
+
+bool DeferredCulls::forget(PointId point) {
+  const std::uint32_t* i = impl_->index.find(point);
+  if (i == nullptr) return false;
+  impl_->remove_at(*i);
+  return true;
+}
+
+bool DeferredCulls::contains(PointId point) const { return impl_->index.find(point) != nullptr; }
+
+void DeferredCulls::clear() {
+  impl_->index.clear();
+  impl_->size = 0;
+}
+
+std::uint32_t DeferredCulls::size() const { return impl_->size; }
+std::uint32_t DeferredCulls::capacity() const { return impl_->index.capacity(); }
+std::uint32_t DeferredCulls::defer_keyframes() const { return impl_->defer; }
+std::uint64_t DeferredCulls::refused() const { return impl_->refused; }
+std::uint64_t DeferredCulls::tick() const { return impl_->clock; }
+std::size_t DeferredCulls::memory_bytes() const {
+  return sizeof(Impl) + impl_->index.memory_bytes() + impl_->ids.capacity() * sizeof(PointId) +
+         impl_->last.capacity() * sizeof(std::uint64_t);
+}
+
+}  // namespace keepless::core
