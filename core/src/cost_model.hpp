@@ -1,7 +1,8 @@
 #pragma once
 // The cost model (Params::cost_model) as the network builders use it: per
 // keyframe, one integer per observation (N(p, f) for the paper's box or the
-// authors' grid, the information level for kInformation), computed when the
+// authors' grid, the information level for kInformation, the quality level
+// for kTrack), computed when the
 // keyframe arrives; the point -> pair cost as a function of the two
 // observations' integers, and the pair -> sink cost of two camera centres.
 // Shared by PaperNetwork and IncrementalNetwork, so both price alike.
@@ -31,6 +32,9 @@ class ObservationScorer {
         return;
       case CostModel::kInformation:
         information_levels(kf, observations, count, out);
+        return;
+      case CostModel::kTrack:
+        track_levels(kf, count, params.track_terms, out);
         return;
       case CostModel::kPaper:
         break;
@@ -63,7 +67,8 @@ inline std::int64_t pair_arc_cost(const Params& params, std::uint32_t a, std::ui
   if (!(params.cost_terms & kSpatialCost)) return 0;
   switch (params.cost_model) {
     case CostModel::kAuthors: return authors_spatial_cost(a, b);
-    case CostModel::kInformation: return std::int64_t{a} + b;
+    case CostModel::kInformation:
+    case CostModel::kTrack: return std::int64_t{a} + b;
     case CostModel::kPaper: break;
   }
   return spatial_cost(a, b);
@@ -83,7 +88,7 @@ inline bool same_network(const Params& a, const Params& b) {
   return a.pair_capacity == b.pair_capacity && a.box_width == b.box_width &&
          a.box_height == b.box_height && a.cost_terms == b.cost_terms &&
          a.cost_model == b.cost_model && a.image_width == b.image_width &&
-         a.image_height == b.image_height;
+         a.image_height == b.image_height && a.track_terms == b.track_terms;
 }
 
 }  // namespace keepless::core

@@ -209,4 +209,61 @@ bool in_box(double du, double dv, std::int32_t box_width, std::int32_t box_heigh
   return std::fabs(du) <= 0.5 * box_width && std::fabs(dv) <= 0.5 * box_height;
 }
 
+namespace {
+
+// 4 - min(4, floor(log2 x)) for x >= 1.
+std::uint32_t log2_level(std::uint64_t x) {
+  std::uint32_t bits = 0;
+  while (x > 1 && bits < 4) {
+    x >>= 1;
+    ++bits;
+  }
+  return 4 - bits;
+}
+
+// The index of the first limit x is below (ascending limits), or 4.
+std::uint32_t below_level(float x, const float (&limits)[4]) {
+  std::uint32_t level = 0;
+  while (level < 4 && !(x < limits[level])) ++level;
+  return level;
+}
+
+// The index of the first limit x reaches (descending limits), or 4.
+std::uint32_t reach_level(float x, const float (&limits)[4]) {
+  std::uint32_t level = 0;
+  while (level < 4 && !(x >= limits[level])) ++level;
+  return level;
+}
+
+std::uint32_t quality_level(const PointQuality& q, std::uint8_t terms) {
+  static constexpr float kErrorLimits[4] = {0.5f, 1.f, 2.f, 4.f};
+  static constexpr float kAngleLimits[4] = {8.f, 4.f, 2.f, 1.f};
+  std::uint32_t sum = 0;
+  if (terms & kTrackLength) {
+    sum += q.track_length > 0 ? log2_level(q.track_length) : kNeutralTrackLevel;
+  }
+  if (terms & kTrackAge) {
+    sum += q.age >= 0 ? log2_level(static_cast<std::uint64_t>(q.age) + 1) : kNeutralTrackLevel;
+  }
+  if (terms & kTrackError) {
+    sum += q.reprojection_error >= 0.f ? below_level(q.reprojection_error, kErrorLimits)
+                                       : kNeutralTrackLevel;
+  }
+  if (terms & kTrackAngle) {
+    sum += q.triangulation_angle > 0.f ? reach_level(q.triangulation_angle, kAngleLimits)
+                                       : kNeutralTrackLevel;
+  }
+  return sum;
+}
+
+}  // namespace
+
+void track_levels(const Keyframe& kf, std::uint32_t count, std::uint8_t terms,
+                  std::uint32_t* out) {
+  const PointQuality unknown{};
+  for (std::uint32_t i = 0; i < count; ++i) {
+    out[i] = quality_level(kf.quality != nullptr ? kf.quality[i] : unknown, terms);
+  }
+}
+
 }  // namespace keepless::core

@@ -286,6 +286,9 @@ struct Sparsifier::Impl {
   template <typename Net>
   void apply_policies(const Window& window, const Net& net, bool finished) {
     const std::uint32_t k = window.keyframe_count();
+    if (params.cost_model == CostModel::kTrack) {
+      for (std::uint32_t s = 0; s < k; ++s) summary.track_fallback += window.keyframe(s).quality == nullptr;
+    }
     if (params.coverage_floor > 0 && finished) net.point_slots(slots_at.data(), slots.data());
     // A budget chose among what the guard and the scope left (decide_budget).
     if (!budgeted) protect_and_scope(window, net, k);
@@ -452,7 +455,8 @@ Status Sparsifier::validate(const Params& p) {
   }
   switch (p.cost_model) {
     case CostModel::kPaper:
-    case CostModel::kInformation: return Status::kOk;
+    case CostModel::kInformation:
+    case CostModel::kTrack: return Status::kOk;
     case CostModel::kAuthors:
       return p.image_width > 0 && p.image_height > 0 ? Status::kOk : Status::kInvalidArgument;
   }

@@ -34,6 +34,7 @@ struct Window::Impl {
   std::vector<Observation> pool;         // [max_observations], contiguous in slot order
   std::vector<PointId> scratch;          // [keyframe_observation_limit], duplicate check
   std::vector<std::uint8_t> tracked;     // [max_observations], beside pool (Keyframe::tracked)
+  std::vector<PointQuality> quality;     // [max_observations], beside pool (Keyframe::quality)
   std::vector<Keypoint> unmapped;        // [max_unmapped_keypoints], contiguous in slot order
   IdTable views;                         // distinct point -> keyframes observing it
   std::uint32_t count = 0;               // keyframes
@@ -48,6 +49,7 @@ struct Window::Impl {
     pool.resize(c.max_observations);
     scratch.resize(keyframe_observation_limit(c));
     tracked.resize(c.max_observations);
+    if (c.hold_quality) quality.resize(c.max_observations);
     unmapped.resize(c.max_unmapped_keypoints);
   }
 
@@ -110,6 +112,12 @@ Status Window::add(const Keyframe& keyframe, const Observation* observations, st
       return Status::kInvalidArgument;
     }
   }
+  for (std::uint32_t i = 0; keyframe.quality != nullptr && i < count; ++i) {
+    if (!std::isfinite(keyframe.quality[i].reprojection_error) ||
+        !std::isfinite(keyframe.quality[i].triangulation_angle)) {
+      return Status::kInvalidArgument;
+    }
+  }
   for (std::uint32_t i = 0; i < keyframe.unmapped_count; ++i) {
     if (!std::isfinite(keyframe.unmapped[i].u) || !std::isfinite(keyframe.unmapped[i].v)) {
       return Status::kInvalidArgument;
@@ -139,6 +147,12 @@ Status Window::add(const Keyframe& keyframe, const Observation* observations, st
   } else {
     w.keyframes[slot].tracked = nullptr;
   }
+  if (count > 0 && keyframe.quality != nullptr && w.caps.hold_quality) {
+    std::memcpy(w.quality.data() + w.total, keyframe.quality, count * sizeof(PointQuality));
+    w.keyframes[slot].quality = w.quality.data() + w.total;
+  } else {
+    w.keyframes[slot].quality = nullptr;
+  }
   for (std::uint32_t i = 0; i < count; ++i) w.add_view(observations[i].point);
   w.total += count;
   if (keyframe.unmapped_count > 0) {
@@ -166,6 +180,9 @@ Status Window::remove_keyframe(KeyframeId id) {
   if (tail > 0) {
     std::memmove(w.pool.data() + begin, w.pool.data() + begin + n, tail * sizeof(Observation));
     std::memmove(w.tracked.data() + begin, w.tracked.data() + begin + n, tail);
+    if (w.caps.hold_quality) {
+      std::memmove(w.quality.data() + begin, w.quality.data() + begin + n, tail * sizeof(PointQuality));
+    }
   }
   const std::uint32_t dropped = w.keyframes[slot].unmapped_count;
   if (dropped > 0) {
@@ -180,6 +197,7 @@ Status Window::remove_keyframe(KeyframeId id) {
     w.obs_begin[s] = w.obs_begin[s + 1] - n;
     w.obs_count[s] = w.obs_count[s + 1];
     if (w.keyframes[s].tracked != nullptr) w.keyframes[s].tracked = w.tracked.data() + w.obs_begin[s];
+    if (w.keyframes[s].quality != nullptr) w.keyframes[s].quality = w.quality.data() + w.obs_begin[s];
   }
   w.total -= n;
   --w.count;
@@ -237,7 +255,7 @@ std::size_t Window::memory_bytes() const {
          w.stamps.capacity() * sizeof(std::uint64_t) +
          (w.obs_begin.capacity() + w.obs_count.capacity()) * sizeof(std::uint32_t) +
          w.pool.capacity() * sizeof(Observation) + w.scratch.capacity() * sizeof(PointId) +
-         w.tracked.capacity() +
+         w.tracked.capacity() + w.quality.capacity() * sizeof(PointQuality) +
          w.unmapped.capacity() * sizeof(Keypoint) +
          w.views.memory_bytes();
 }

@@ -2,7 +2,7 @@
 // reconstruction, checked by COLMAP's own bundle adjuster.
 //
 //   keepless_maps_bench [--data DIR] [--colmap BIN] [--M 30,100,200 | --keep-fraction 0.1,0.3] [--K 20]
-//                       [--seeds 5] [--work DIR] [--cost paper|authors|information]
+//                       [--seeds 5] [--work DIR] [--cost paper|authors|information|track]
 //
 // On the shared fixture (DIR/colmap_kitti06_first51, 51 KITTI 06 images):
 // the full model is re-solved by `colmap bundle_adjuster` (fixed intrinsics,
@@ -10,7 +10,10 @@
 // that keep budget per window, M unused, reported as 0), keepless replay and whole (each with the
 // per-image floor), and at replay's point count: random (--seeds seeds),
 // longest-track-first and `colmap point_filtering` (the --min_track_len
-// whose count is nearest). Each sparsified model is bundle-adjusted the same
+// whose count is nearest); then keepless_exact, the whole model at exactly
+// K points (F x the model's points, or replay's count under --M) with every
+// image's floor, with longest-track-first at K and the filter nearest K
+// (rows *_exact). Each sparsified model is bundle-adjusted the same
 // way. Printed per row: points kept, min observations per image, BA time
 // and termination, camera-centre deviation from the full solution (max and
 // RMS, same gauge), and ATE (RMS) against the KITTI poses after the
@@ -42,6 +45,7 @@
 #include "keepless/io/keyframes.hpp"
 #include "keepless/io/trajectory_alignment.hpp"
 #include "keepless/platform/monotonic_clock.hpp"
+#include "sparsify/exact_count.hpp"
 #include "sparsify/modes.hpp"
 #include "sparsify/model_run.hpp"
 
@@ -203,6 +207,29 @@ struct Bench {
     return culled;
   }
 
+  // The whole model at exactly `count` points with every image's floor
+  // (sparsify::keep_exactly on one budgeted whole-model decision).
+  std::vector<bool> exact_culls(std::uint64_t count, const io::Keyframes& kfs,
+                                const std::vector<std::vector<core::PointId>>& images) {
+    core::Params params;
+    params.budget = {core::BudgetKind::kPoints, count, 0.0};
+    params.cost_model = opt.cost;
+    params.image_width = static_cast<std::int32_t>(original.cameras.front().width);
+    params.image_height = static_cast<std::int32_t>(original.cameras.front().height);
+    sp::ModeResult r;
+    if (sp::decide(kfs.file, sp::Mode::kWhole, params, opt.K, &r) != core::Status::kOk) die("decide failed");
+    const sp::ExactCount e = sp::keep_exactly(images, sp::kDefaultFloor, count, r.thresholds, &r.decisions);
+    std::printf("exact whole: %llu kept (%llu by the order, %u by the floor)%s\n",
+                static_cast<unsigned long long>(e.kept), static_cast<unsigned long long>(e.from_order), e.restored,
+                e.floor_fits ? "" : ": the floor alone keeps more");
+    std::vector<bool> culled(original.points.size());
+    for (std::size_t i = 0; i < culled.size(); ++i) {
+      const std::int64_t s = sp::find_decision(r.decisions, original.points[i].id);
+      culled[i] = s >= 0 && r.decisions[s].verdict == core::Verdict::kCull;
+    }
+    return culled;
+  }
+
   // Keeps `order`'s first n points.
   std::vector<bool> keep_first(const std::vector<std::size_t>& order, std::uint64_t n) const {
     std::vector<bool> culled(original.points.size(), true);
@@ -239,7 +266,7 @@ int main(int argc, char** argv) {
       {"--K", "N", "replay window in keyframes (default 20)"},
       {"--seeds", "N", "seeds of the random baseline (default 5)"},
       {"--work", "DIR", "where the models and BA runs go (default: a new /tmp/keepless_maps_bench_*)"},
-      {"--cost", "paper|authors|information", "keepless's cost model (default paper)"},
+      {"--cost", "paper|authors|information|track", "keepless's cost model (default paper)"},
   };
   for (int i = 1; i < argc; ++i) {
     const cli::Flag* flag = nullptr;
@@ -290,7 +317,7 @@ int main(int argc, char** argv) {
     else if (f == "--work") opt.work = value;
     else if (f == "--cost") {
       if (!core::parse_cost_model(value, &opt.cost)) {
-        return cli::usage_error(kTool, std::string("bad value for --cost: '") + value + "' (paper, authors or information)");
+        return cli::usage_error(kTool, std::string("bad value for --cost: '") + value + "' (paper, authors, information or track)");
       }
     }
   }
@@ -413,20 +440,29 @@ int main(int argc, char** argv) {
     add_json("random", M, n, smin.mean, stat(ba_s).mean, sm.mean, sr.mean, sa.mean, sa.sd, converged,
              opt.seeds - converged, F);
     // COLMAP's own filter, at the track length whose count is nearest.
-    int best = 2;
-    for (const auto& [t, count] : filter_count) {
-      const auto gap = [&](std::uint64_t c) { return c > n ? c - n : n - c; };
-      if (gap(count) < gap(filter_count[best])) best = t;
-    }
-    io::ColmapModel filtered;
-    if (!io::read_colmap_model(opt.work + "/filter" + std::to_string(best), &filtered, &format, &error)) die(error);
-    std::vector<bool> culled(b.original.points.size(), true);
-    {
+    const auto filter_row = [&](std::uint64_t target, const std::string& suffix) {
+      int best = 2;
+      for (const auto& [t, count] : filter_count) {
+        const auto gap = [&](std::uint64_t c) { return c > target ? c - target : target - c; };
+        if (gap(count) < gap(filter_count[best])) best = t;
+      }
+      io::ColmapModel filtered;
+      if (!io::read_colmap_model(opt.work + "/filter" + std::to_string(best), &filtered, &format, &error)) die(error);
+      std::vector<bool> culled(b.original.points.size(), true);
       std::map<std::uint64_t, bool> in;
       for (const auto& p : filtered.points) in[p.id] = true;
       for (std::size_t i = 0; i < culled.size(); ++i) culled[i] = in.count(b.original.points[i].id) == 0;
-    }
-    add_row(b.score("colmap_filter_len" + std::to_string(best), M, culled));
+      add_row(b.score("colmap_filter_len" + std::to_string(best) + suffix, M, culled));
+    };
+    filter_row(n, "");
+    // The whole model at exactly K points (K = F x the model's points, or
+    // replay's count under --M) with every image's floor, against
+    // longest-track-first at K and COLMAP's filter nearest K.
+    const std::uint64_t exact =
+        std::isfinite(F) ? static_cast<std::uint64_t>(std::floor(F * b.original.points.size() + 0.5)) : n;
+    add_row(b.score("keepless_exact", M, b.exact_culls(exact, kfs, images)));
+    add_row(b.score("longest_track_exact", M, b.keep_first(longest, exact)));
+    filter_row(exact, "_exact");
   }
   json += "],\"full_ba_s\":" + std::to_string(full.seconds) + ",\"K\":" + std::to_string(opt.K) +
           ",\"seeds\":" + std::to_string(opt.seeds) + ",\"not_converged\":" + std::to_string(not_converged) +

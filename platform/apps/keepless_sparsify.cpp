@@ -79,7 +79,9 @@ const std::vector<keepless::cli::Flag> kFlags = {
     {"--box", "WxH", "spatial-diversity box in pixels (default 64x48)"},
     {"--scope", "window|newest", "decide every point, or only the newest keyframe's (default window)"},
     {"--floor", "L", "every keyframe keeps >= L of its evaluated points (default 0: off)"},
-    {"--cost", "paper|authors|information", "point -> pair costs (default paper)"},
+    {"--cost", "paper|authors|information|track", "point -> pair costs (default paper)"},
+    {"--track-terms", "LIST", "what --cost track sums: length,age,error,angle (default all; COLMAP\n"
+                              "gives length and error, BAL length)"},
     {"--maturity", "A", "tracking-safe culling: points first seen in the newest A keyframes of a\n"
                         "window are not decided yet (default 0: off)"},
     {"--image", "WxH", "the image the authors' grid covers (default 640x480; COLMAP: its cameras')"},
@@ -202,7 +204,11 @@ int parse_args(int argc, char** argv, Options* opt, bool* help, bool* version) {
       opt->params.maturity_keyframes = static_cast<std::uint32_t>(maturity);
     } else if (flag == "--cost") {
       if (!core::parse_cost_model(value, &opt->params.cost_model)) {
-        return usage_error(bad + " (paper, authors or information)");
+        return usage_error(bad + " (paper, authors, information or track)");
+      }
+    } else if (flag == "--track-terms") {
+      if (!core::parse_track_terms(value, &opt->params.track_terms)) {
+        return usage_error(bad + " (a comma-separated list of length, age, error, angle)");
       }
     } else if (flag == "--image") {
       int w = 0, h = 0;
@@ -378,14 +384,14 @@ int decide_window_unguarded(const Options& opt, const core::WindowFile& file, co
       "\"scope\":\"%s\",\"floor\":%u,\"cost\":\"%s\",\"out_of_scope\":%u,"
       "\"floor_keyframes\":%u,\"floor_promoted\":%u,\"floor_short\":%u,"
       "\"budget\":\"%s\",\"budget_value\":%s,\"budget_m\":%" PRId64 ",\"budget_observations\":%" PRIu64 ","
-      "\"maturity\":%u,\"guarded\":%u}\n",
+      "\"maturity\":%u,\"guarded\":%u,\"track_fallback\":%u}\n",
       sum.keyframes, sum.points, sum.evaluated, sum.kept, sum.culled, sum.skipped, sum.pairs,
       sum.arcs, sum.max_flow, sum.total_cost, opt.params.pair_capacity, theta, opt.params.box_width,
       opt.params.box_height, parse_ms, build_ms, solve_ms, memory, core::to_string(opt.params.scope),
       opt.params.coverage_floor, core::to_string(opt.params.cost_model), sum.out_of_scope,
       sum.floor_keyframes, sum.floor_promoted, sum.floor_short,
       core::to_string(opt.params.budget.kind), budget_value, sum.budget_m, sum.budget_observations,
-      opt.params.maturity_keyframes, sum.guarded);
+      opt.params.maturity_keyframes, sum.guarded, sum.track_fallback);
   return std::fflush(stdout) == 0 ? 0 : kExitInternal;
 }
 

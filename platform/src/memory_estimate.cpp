@@ -34,7 +34,8 @@ MemoryModel probe_memory_model(const core::Params& params, core::SolveMode mode,
   // 4096 points halve them, which prices a slot.
   constexpr std::uint32_t kStep = 4096;
   // One keyframe's limit half the window's, so that the window's slope leaves it alone.
-  const core::Capacities base{8, kStep + 1, kStep, kStep, 0, kStep / 2};
+  core::Capacities base{8, kStep + 1, kStep, kStep, 0, kStep / 2};
+  base.hold_quality = params.cost_model == core::CostModel::kTrack;  // as window_capacities() sizes the node
   const double b = measure(base, params, mode, windows);
   const auto slope = [&](core::Capacities c, std::uint32_t core::Capacities::*field, std::uint32_t step) {
     c.*field += step;

@@ -71,6 +71,20 @@ bool fingerprint_ok(const std::uint8_t* p, std::size_t size, std::int64_t hash) 
 
 bool finite(double x) { return std::isfinite(x); }
 
+// The point quality arrays' counts and track lengths (finiteness is checked
+// as kNonFinite): the field at fault, or null.
+const char* quality_field(const keepless::keyframe_t& m) {
+  const auto q = static_cast<std::size_t>(m.num_quality);
+  if ((m.num_quality != 0 && m.num_quality != m.num_observations) || m.track_length.size() != q ||
+      m.age.size() != q || m.reprojection_error.size() != q || m.triangulation_angle.size() != q) {
+    return "num_quality (must be 0 or num_observations)";
+  }
+  for (std::int32_t t : m.track_length) {
+    if (t < 0) return "track_length (must be >= 0)";
+  }
+  return nullptr;
+}
+
 bool has_adjacent_equal(const std::uint64_t* sorted, std::size_t n) {
   for (std::size_t i = 1; i < n; ++i) {
     if (sorted[i] == sorted[i - 1]) return true;
@@ -111,7 +125,12 @@ RejectReason check_keyframe_bytes(const void* data, std::size_t size, const Mess
   if (size < at + wire::kKeyframeTrailerBytes) return RejectReason::kTruncated;
   const std::int32_t tracked = read_be32(p + at + wire::kKeyframeTrailerBytes - 4);
   if (tracked != 0 && tracked != n) return RejectReason::kInvalidField;
-  if (size != at + wire::kKeyframeTrailerBytes + static_cast<std::size_t>(tracked)) return RejectReason::kTruncated;
+  at += wire::kKeyframeTrailerBytes + static_cast<std::size_t>(tracked);
+  // Point quality, after the flags: 0 or one per observation.
+  std::int32_t quality = 0;
+  if (!count(&quality)) return RejectReason::kTruncated;
+  if (quality != 0 && quality != n) return RejectReason::kInvalidField;
+  if (size != at + wire::kKeyframeBytesPerQuality * static_cast<std::size_t>(quality)) return RejectReason::kTruncated;
   return RejectReason::kNone;
 }
 
@@ -251,6 +270,13 @@ RejectReason check_keyframe(const keepless::keyframe_t& msg, const core::Window&
   for (std::int8_t t : msg.tracked) {
     if (t != 0 && t != 1) return RejectReason::kInvalidField;
   }
+  if (quality_field(msg) != nullptr) return RejectReason::kInvalidField;
+  for (std::int32_t i = 0; i < msg.num_quality; ++i) {
+    const auto q = static_cast<std::size_t>(i);
+    if (!std::isfinite(msg.reprojection_error[q]) || !std::isfinite(msg.triangulation_angle[q])) {
+      return RejectReason::kNonFinite;
+    }
+  }
   if (msg.image_width <= 0 || msg.image_height <= 0) return RejectReason::kInvalidField;
   // Float-derived quaternions are off by ~1e-7; anything far from unit is a bug upstream.
   if (std::fabs(norm2 - 1.0) > core::kQuaternionNormTolerance) return RejectReason::kInvalidField;
@@ -279,7 +305,8 @@ RejectReason check_map_event(const keepless::map_event_t& msg) {
 
 const char* invalid_keyframe_field(const keepless::keyframe_t* m) {
   if (m == nullptr) {
-    return "an array count (num_observations, num_depths, num_intrinsics, num_unmapped or num_tracked)";
+    return "an array count (num_observations, num_depths, num_intrinsics, num_unmapped, num_tracked or "
+           "num_quality)";
   }
   const auto n = static_cast<std::size_t>(m->num_observations);
   if (m->num_observations < 0 || m->point_id.size() != n || m->u.size() != n || m->v.size() != n) {
@@ -304,6 +331,7 @@ const char* invalid_keyframe_field(const keepless::keyframe_t* m) {
   for (std::int8_t t : m->tracked) {
     if (t != 0 && t != 1) return "tracked (a flag is 0 or 1)";
   }
+  if (const char* q = quality_field(*m)) return q;
   if (m->image_width <= 0) return "image_width (must be > 0)";
   if (m->image_height <= 0) return "image_height (must be > 0)";
   double norm2 = 0;

@@ -74,8 +74,13 @@ struct Node::Impl {
     kf.unmapped_u.reserve(c.max_unmapped);
     kf.unmapped_v.reserve(c.max_unmapped);
     kf.tracked.reserve(c.max_observations);
+    kf.track_length.reserve(c.max_observations);
+    kf.age.reserve(c.max_observations);
+    kf.reprojection_error.reserve(c.max_observations);
+    kf.triangulation_angle.reserve(c.max_observations);
     unmapped.resize(c.max_unmapped);
     tracked.resize(c.max_observations);
+    quality.resize(c.max_observations);
     event.deleted_point_id.reserve(c.max_event_ids);
     event.merged_from_id.reserve(c.max_event_ids);
     event.merged_into_id.reserve(c.max_event_ids);
@@ -220,6 +225,10 @@ struct Node::Impl {
       observations[kept].v = static_cast<double>(kf.v[i]);
       observations[kept].depth = kf.num_depths != 0 ? static_cast<double>(kf.depth[i]) : 0.0;
       tracked[kept] = kf.num_tracked != 0 ? static_cast<std::uint8_t>(kf.tracked[i]) : 0;
+      if (kf.num_quality != 0) {
+        quality[kept] = {static_cast<std::uint32_t>(kf.track_length[i]), kf.age[i], kf.reprojection_error[i],
+                         kf.triangulation_angle[i]};
+      }
       ++kept;
     }
     core::Keyframe keyframe;
@@ -239,6 +248,7 @@ struct Node::Impl {
     keyframe.unmapped = unmapped.data();
     keyframe.unmapped_count = m;
     keyframe.tracked = kf.num_tracked != 0 ? tracked.data() : nullptr;
+    keyframe.quality = kf.num_quality != 0 ? quality.data() : nullptr;
     const core::Status s = sliding.push(keyframe, observations.data(), kept, evicted);
     if (s != core::Status::kOk) return reason_of(s);
     if (*evicted > 0) note_window_overflow(kf.sequence);
@@ -251,6 +261,13 @@ struct Node::Impl {
       for (std::uint32_t i = 0; i < n; ++i) {
         (void)deferred.observe(static_cast<core::PointId>(kf.point_id[i]), kf.num_tracked == 0 || kf.tracked[i] != 0);
       }
+    }
+    if (kf.num_quality == 0 && config.params.cost_model == core::CostModel::kTrack &&
+        counters.track_fallback++ == 0 && !config.quiet) {
+      std::fprintf(stderr,
+                   "keepless_node: keyframe_t without point quality (num_quality 0) at seq %lld: --cost track "
+                   "ranks its points by the window alone\n",
+                   static_cast<long long>(kf.sequence));
     }
     return RejectReason::kNone;
   }
@@ -274,6 +291,10 @@ struct Node::Impl {
     kf.unmapped_u.clear();
     kf.unmapped_v.clear();
     kf.tracked.clear();
+    kf.track_length.clear();
+    kf.age.clear();
+    kf.reprojection_error.clear();
+    kf.triangulation_angle.clear();
     if (r == RejectReason::kNone && kf.decode(data, 0, static_cast<int>(size)) < 0) r = RejectReason::kTruncated;
     if (r != RejectReason::kNone) {
       // Ids unreadable: no decision can name the request.
@@ -596,7 +617,8 @@ struct Node::Impl {
            observations.size() * sizeof(core::Observation) + id_scratch.size() * sizeof(std::uint64_t) +
            (kf.point_id.capacity() * 16) + kf.depth.capacity() * 4 + kf.intrinsics.capacity() * 8 +
            kf.unmapped_u.capacity() * 8 + unmapped.size() * sizeof(core::Keypoint) +
-           kf.tracked.capacity() + tracked.size() +
+           kf.tracked.capacity() + tracked.size() + kf.track_length.capacity() * 16 +
+           quality.size() * sizeof(core::PointQuality) +
            (event.deleted_point_id.capacity() + event.merged_from_id.capacity() +
             event.merged_into_id.capacity() + event.removed_keyframe_id.capacity()) * 8 +
            (decision.window_keyframe_id.capacity() + decision.culled_point_id.capacity()) * 8 +
@@ -652,6 +674,7 @@ struct Node::Impl {
   std::vector<core::Observation> observations;
   std::vector<core::Keypoint> unmapped;  // [max_unmapped]
   std::vector<std::uint8_t> tracked;     // [max_observations], the accepted observations' flags
+  std::vector<core::PointQuality> quality;  // [max_observations], the accepted observations' quality
   std::vector<std::uint64_t> id_scratch;
   std::vector<std::uint8_t> out;
   std::array<std::uint8_t, 1024> small{};

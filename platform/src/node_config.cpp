@@ -97,8 +97,10 @@ std::string node_usage() {
          "  --box WxH                 spatial-diversity box in pixels (default 64x48)\n"
          "  --scope window|newest     decide every window point, or only the newest keyframe's (default window)\n"
          "  --floor L                 every keyframe keeps >= L of its evaluated points (default 0: off)\n"
-         "  --cost paper|authors|information\n"
+         "  --cost paper|authors|information|track\n"
          "                            point -> pair costs (default paper; docs/design/policies.md)\n"
+         "  --track-terms LIST        what --cost track sums of keyframe_t's point quality, comma-separated\n"
+         "                            from length, age, error, angle (default all four)\n"
          "  --image WxH               the image the authors' 64x48 grid covers (default 640x480)\n"
          "  --maturity A              points first seen in the newest A window keyframes are not decided\n"
          "                            yet (default 0: off); a keyframe_t's tracked flags are always honoured\n"
@@ -300,7 +302,11 @@ ParseResult parse_node_arguments(int argc, const char* const* argv, NodeConfig& 
       config.params.coverage_floor = static_cast<std::uint32_t>(n);
     } else if (flag == "--cost") {
       if (!core::parse_cost_model(value.c_str(), &config.params.cost_model)) {
-        return bad("expected paper, authors or information");
+        return bad("expected paper, authors, information or track");
+      }
+    } else if (flag == "--track-terms") {
+      if (!core::parse_track_terms(value.c_str(), &config.params.track_terms)) {
+        return bad("expected a comma-separated list of length, age, error, angle");
       }
     } else if (flag == "--maturity") {
       if (!parse_u64(value, 0, std::numeric_limits<std::uint32_t>::max(), n)) return bad("expected an integer >= 0");
@@ -381,6 +387,7 @@ core::Capacities window_capacities(const NodeConfig& config) {
   c.max_points = capped(config.max_points);
   c.max_unmapped_keypoints = static_cast<std::uint32_t>(k * config.max_unmapped);
   c.max_keyframe_observations = config.max_observations;  // a keyframe_t's, refused beyond
+  c.hold_quality = config.params.cost_model == core::CostModel::kTrack;  // only --cost track reads it
   // Sum over points of n(n-1)/2 with sum n <= observations and n <= K.
   const std::uint64_t worst_arcs = std::uint64_t{c.max_observations} * (k - 1) / 2;
   c.max_pair_arcs = static_cast<std::uint32_t>(
@@ -397,7 +404,7 @@ double estimate_node_bytes(const NodeConfig& config) {
   const MemoryModel model = probe_memory_model(config.params, core::SolveMode::kIncremental, 2);
   const double ids = config.cull_memory != 0 ? config.cull_memory : caps.max_points;
   // Sliding-window scratch, message objects and buffers, decision arrays, cull memory.
-  const double messages = 110.0 * config.max_observations + 124.0 * config.max_event_ids +
+  const double messages = 158.0 * config.max_observations + 124.0 * config.max_event_ids +
                           16.0 * (caps.max_points + caps.max_keyframes) + 8.0 * caps.max_points;
   // Deferred culling: the held points (a 16-byte slot table at <= 1/2 load,
   // id and last match) and the decision's two lists.

@@ -12,6 +12,7 @@ SlidingWindow::SlidingWindow(const core::Capacities& capacities, std::uint32_t m
   order_scratch_.resize(max_observations);
   keep_scratch_.resize(max_observations);
   tracked_scratch_.resize(max_observations);
+  quality_scratch_.resize(max_observations);
   drop_table_.resize(std::max<std::size_t>(max_event_ids, capacities.max_points));
   merge_table_.resize(max_event_ids);
 }
@@ -23,7 +24,8 @@ void SlidingWindow::clear() {
 
 std::size_t SlidingWindow::memory_bytes() const {
   return a_.memory_bytes() + b_.memory_bytes() + obs_scratch_.size() * sizeof(core::Observation) +
-         order_scratch_.size() * sizeof(std::uint32_t) + keep_scratch_.size() + tracked_scratch_.size() + drop_table_.size() * sizeof(core::PointId) +
+         order_scratch_.size() * sizeof(std::uint32_t) + keep_scratch_.size() + tracked_scratch_.size() +
+         quality_scratch_.size() * sizeof(core::PointQuality) + drop_table_.size() * sizeof(core::PointId) +
          merge_table_.size() * sizeof(Merge);
 }
 
@@ -138,13 +140,16 @@ core::Status SlidingWindow::rebuild(std::uint32_t skip_front, const core::Keyfra
     }
     std::uint32_t kept = 0;
     bool merged = false;
-    // Tracked flags follow their observations (the window copies them again).
+    // Tracked flags and quality follow their observations (the window copies them again).
     const std::uint8_t* tracked = kf.tracked;
     std::uint8_t* tracked_out = tracked_scratch_.data();
+    const core::PointQuality* quality = kf.quality;
+    core::PointQuality* quality_out = quality_scratch_.data();
     for (std::uint32_t i = 0; i < n; ++i) {
       core::Observation o = obs[i];
       if (drop_count > 0 && std::binary_search(drop_begin, drop_end, o.point)) continue;
       if (tracked != nullptr) tracked_out[kept] = tracked[i];
+      if (quality != nullptr) quality_out[kept] = quality[i];
       if (merge_count > 0) {
         const auto it = std::lower_bound(merge_begin, merge_end, o.point,
                                          [](const Merge& m, core::PointId p) { return m.from < p; });
@@ -175,11 +180,13 @@ core::Status SlidingWindow::rebuild(std::uint32_t skip_front, const core::Keyfra
       for (std::uint32_t i = 0; i < kept; ++i) {
         if (!keep[i]) continue;
         tracked_out[j] = tracked_out[i];
+        quality_out[j] = quality_out[i];
         obs_scratch_[j++] = obs_scratch_[i];
       }
       kept = j;
     }
     if (tracked != nullptr) kf.tracked = tracked_out;
+    if (quality != nullptr) kf.quality = quality_out;
     const core::Status s = to.add_keyframe(kf, obs_scratch_.data(), kept);
     if (s != core::Status::kOk) {
       to.clear();

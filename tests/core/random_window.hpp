@@ -177,6 +177,29 @@ inline void random_guard(RandomCase& c, std::uint64_t seed) {
   }
 }
 
+// CostModel::kTrack on a case: point quality on most keyframes (values on
+// the levels' edges, some unknown), the same point's quality differing
+// between keyframes as a map's does over time, and random track terms.
+inline void random_quality(RandomCase& c, std::uint64_t seed) {
+  Rng rng(seed ^ 0x747261636bULL);
+  static constexpr float kErrors[] = {-1.f, 0.f, 0.25f, 0.5f, 0.99f, 1.f, 1.5f, 2.f, 3.99f, 4.f, 9.f};
+  static constexpr float kAngles[] = {0.f, -3.f, 0.5f, 1.f, 1.99f, 2.f, 3.f, 4.f, 7.99f, 8.f, 40.f};
+  for (auto& f : c.frames) {
+    f.quality.clear();
+    if (!rng.chance(85)) continue;  // a keyframe without quality (the fallback)
+    for (std::size_t i = 0; i < f.observations.size(); ++i) {
+      core::PointQuality q;
+      q.track_length = static_cast<std::uint32_t>(rng.between(0, 40));
+      q.age = static_cast<std::int32_t>(rng.between(-1, 33));
+      q.reprojection_error = kErrors[rng.between(0, 10)];
+      q.triangulation_angle = kAngles[rng.between(0, 10)];
+      f.quality.push_back(q);
+    }
+  }
+  c.params.cost_model = core::CostModel::kTrack;
+  c.params.track_terms = static_cast<std::uint8_t>(rng.chance(50) ? 15 : rng.between(0, 15));
+}
+
 inline core::Keyframe keyframe_of(const RefKeyframe& f, std::vector<core::Keypoint>& unmapped) {
   core::Keyframe kf;
   kf.id = f.id;
@@ -190,6 +213,7 @@ inline core::Keyframe keyframe_of(const RefKeyframe& f, std::vector<core::Keypoi
   kf.unmapped = unmapped.data();
   kf.unmapped_count = static_cast<std::uint32_t>(unmapped.size());
   kf.tracked = f.tracked.empty() ? nullptr : f.tracked.data();
+  kf.quality = f.quality.empty() ? nullptr : f.quality.data();
   return kf;
 }
 

@@ -107,15 +107,19 @@ TEST(ZeroAllocation, PoliciesAndCostModelsAllocateNothing) {
     Keyframe keyframe;
     std::vector<Observation> observations;
     std::vector<Keypoint> unmapped;
+    std::vector<PointQuality> quality;
   };
   std::vector<std::vector<Frame>> windows;
   for (std::uint64_t seed = 1; seed <= 12; ++seed) {
     auto c = test::random_case(seed, 12, 150);
     test::random_policies(c, seed);
+    test::random_quality(c, seed);  // point quality for kTrack (the others ignore it)
     std::vector<Frame> frames(c.frames.size());
     for (std::size_t i = 0; i < frames.size(); ++i) {
       frames[i].keyframe = test::keyframe_of(c.frames[i], frames[i].unmapped);
       frames[i].observations = test::observations_of(c.frames[i]);
+      frames[i].quality = c.frames[i].quality;
+      frames[i].keyframe.quality = frames[i].quality.empty() ? nullptr : frames[i].quality.data();
     }
     windows.push_back(std::move(frames));
   }
@@ -123,7 +127,7 @@ TEST(ZeroAllocation, PoliciesAndCostModelsAllocateNothing) {
   // Each with no budget and with each kind of keep budget.
   const KeepBudget budgets[] = {{}, {BudgetKind::kPoints, 40, 0.0}, {BudgetKind::kFraction, 0, 0.3},
                                 {BudgetKind::kObservations, 150, 0.0}};
-  for (CostModel model : {CostModel::kPaper, CostModel::kAuthors, CostModel::kInformation}) {
+  for (CostModel model : {CostModel::kPaper, CostModel::kAuthors, CostModel::kInformation, CostModel::kTrack}) {
     for (const KeepBudget& budget : budgets) {
       Params p;
       p.pair_capacity = 2;

@@ -34,6 +34,7 @@ constexpr std::uint64_t kExpectedCostHash = 0x231e8d5f5870d2a7ULL;
 constexpr std::uint64_t kExpectedDecisionHash = 0x6da842663cdda28eULL;
 constexpr std::uint64_t kExpectedPolicyHash = 0x8092a28e8907ad34ULL;
 constexpr std::uint64_t kExpectedBudgetHash = 0x95b5b9d23195ea3dULL;
+constexpr std::uint64_t kExpectedTrackHash = 0x458af2d5de07218dULL;
 
 // splitmix64: a fixed, portable stream (std:: distributions are not
 // specified bit for bit across standard libraries).
@@ -474,6 +475,77 @@ TEST(CrossArchitecture, BudgetDecisionsMatchRecordedHash) {
   EXPECT_GT(culled, 0u);
   EXPECT_EQ(hash.value(), kExpectedBudgetHash)
       << "budget decision hash " << hex(hash.value()) << " (expected " << hex(kExpectedBudgetHash) << ")";
+}
+
+// CostModel::kTrack: float-fed point quality (some unknown, some keyframes
+// without any) under each set of terms, without and with a keep budget: the
+// levels and the decisions.
+TEST(CrossArchitecture, TrackCostDecisionsMatchRecordedHash) {
+  constexpr std::uint32_t kWindows = 24;
+  const Capacities capacities = generated_capacities();
+
+  SplitMix64 rng(0x747261636b000001ULL);
+  SplitMix64 extra(0x747261636b000002ULL);
+  Fnv1a64 hash;
+  Window window(capacities);
+  std::uint64_t culled = 0, fallback = 0;
+  std::vector<PointQuality> quality;
+  std::vector<std::vector<PointQuality>> held;
+  for (std::uint32_t index = 0; index < kWindows; ++index) {
+    GeneratedWindow g = generate_window(rng, index);
+    window.clear();
+    held.assign(g.keyframes.size(), {});
+    for (std::size_t f = 0; f < g.keyframes.size(); ++f) {
+      Keyframe kf = g.keyframes[f];
+      const std::size_t n = g.observations[f].size();
+      if (extra.below(8) != 0) {
+        quality.resize(n);
+        for (PointQuality& q : quality) {
+          q.track_length = static_cast<std::uint32_t>(extra.below(40));
+          q.age = static_cast<std::int32_t>(extra.below(30)) - 1;
+          q.reprojection_error = static_cast<float>(6.0 * extra.fraction(24) - 0.5);
+          q.triangulation_angle = static_cast<float>(12.0 * extra.fraction(24) - 0.5);
+        }
+        held[f] = quality;
+        kf.quality = held[f].data();
+      }
+      ASSERT_EQ(window.add_keyframe(kf, g.observations[f].data(), static_cast<std::uint32_t>(n)), Status::kOk)
+          << "window " << index << " keyframe " << f;
+      std::vector<std::uint32_t> levels(n);
+      track_levels(kf, static_cast<std::uint32_t>(n), kTrackLength | kTrackAge | kTrackError | kTrackAngle,
+                   levels.data());
+      for (std::uint32_t v : levels) hash.add(v, 1);
+    }
+    for (std::uint8_t terms : {std::uint8_t{15}, std::uint8_t{kTrackLength}, std::uint8_t{kTrackError | kTrackAngle}}) {
+      Params p = g.params;
+      p.cost_model = CostModel::kTrack;
+      p.track_terms = terms;
+      p.scope = index % 2 == 0 ? Scope::kNewest : Scope::kWindow;
+      p.coverage_floor = index % 3 == 0 ? 0 : 5;
+      if (index % 4 == 1) p.budget = {BudgetKind::kFraction, 0, 0.05 * (1 + index % 12)};
+      Sparsifier sparsifier(capacities, p);
+      ASSERT_EQ(sparsifier.run(window), Status::kOk) << "window " << index;
+      const Summary& s = sparsifier.summary();
+      hash.add(index, 4);
+      hash.add(terms, 1);
+      const PointDecision* d = sparsifier.decisions();
+      for (std::uint32_t i = 0; i < sparsifier.decision_count(); ++i) {
+        hash.add(d[i].point);
+        hash.add(static_cast<std::uint64_t>(d[i].verdict), 1);
+        hash.add_signed(d[i].flow);
+      }
+      hash.add_signed(s.max_flow);
+      hash.add_signed(s.total_cost);
+      hash.add_signed(s.budget_m);
+      hash.add(s.track_fallback, 4);
+      culled += s.culled;
+      fallback += s.track_fallback;
+    }
+  }
+  EXPECT_GT(culled, 0u);
+  EXPECT_GT(fallback, 0u);
+  EXPECT_EQ(hash.value(), kExpectedTrackHash)
+      << "track cost decision hash " << hex(hash.value()) << " (expected " << hex(kExpectedTrackHash) << ")";
 }
 
 }  // namespace

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <limits>
 
 #include <cmath>
 #include <cstring>
@@ -34,7 +35,8 @@ TEST(LcmMessages, KeyframeRoundTrip) {
   m.publisher_id = -77;
   const auto bytes = kt::encode(m);
   ASSERT_EQ(bytes.size(), wire::kKeyframeHeaderBytes + 3 * wire::kKeyframeBytesPerObservation +
-                              wire::kKeyframeOptionalCountBytes + wire::kKeyframeTrailerBytes);
+                              wire::kKeyframeOptionalCountBytes + wire::kKeyframeTrailerBytes +
+                              wire::kKeyframeQualityCountBytes);
 
   keepless::keyframe_t d{};
   ASSERT_EQ(d.decode(bytes.data(), 0, static_cast<int>(bytes.size())), static_cast<int>(bytes.size()));
@@ -58,7 +60,8 @@ TEST(LcmMessages, KeyframeCountAtFixedOffset) {
     for (int i = 0; i < n; ++i) ids.push_back(i);
     const auto bytes = kt::encode(kt::make_keyframe(1, 1, ids));
     ASSERT_EQ(bytes.size(), wire::kKeyframeHeaderBytes + wire::kKeyframeBytesPerObservation * n +
-                                wire::kKeyframeOptionalCountBytes + wire::kKeyframeTrailerBytes);
+                                wire::kKeyframeOptionalCountBytes + wire::kKeyframeTrailerBytes +
+                              wire::kKeyframeQualityCountBytes);
     EXPECT_EQ(be32_at(bytes, wire::kKeyframeCountOffset), n);
   }
 }
@@ -76,7 +79,8 @@ TEST(LcmMessages, KeyframeTrackedFlags) {
   m.tracked = {1, 0, 1};
   const auto bytes = kt::encode(m);
   ASSERT_EQ(bytes.size(), wire::kKeyframeHeaderBytes + 3 * wire::kKeyframeBytesPerObservation +
-                              wire::kKeyframeOptionalCountBytes + wire::kKeyframeTrailerBytes + 3);
+                              wire::kKeyframeOptionalCountBytes + wire::kKeyframeTrailerBytes + 3 +
+                              wire::kKeyframeQualityCountBytes);
   EXPECT_EQ(keepless::platform::check_keyframe_bytes(bytes.data(), bytes.size(), limits), RejectReason::kNone);
   keepless::keyframe_t d{};
   ASSERT_EQ(d.decode(bytes.data(), 0, static_cast<int>(bytes.size())), static_cast<int>(bytes.size()));
@@ -91,6 +95,54 @@ TEST(LcmMessages, KeyframeTrackedFlags) {
   EXPECT_EQ(keepless::platform::check_keyframe_bytes(cut.data(), cut.size(), limits), RejectReason::kTruncated);
 }
 
+// The point quality after the tracked flags: a round trip, the pre-decode
+// check of its count (0 or num_observations), the decoded checks (track
+// length >= 0, finite error and angle), and a message without it (an old
+// VO's fields only) accepted as before.
+TEST(LcmMessages, KeyframePointQuality) {
+  using keepless::platform::RejectReason;
+  const keepless::platform::MessageLimits limits;
+  keepless::keyframe_t m = kt::make_keyframe(1, 1, {5, 6, 7});
+  const auto old = kt::encode(m);
+  EXPECT_EQ(keepless::platform::check_keyframe_bytes(old.data(), old.size(), limits), RejectReason::kNone);
+  const keepless::core::Window empty(keepless::core::Capacities{4, 16, 16, 16, 0});
+  std::vector<std::uint64_t> scratch(3);
+  EXPECT_EQ(keepless::platform::check_keyframe(m, empty, scratch.data()), RejectReason::kNone);
+  m.num_quality = 3;
+  m.track_length = {2, 0, 17};
+  m.age = {0, -1, 9};
+  m.reprojection_error = {0.25f, -1.0f, 3.5f};
+  m.triangulation_angle = {1.5f, 0.0f, 12.0f};
+  const auto bytes = kt::encode(m);
+  ASSERT_EQ(bytes.size(), old.size() + 3 * wire::kKeyframeBytesPerQuality);
+  EXPECT_EQ(keepless::platform::check_keyframe_bytes(bytes.data(), bytes.size(), limits), RejectReason::kNone);
+  keepless::keyframe_t d{};
+  ASSERT_EQ(d.decode(bytes.data(), 0, static_cast<int>(bytes.size())), static_cast<int>(bytes.size()));
+  EXPECT_EQ(d.track_length, m.track_length);
+  EXPECT_EQ(d.age, m.age);
+  EXPECT_EQ(d.reprojection_error, m.reprojection_error);
+  EXPECT_EQ(d.triangulation_angle, m.triangulation_angle);
+  auto cut = bytes;
+  cut.pop_back();
+  EXPECT_EQ(keepless::platform::check_keyframe_bytes(cut.data(), cut.size(), limits), RejectReason::kTruncated);
+  keepless::keyframe_t bad = m;
+  bad.num_quality = 2;
+  for (auto* v : {&bad.track_length, &bad.age}) v->pop_back();
+  for (auto* v : {&bad.reprojection_error, &bad.triangulation_angle}) v->pop_back();
+  const auto two = kt::encode(bad);
+  EXPECT_EQ(keepless::platform::check_keyframe_bytes(two.data(), two.size(), limits), RejectReason::kInvalidField);
+  EXPECT_EQ(keepless::platform::check_keyframe(bad, empty, scratch.data()), RejectReason::kInvalidField);
+  EXPECT_STREQ(keepless::platform::invalid_keyframe_field(&bad), "num_quality (must be 0 or num_observations)");
+  EXPECT_EQ(keepless::platform::check_keyframe(m, empty, scratch.data()), RejectReason::kNone);
+  bad = m;
+  bad.track_length[1] = -4;
+  EXPECT_EQ(keepless::platform::check_keyframe(bad, empty, scratch.data()), RejectReason::kInvalidField);
+  EXPECT_STREQ(keepless::platform::invalid_keyframe_field(&bad), "track_length (must be >= 0)");
+  bad = m;
+  bad.triangulation_angle[2] = std::numeric_limits<float>::quiet_NaN();
+  EXPECT_EQ(keepless::platform::check_keyframe(bad, empty, scratch.data()), RejectReason::kNonFinite);
+}
+
 TEST(LcmMessages, KeyframeOptionalFields) {
   keepless::keyframe_t m = kt::make_keyframe(1, 1, {5, 6, 7});
   m.num_depths = 3;
@@ -103,7 +155,7 @@ TEST(LcmMessages, KeyframeOptionalFields) {
   const auto bytes = kt::encode(m);
   ASSERT_EQ(bytes.size(), wire::kKeyframeHeaderBytes + 3 * wire::kKeyframeBytesPerObservation +
                               wire::kKeyframeOptionalCountBytes + 3 * 4 + 4 * 8 + 2 * 8 +
-                              wire::kKeyframeTrailerBytes);
+                              wire::kKeyframeTrailerBytes + wire::kKeyframeQualityCountBytes);
   keepless::keyframe_t d{};
   ASSERT_EQ(d.decode(bytes.data(), 0, static_cast<int>(bytes.size())), static_cast<int>(bytes.size()));
   EXPECT_EQ(d.depth, m.depth);
@@ -134,8 +186,9 @@ TEST(LcmMessages, KeyframeOptionalFields) {
   bad = m;
   auto negative = kt::encode(bad);
   // num_unmapped sits 4 + 16 bytes (its two floats each) + the 8-byte
-  // publisher_id + the 4-byte num_tracked (no flags) before the end.
-  negative[negative.size() - 32] = 0xff;
+  // publisher_id + the 4-byte num_tracked (no flags) + the 4-byte
+  // num_quality (no quality) before the end.
+  negative[negative.size() - 36] = 0xff;
   EXPECT_EQ(check(negative), RejectReason::kInvalidField);
 }
 

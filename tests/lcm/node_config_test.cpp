@@ -216,10 +216,18 @@ TEST(NodeConfig, ParsesThePolicyFlags) {
   EXPECT_EQ(c.params.image_height, 376);
   for (const std::vector<std::string>& bad :
        {std::vector<std::string>{"--scope", "all"}, {"--floor", "-1"}, {"--floor", "4294967296"},
-        {"--cost", "Paper"}, {"--image", "0x480"}, {"--image", "640"}, {"--max-unmapped", "-1"}}) {
+        {"--cost", "Paper"}, {"--image", "0x480"}, {"--image", "640"}, {"--max-unmapped", "-1"},
+        {"--track-terms", "length,length"}, {"--track-terms", ""}, {"--track-terms", "size"}}) {
     NodeConfig d;
     EXPECT_EQ(parse(bad, d, error), ParseResult::kError) << bad[0] << " " << bad[1];
   }
+  // --cost track and the terms it sums (default all four).
+  NodeConfig t;
+  ASSERT_EQ(parse({"--cost", "track"}, t, error), ParseResult::kOk) << error;
+  EXPECT_EQ(t.params.cost_model, keepless::core::CostModel::kTrack);
+  EXPECT_EQ(t.params.track_terms, 15);
+  ASSERT_EQ(parse({"--cost", "track", "--track-terms", "length,error"}, t, error), ParseResult::kOk) << error;
+  EXPECT_EQ(t.params.track_terms, keepless::core::kTrackLength | keepless::core::kTrackError);
 }
 
 TEST(NodeConfig, ParsesTheKeepBudgets) {

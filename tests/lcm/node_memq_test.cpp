@@ -586,6 +586,43 @@ TEST_F(NodeOnMemq, TrackedFlagsAndMaturityMatchTheLibrary) {
   ASSERT_NE(w.keyframe(w.keyframe_count() - 1).tracked, nullptr);
 }
 
+// --cost track: keyframe_t's point quality reaches the window (through
+// slides and the culled points' removal) and the decisions equal the
+// library's on the same windows; keyframes without it are counted.
+TEST_F(NodeOnMemq, PointQualityMatchesTheLibrary) {
+  NodeConfig c = default_config();
+  c.params.pair_capacity = 2;
+  c.params.cost_model = keepless::core::CostModel::kTrack;
+  make_node(c);
+  kt::ReferenceNode ref(keepless::platform::window_capacities(config_), config_.params, config_.window);
+  std::vector<kt::ReferenceDecision> expected;
+  for (int i = 0; i < 8; ++i) {
+    keepless::keyframe_t m = kt::make_keyframe(i + 1, 100 + i, kt::id_range(i * 8, 40));
+    if (i % 4 != 2) {  // every fourth keyframe sends none
+      m.num_quality = m.num_observations;
+      for (int j = 0; j < m.num_observations; ++j) {
+        m.track_length.push_back((j * 7 + i) % 23);
+        m.age.push_back((j + i) % 5 - 1);
+        m.reprojection_error.push_back(0.3f * static_cast<float>((j * 3 + i) % 13) - 0.2f);
+        m.triangulation_angle.push_back(0.7f * static_cast<float>((j * 5 + i) % 17));
+      }
+    }
+    expected.push_back(ref.step(m));
+    send(m);
+  }
+  ASSERT_EQ(decisions_.size(), 8u);
+  EXPECT_EQ(node_->counters().messages_rejected, 0u);
+  EXPECT_EQ(node_->counters().track_fallback, 2u);
+  int culled = 0;
+  for (int i = 0; i < 8; ++i) {
+    kt::expect_same(expected[i], decisions_[i], ("keyframe " + std::to_string(i)).c_str());
+    culled += decisions_[i].num_culled;
+  }
+  EXPECT_GT(culled, 0) << "the stream should exercise culling";
+  const keepless::core::Window& w = node_->window();
+  ASSERT_NE(w.keyframe(w.keyframe_count() - 1).quality, nullptr);
+}
+
 TEST_F(NodeOnMemq, RejectsBadTrackedFlags) {
   fill();
   const WindowSnapshot before = snapshot(node_->window());

@@ -48,6 +48,11 @@ class ReferenceNode {
       o.v = m.v[i];
       if (m.num_depths != 0) o.depth = m.depth[static_cast<std::size_t>(i)];
       if (m.num_tracked != 0) f.tracked[o.point] = static_cast<std::uint8_t>(m.tracked[static_cast<std::size_t>(i)]);
+      if (m.num_quality != 0) {
+        const auto q = static_cast<std::size_t>(i);
+        f.quality[o.point] = {static_cast<std::uint32_t>(m.track_length[q]), m.age[q], m.reprojection_error[q],
+                              m.triangulation_angle[q]};
+      }
       f.obs.push_back(o);
     }
     if (m.num_intrinsics == 4) {
@@ -60,6 +65,7 @@ class ReferenceNode {
       f.unmapped.push_back({m.unmapped_u[static_cast<std::size_t>(i)], m.unmapped_v[static_cast<std::size_t>(i)]});
     }
     f.has_tracked = m.num_tracked != 0;
+    f.has_quality = m.num_quality != 0;
     if (frames_.size() == k_) frames_.pop_front();
     frames_.push_back(f);
 
@@ -71,6 +77,9 @@ class ReferenceNode {
       std::vector<std::uint8_t> flags;  // the window copies them
       for (const core::Observation& o : fr.obs) flags.push_back(fr.tracked.count(o.point) ? fr.tracked.at(o.point) : 0);
       kf.tracked = fr.has_tracked && !flags.empty() ? flags.data() : nullptr;
+      std::vector<core::PointQuality> quality;
+      for (const core::Observation& o : fr.obs) quality.push_back(fr.quality.count(o.point) ? fr.quality.at(o.point) : core::PointQuality{});
+      kf.quality = fr.has_quality && !quality.empty() ? quality.data() : nullptr;
       if (w.add_keyframe(kf, fr.obs.data(), static_cast<std::uint32_t>(fr.obs.size())) != core::Status::kOk) {
         ADD_FAILURE() << "reference window rejected keyframe " << fr.kf.id;
       }
@@ -124,7 +133,7 @@ class ReferenceNode {
     std::deque<Frame> next;
     for (Frame& fr : frames_) {
       if (removed.count(static_cast<std::int64_t>(fr.kf.id)) > 0) continue;
-      Frame out{fr.kf, {}, fr.unmapped, {}, fr.has_tracked};
+      Frame out{fr.kf, {}, fr.unmapped, {}, fr.has_tracked, {}, fr.has_quality};
       std::set<core::PointId> seen;
       for (core::Observation o : fr.obs) {
         const auto id = static_cast<std::int64_t>(o.point);
@@ -134,6 +143,7 @@ class ReferenceNode {
         if (m != merged.end()) o.point = static_cast<core::PointId>(m->second);
         if (!seen.insert(o.point).second) continue;
         out.tracked[o.point] = flag;
+        if (fr.quality.count(static_cast<core::PointId>(id))) out.quality[o.point] = fr.quality.at(static_cast<core::PointId>(id));
         out.obs.push_back(o);
       }
       next.push_back(out);
@@ -148,6 +158,8 @@ class ReferenceNode {
     std::vector<core::Keypoint> unmapped;
     std::map<core::PointId, std::uint8_t> tracked;  // keyframe_t's tracked flags by point
     bool has_tracked = false;
+    std::map<core::PointId, core::PointQuality> quality;  // keyframe_t's point quality by point
+    bool has_quality = false;
   };
   core::Capacities caps_;
   core::Params params_;

@@ -16,6 +16,7 @@
 #include "keepless/io/colmap_model.hpp"
 #include "keepless/io/keyframes.hpp"
 #include "maps_support.hpp"
+#include "sparsify/exact_count.hpp"
 #include "sparsify/modes.hpp"
 
 namespace keepless {
@@ -249,6 +250,118 @@ TEST(CostModelsOnTheFixture, AuthorsCountsTheUnmappedKeypointsAndPaperIgnoresThe
     EXPECT_TRUE(same_decisions(decide(mapped, mode, params_for(f.model, core::CostModel::kPaper)),
                                decide(all, mode, params_for(f.model, core::CostModel::kPaper))));
   }
+}
+
+// Point quality from the model: every observation's track length is its
+// 3D point's track and its error the point's ERROR (COLMAP); BAL gives the
+// point's observations; age and angle stay unknown. `track` then decides
+// differently from `paper`, repeatably, and without the quality it falls
+// back (every keyframe counted) to the window alone.
+TEST(CostModelsOnTheFixture, TrackUsesTheModelsTrackLengthsAndErrors) {
+  KEEPLESS_MAPS_NEED(maps_test::fixture("sparse/images.bin"));
+  const Fixture f = read_fixture();
+  ASSERT_FALSE(::testing::Test::HasFailure());
+  const io::Keyframes k = io::keyframes_from_colmap(f.model, io::KeyframeOrder::kName, f.sim);
+  std::unordered_map<std::uint64_t, const io::ColmapPoint3D*> points;
+  for (const auto& p : f.model.points) points[p.id] = &p;
+  std::size_t checked = 0;
+  for (std::size_t i = 0; i < k.file.keyframes.size(); ++i) {
+    const core::PointQuality* q = k.file.keyframes[i].quality;
+    ASSERT_NE(q, nullptr);
+    for (std::size_t j = 0; j < k.file.observations[i].size(); ++j) {
+      const io::ColmapPoint3D& p = *points.at(k.file.observations[i][j].point);
+      ASSERT_EQ(q[j].track_length, p.track.size());
+      ASSERT_EQ(q[j].reprojection_error, static_cast<float>(p.error));
+      ASSERT_LT(q[j].age, 0);
+      ASSERT_EQ(q[j].triangulation_angle, 0.f);
+      ++checked;
+    }
+  }
+  EXPECT_GT(checked, 10000u);
+  for (const sparsify::Mode mode : {sparsify::Mode::kReplay, sparsify::Mode::kWhole}) {
+    const auto paper = decide(k, mode, params_for(f.model, core::CostModel::kPaper));
+    const auto track = decide(k, mode, params_for(f.model, core::CostModel::kTrack));
+    EXPECT_TRUE(differ(mode, paper, track)) << sparsify::to_string(mode);
+    EXPECT_TRUE(same_decisions(track, decide(k, mode, params_for(f.model, core::CostModel::kTrack))));
+    io::Keyframes bare = io::keyframes_from_colmap(f.model, io::KeyframeOrder::kName, f.sim);
+    for (auto& kf : bare.file.keyframes) kf.quality = nullptr;
+    sparsify::ModeResult r;
+    ASSERT_EQ(sparsify::decide(bare.file, mode, params_for(f.model, core::CostModel::kTrack), 20, &r),
+              core::Status::kOk);
+    EXPECT_TRUE(differ(mode, track, r.decisions)) << sparsify::to_string(mode);
+    EXPECT_GT(r.totals.track_fallback, 0u) << sparsify::to_string(mode);
+  }
+}
+
+TEST(BalBridge, TrackLengthIsEachPointsObservations) {
+  KEEPLESS_MAPS_NEED(maps_test::bal_problem());
+  io::BalProblem p;
+  std::string error;
+  ASSERT_TRUE(io::read_bal(maps_test::bal_problem(), &p, &error)) << error;
+  const io::Keyframes k = io::keyframes_from_bal(p, io::KeyframeOrder::kFile, {});
+  std::vector<std::uint32_t> views(p.num_points, 0);
+  for (const auto& obs : k.file.observations) {
+    for (const auto& o : obs) ++views[o.point];
+  }
+  std::size_t checked = 0;
+  for (std::size_t i = 0; i < k.file.keyframes.size(); ++i) {
+    const core::PointQuality* q = k.file.keyframes[i].quality;
+    if (k.file.observations[i].empty()) continue;
+    ASSERT_NE(q, nullptr);
+    for (std::size_t j = 0; j < k.file.observations[i].size(); ++j) {
+      ASSERT_EQ(q[j].track_length, views[k.file.observations[i][j].point]);
+      ASSERT_LT(q[j].reprojection_error, 0.f);  // BAL stores no error
+      ++checked;
+    }
+  }
+  EXPECT_EQ(checked, p.observations.size() - k.duplicates);
+}
+
+// The whole model at exactly the requested count with every image's floor:
+// on the fixture with the track cost, each count is met exactly, every
+// image keeps at least the floor, and the points taken by the order are a
+// prefix of the budget's order (smallest M* first) up to the floor's.
+TEST(ExactCount, KeepsExactlyTheCountWithEveryImagesFloor) {
+  KEEPLESS_MAPS_NEED(maps_test::fixture("sparse/images.bin"));
+  const Fixture f = read_fixture();
+  ASSERT_FALSE(::testing::Test::HasFailure());
+  const io::Keyframes k = io::keyframes_from_colmap(f.model, io::KeyframeOrder::kName, f.sim);
+  std::unordered_map<std::uint32_t, const io::ColmapImage*> by_id;
+  for (const auto& im : f.model.images) by_id[im.id] = &im;
+  std::vector<std::vector<core::PointId>> images;
+  for (const core::Keyframe& kf : k.file.keyframes) {
+    auto& ids = images.emplace_back();
+    for (const auto& p : by_id.at(static_cast<std::uint32_t>(kf.id))->points2D) {
+      if (p.point3D_id != io::kNoPoint3D) ids.push_back(p.point3D_id);
+    }
+  }
+  constexpr std::uint32_t kFloor = 30;
+  for (const std::uint64_t count : {800u, 2000u, 5000u}) {
+    core::Params p = params_for(f.model, core::CostModel::kTrack);
+    p.budget = {core::BudgetKind::kPoints, count, 0.0};
+    sparsify::ModeResult r;
+    ASSERT_EQ(sparsify::decide(k.file, sparsify::Mode::kWhole, p, 20, &r), core::Status::kOk);
+    ASSERT_EQ(r.thresholds.size(), r.decisions.size());
+    const sparsify::ExactCount e = sparsify::keep_exactly(images, kFloor, count, r.thresholds, &r.decisions);
+    EXPECT_TRUE(e.floor_fits) << count;
+    std::uint64_t kept = 0;
+    for (const auto& d : r.decisions) kept += d.verdict != core::Verdict::kCull;
+    EXPECT_EQ(kept, count);
+    EXPECT_EQ(e.kept, count);
+    const std::vector<std::uint32_t> per_image = sparsify::kept_observations(images, r.decisions);
+    for (std::size_t i = 0; i < images.size(); ++i) {
+      EXPECT_GE(per_image[i], std::min<std::size_t>(kFloor, images[i].size())) << "image " << i << ", count " << count;
+    }
+    EXPECT_GT(e.from_order, 0u);
+  }
+  // A count below what the floor needs: the floor's set, said so.
+  core::Params p = params_for(f.model, core::CostModel::kTrack);
+  p.budget = {core::BudgetKind::kPoints, 10, 0.0};
+  sparsify::ModeResult r;
+  ASSERT_EQ(sparsify::decide(k.file, sparsify::Mode::kWhole, p, 20, &r), core::Status::kOk);
+  const sparsify::ExactCount e = sparsify::keep_exactly(images, kFloor, 10, r.thresholds, &r.decisions);
+  EXPECT_FALSE(e.floor_fits);
+  EXPECT_GT(e.kept, 10u);
 }
 
 class CostModelsCli : public maps_test::MapsTest {};

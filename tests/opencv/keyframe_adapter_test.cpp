@@ -315,6 +315,63 @@ TEST(OpencvKeyframes, TrackedFlagsReachTheWindowAndProtect) {
   EXPECT_GT(sparsifier.summary().tracked, 0u);
 }
 
+// Point quality (KeyframeExtras::quality) reaches the window per mapped
+// observation, unknown for reserved-id unmapped keypoints; a wrong length
+// or a non-finite value is refused; under --cost track a pair keeps the
+// longest tracks first.
+TEST(OpencvKeyframes, PointQualityReachesTheWindowAndRanks) {
+  const core::Capacities caps = small_capacities();
+  core::Params params;
+  params.pair_capacity = 10;
+  params.cost_model = core::CostModel::kTrack;
+  params.track_terms = core::kTrackLength;
+  core::Window window(caps);
+  core::Sparsifier sparsifier(caps, params);
+  KeyframeAdapter adapter(caps);
+  Frame a = frame(0, 0, 30), b = frame(1, 0, 30);
+  std::vector<core::PointQuality> quality(30);
+  for (std::size_t i = 0; i < quality.size(); ++i) quality[i].track_length = static_cast<std::uint32_t>(1 + i);
+  std::vector<cv::KeyPoint> unmapped = {cv::KeyPoint(5.f, 5.f, 31.f)};
+  KeyframeExtras extras;
+  extras.unmapped = &unmapped;
+  extras.quality = &quality;
+  std::vector<core::PointQuality> short_quality(29);
+  KeyframeExtras bad = extras;
+  bad.quality = &short_quality;
+  EXPECT_EQ(adapter.add_keyframe(window, 1, centre_at(0), a.keypoints, a.ids, bad), Status::kSizeMismatch);
+  std::vector<core::PointQuality> nan_quality = quality;
+  nan_quality[3].reprojection_error = std::numeric_limits<float>::quiet_NaN();
+  bad.quality = &nan_quality;
+  EXPECT_EQ(adapter.add_keyframe(window, 1, centre_at(0), a.keypoints, a.ids, bad), Status::kNonFinite);
+  EXPECT_EQ(window.keyframe_count(), 0u);
+  ASSERT_EQ(adapter.add_keyframe(window, 1, centre_at(0), a.keypoints, a.ids, extras), Status::kOk);
+  ASSERT_EQ(adapter.add_keyframe(window, 2, centre_at(1), b.keypoints, b.ids, extras), Status::kOk);
+  const core::Keyframe& k = window.keyframe(1);
+  ASSERT_NE(k.quality, nullptr);
+  ASSERT_EQ(window.observation_count(1), 31u);
+  for (std::uint32_t i = 0; i < 30; ++i) EXPECT_EQ(k.quality[i].track_length, quality[i].track_length) << i;
+  EXPECT_EQ(k.quality[30].track_length, 0u);  // the unmapped keypoint's reserved id: unknown
+
+  ASSERT_EQ(sparsifier.run(window), core::Status::kOk);
+  EXPECT_EQ(sparsifier.summary().track_fallback, 0u);
+  std::vector<core::PointId> kept;
+  points_with_verdict(sparsifier, core::Verdict::kKeep, &kept);
+  ASSERT_FALSE(kept.empty());
+  // The pair keeps its 10 points of the longest tracks, by the level's
+  // log2 steps (1, 2-3, 4-7, 8-15, >= 16), ties to the smaller id.
+  const auto step = [](std::uint32_t t) { return std::min(4, static_cast<int>(std::floor(std::log2(t)))); };
+  int lowest_kept = 4, highest_culled = 0;
+  for (std::size_t i = 0; i < b.ids.size(); ++i) {
+    if (std::binary_search(kept.begin(), kept.end(), b.ids[i])) {
+      lowest_kept = std::min(lowest_kept, step(quality[i].track_length));
+    } else {
+      highest_culled = std::max(highest_culled, step(quality[i].track_length));
+    }
+  }
+  EXPECT_EQ(kept.size(), 10u);
+  EXPECT_GE(lowest_kept, highest_culled);
+}
+
 TEST(OpencvKeyframes, NativeUnmappedListCountsUnderAuthorsButNotInThePapersBox) {
   // Dense enough clutter (12 around each point) to move the authors' binned c_s.
   core::Capacities caps = small_capacities();

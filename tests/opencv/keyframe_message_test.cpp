@@ -68,6 +68,30 @@ TEST(OpencvKeyframeMessage, CarriesPoseAndObservationsAndRoundTrips) {
     to_keyframe_message(flagged, 12, 1600, 640, 480, false, &t);
     EXPECT_EQ(t.num_tracked, 2);
     EXPECT_EQ(t.tracked, (std::vector<std::int8_t>{1, 0}));
+    EXPECT_EQ(t.num_quality, 0);  // no quality given
+  }
+  {  // with point quality: one per observation sent, the unmapped ones unknown
+    std::vector<core::PointQuality> quality = {{12, 3, 0.75f, 4.5f}, {2, 0, 1.25f, 0.5f}};
+    KeyframeExtras extras;
+    extras.unmapped = &unmapped;
+    extras.quality = &quality;
+    KeyframeRecord rated;
+    ASSERT_EQ(adapter.convert(44, pose, kps, ids, extras, &rated), Status::kOk);
+    keepless::keyframe_t t;
+    to_keyframe_message(rated, 13, 1700, 640, 480, true, &t);
+    EXPECT_EQ(t.num_quality, 3);
+    EXPECT_EQ(t.track_length, (std::vector<std::int32_t>{12, 2, 0}));
+    EXPECT_EQ(t.age, (std::vector<std::int32_t>{3, 0, -1}));
+    EXPECT_EQ(t.reprojection_error, (std::vector<float>{0.75f, 1.25f, -1.f}));
+    EXPECT_EQ(t.triangulation_angle, (std::vector<float>{4.5f, 0.5f, 0.f}));
+    std::vector<std::uint8_t> buf(static_cast<std::size_t>(t.getEncodedSize()));
+    ASSERT_EQ(t.encode(buf.data(), 0, static_cast<int>(buf.size())), static_cast<int>(buf.size()));
+    keepless::keyframe_t back;
+    ASSERT_EQ(back.decode(buf.data(), 0, static_cast<int>(buf.size())), static_cast<int>(buf.size()));
+    EXPECT_EQ(back.track_length, t.track_length);
+    EXPECT_EQ(back.triangulation_angle, t.triangulation_angle);
+    to_keyframe_message(rated, 14, 1800, 640, 480, false, &t);
+    EXPECT_EQ(t.num_quality, 2);
   }
   to_keyframe_message(record, 10, 2000, 640, 480, true, &msg);
   ASSERT_EQ(msg.num_observations, 3);

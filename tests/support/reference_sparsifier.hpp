@@ -42,6 +42,7 @@ struct RefKeyframe {
   double fx = 0, fy = 0, cx = 0, cy = 0;  // fx = 0: unknown
   std::vector<std::pair<double, double>> unmapped;  // (u, v)
   std::vector<std::uint8_t> tracked;  // empty, or one flag per observation (core::Keyframe::tracked)
+  std::vector<core::PointQuality> quality;  // empty, or one per observation (core::Keyframe::quality)
 };
 
 struct RefPoint {
@@ -237,9 +238,37 @@ inline std::vector<std::uint64_t> ref_information_levels(const RefKeyframe& f) {
   return levels;
 }
 
+// One quality's level (core::CostModel::kTrack), written from the rules:
+// log2 steps for the track length and the age, thresholds for the error and
+// the angle; 2 where unknown.
+inline std::uint64_t ref_track_level(const core::PointQuality& q, std::uint8_t terms) {
+  std::uint64_t sum = 0;
+  const auto log_steps = [](double x) {  // 4 - min(4, floor(log2 x)), x >= 1
+    return static_cast<std::uint64_t>(4 - std::min(4.0, std::floor(std::log2(x))));
+  };
+  if (terms & core::kTrackLength) sum += q.track_length == 0 ? 2 : log_steps(q.track_length);
+  if (terms & core::kTrackAge) sum += q.age < 0 ? 2 : log_steps(q.age + 1.0);
+  if (terms & core::kTrackError) {
+    const float e = q.reprojection_error;
+    sum += e < 0 ? 2 : e < 0.5f ? 0 : e < 1 ? 1 : e < 2 ? 2 : e < 4 ? 3 : 4;
+  }
+  if (terms & core::kTrackAngle) {
+    const float a = q.triangulation_angle;
+    sum += a <= 0 ? 2 : a >= 8 ? 0 : a >= 4 ? 1 : a >= 2 ? 2 : a >= 1 ? 3 : 4;
+  }
+  return sum;
+}
+
 // The integer each observation's arc costs are a function of, per model.
 inline std::vector<std::uint64_t> ref_scores(const RefKeyframe& f, const core::Params& params) {
   if (params.cost_model == core::CostModel::kInformation) return ref_information_levels(f);
+  if (params.cost_model == core::CostModel::kTrack) {
+    std::vector<std::uint64_t> out;
+    for (std::size_t i = 0; i < f.observations.size(); ++i) {
+      out.push_back(ref_track_level(f.quality.empty() ? core::PointQuality{} : f.quality[i], params.track_terms));
+    }
+    return out;
+  }
   std::vector<std::uint64_t> out;
   for (std::size_t i = 0; i < f.observations.size(); ++i) {
     out.push_back(params.cost_model == core::CostModel::kAuthors ? ref_grid_neighbours(f, i, params)
@@ -252,7 +281,8 @@ inline std::int64_t ref_arc_cost(const core::Params& params, std::uint64_t a, st
   if (!(params.cost_terms & core::kSpatialCost)) return 0;
   switch (params.cost_model) {
     case core::CostModel::kAuthors: return ref_authors_spatial_cost(a, b);
-    case core::CostModel::kInformation: return static_cast<std::int64_t>(a + b);
+    case core::CostModel::kInformation:
+    case core::CostModel::kTrack: return static_cast<std::int64_t>(a + b);
     default: return ref_spatial_cost(a, b);
   }
 }
@@ -281,6 +311,7 @@ inline std::vector<RefKeyframe> ref_frames_of(const core::Window& window) {
       const core::Observation& o = window.observations(s)[i];
       f.observations.push_back({o.point, o.u, o.v, o.depth});
       if (kf.tracked != nullptr) f.tracked.push_back(kf.tracked[i]);
+      if (kf.quality != nullptr) f.quality.push_back(kf.quality[i]);
     }
     frames.push_back(f);
   }

@@ -75,8 +75,12 @@ const std::vector<cli::Flag> kFlags = {
     {"--ablation-all", nullptr, "every ablation variant"},
     {"--scope", "window|newest", "keepless's decision scope (core::Params scope)"},
     {"--floor", "L", "keepless's coverage floor (core::Params coverage_floor)"},
-    {"--cost", "paper|authors|information", "keepless's cost model; with --kept-fraction the real VO\n"
-                                            "decides the new keyframe's points"},
+    {"--cost", "paper|authors|information|track", "keepless's cost model; with --kept-fraction the real VO\n"
+                                                  "decides the new keyframe's points; track: the real VO\n"
+                                                  "sends each point's map observations, age, reprojection\n"
+                                                  "error and triangulation angle"},
+    {"--track-terms", "LIST", "the qualities --cost track sums, comma-separated from length, age,\n"
+                              "error, angle (default all four)"},
     {"--maturity", "A", "tracking-safe culling: points first seen in the newest A window keyframes\n"
                         "are not decided yet (core::Params maturity_keyframes); every selector\n"
                         "culls only what keepless decided, so the baselines get the same guard\n"
@@ -131,7 +135,7 @@ struct Args {
   int max_keyframes = -1, keypoints = -1, window = -1, ba_iterations = -1, image_frames = -1;
   bool window_sizes = false;
   bool noise_free = false, baselines = true, ablation = true, ablation_all = false;
-  keepless::core::Params policy;  // scope, coverage_floor, cost_model, maturity_keyframes; the rest is set per variant
+  keepless::core::Params policy;  // scope, coverage_floor, cost_model, maturity_keyframes, track_terms; the rest is set per variant
   bool tracked_flags = false;     // --tracked-flags (the real VO)
   bool defer_fixed = false;       // --defer-fixed (the real VO)
 };
@@ -247,7 +251,11 @@ Args parse(int argc, char** argv) {
     else if (f == "--cost") {
       const std::string v = val();
       if (!keepless::core::parse_cost_model(v.c_str(), &a.policy.cost_model))
-        fail("--cost: expected paper, authors or information, got '" + v + "'");
+        fail("--cost: expected paper, authors, information or track, got '" + v + "'");
+    } else if (f == "--track-terms") {
+      const std::string v = val();
+      if (!keepless::core::parse_track_terms(v.c_str(), &a.policy.track_terms))
+        fail("--track-terms: expected a comma-separated list of length, age, error, angle, got '" + v + "'");
     }
     else std::exit(cli::usage_error(kTool, cli::unknown_option(f)));
   }
@@ -347,6 +355,7 @@ ke::VariantSpec variant(const keepless::core::Params& policy, const std::string&
   v.params.scope = policy.scope;
   v.params.coverage_floor = policy.coverage_floor;
   v.params.cost_model = policy.cost_model;
+  v.params.track_terms = policy.track_terms;
   v.params.maturity_keyframes = policy.maturity_keyframes;
   v.params.pair_capacity = std::isfinite(fraction) ? keepless::core::Params{}.pair_capacity : M;
   if (std::isfinite(fraction)) v.params.budget = {keepless::core::BudgetKind::kFraction, 0, fraction};
@@ -468,6 +477,9 @@ int main(int argc, char** argv) {
   if (a.tracked_flags) summary.settings += ", tracked flags";
   if (a.policy.defer_keyframes > 0) summary.settings += ", defer " + std::to_string(a.policy.defer_keyframes);
   if (a.defer_fixed) summary.settings += ", excluded points fixed in BA";
+  if (a.policy.cost_model == keepless::core::CostModel::kTrack) {
+    summary.settings += ", track terms " + std::to_string(a.policy.track_terms);
+  }
 
   std::vector<std::pair<std::string, ke::WindowSizes>> sizes;  // --window-sizes
   std::map<std::string, ke::WindowSizes> group_sizes;

@@ -21,6 +21,7 @@
 #include "keepless/opencv/keyframe_adapter.hpp"
 #include "matching.hpp"
 #include "metrics.hpp"
+#include "point_quality.hpp"
 #include "point_selection.hpp"
 #include "prng.hpp"
 #include "vo_ba.hpp"
@@ -640,6 +641,7 @@ void Vo::select_points(int kf, const std::vector<int>& local) {
   std::vector<core::PointId> ids;
   std::vector<double> depths;
   std::vector<std::uint8_t> tracked;
+  std::vector<core::PointQuality> quality;
   // The paper's box N(p, f) has counted the unmapped detections as
   // reserved-id observations since the VO first ran; core's native list is
   // what kAuthors' grid reads (and the box does not), so `paper` keeps the
@@ -650,6 +652,8 @@ void Vo::select_points(int kf, const std::vector<int>& local) {
                                                                           : opencv::UnmappedAs::kKeypointList;
   extras.intrinsics = {cam_.fx, cam_.fy, cam_.cx, cam_.cy};
   extras.depths = &depths;
+  const bool send_quality = opt_.params.cost_model == core::CostModel::kTrack;
+  extras.quality = send_quality ? &quality : nullptr;
   for (int k : ordered) {
     const KeyFrame& f = map_.kfs[static_cast<std::size_t>(k)];
     keypoints.clear();
@@ -657,6 +661,7 @@ void Vo::select_points(int kf, const std::vector<int>& local) {
     ids.clear();
     depths.clear();
     tracked.clear();
+    quality.clear();
     // Only the new keyframe's flags are read (core::Keyframe::tracked).
     const bool flags = opt_.tracked_flags && k == kf && f.tracked.size() == f.mp.size();
     extras.tracked = flags ? &tracked : nullptr;
@@ -668,6 +673,7 @@ void Vo::select_points(int kf, const std::vector<int>& local) {
         ids.push_back(static_cast<core::PointId>(f.mp[i]));
         if (flags) tracked.push_back(f.tracked[i]);
         depths.push_back((f.Tcw * map_.points[static_cast<std::size_t>(f.mp[i])].X).z());
+        if (send_quality) quality.push_back(point_quality(map_, f.mp[i], kf, cam_));
       } else {
         unmapped.push_back(f.f.keys[i]);
       }

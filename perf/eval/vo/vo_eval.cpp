@@ -79,6 +79,7 @@ bool evaluate_real_vo(const VoInput& in, const VoEvalOptions& o, std::vector<Com
     vo.params.scope = o.policy.scope;
     vo.params.coverage_floor = o.policy.coverage_floor;
     vo.params.cost_model = o.policy.cost_model;
+    vo.params.track_terms = o.policy.track_terms;
     vo.params.maturity_keyframes = o.policy.maturity_keyframes;
     vo.params.defer_keyframes = o.policy.defer_keyframes;
     vo.tracked_flags = o.tracked_flags;

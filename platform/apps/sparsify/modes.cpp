@@ -60,6 +60,7 @@ void add_totals(const core::Summary& s, core::Summary* t) {
   t->floor_short += s.floor_short;
   t->guarded += s.guarded;  // tracking-safe culling's counts, likewise
   t->tracked += s.tracked;
+  t->track_fallback += s.track_fallback;  // keyframes without point quality, per slide
 }
 
 // Final counts over the decisions.
@@ -88,6 +89,7 @@ core::Status whole(const core::WindowFile& f, const core::Params& params, ModeRe
   const core::Status s = sparsifier.run(window);
   if (s != core::Status::kOk) return s;
   out->decisions.assign(sparsifier.decisions(), sparsifier.decisions() + sparsifier.decision_count());
+  if (const std::uint32_t* t = sparsifier.keep_thresholds()) out->thresholds.assign(t, t + sparsifier.decision_count());
   out->totals = sparsifier.summary();
   out->slides = 1;
   out->capacities = caps;
@@ -118,15 +120,25 @@ core::Status replay(const core::WindowFile& f, const core::Params& params, std::
   const std::size_t n = f.keyframes.size();
   std::vector<std::vector<core::Observation>> live(n);
   std::vector<std::vector<std::uint32_t>> live_slots(n);
+  // Point quality follows the live observations (Keyframe::quality is per observation).
+  std::vector<std::vector<core::PointQuality>> live_quality(n);
+  const auto add_live = [&](core::Window* to, std::size_t j) {
+    core::Keyframe kf = f.keyframes[j];
+    if (kf.quality != nullptr) kf.quality = live_quality[j].data();
+    return to->add_keyframe(kf, live[j].data(), static_cast<std::uint32_t>(live[j].size()));
+  };
   std::vector<bool> changed(n, false);  // lost points since it entered the active window
   std::deque<std::size_t> members;
   std::vector<core::PointId> culled_now;
   for (std::size_t i = 0; i < n; ++i) {
-    for (const core::Observation& o : f.observations[i]) {
+    const core::PointQuality* quality = f.keyframes[i].quality;
+    for (std::size_t k = 0; k < f.observations[i].size(); ++k) {
+      const core::Observation& o = f.observations[i][k];
       const std::uint32_t s = slot_of(o.point);
       if (culled[s]) continue;
       live[i].push_back(o);
       live_slots[i].push_back(s);
+      if (quality != nullptr) live_quality[i].push_back(quality[k]);
     }
     // The spare window: the active one minus its oldest keyframe when full,
     // unchanged keyframes copied (keeping their stamps, as the node's window
@@ -135,18 +147,17 @@ core::Status replay(const core::WindowFile& f, const core::Params& params, std::
     const std::size_t first = members.size() == K ? 1 : 0;
     for (std::size_t m = first; m < members.size(); ++m) {
       const std::size_t j = members[m];
-      const core::Status s = changed[j] ? spare->add_keyframe(f.keyframes[j], live[j].data(),
-                                                              static_cast<std::uint32_t>(live[j].size()))
-                                        : spare->copy_keyframe(*active, static_cast<std::uint32_t>(m));
+      const core::Status s =
+          changed[j] ? add_live(spare, j) : spare->copy_keyframe(*active, static_cast<std::uint32_t>(m));
       if (s != core::Status::kOk) return s;
     }
-    core::Status s =
-        spare->add_keyframe(f.keyframes[i], live[i].data(), static_cast<std::uint32_t>(live[i].size()));
+    core::Status s = add_live(spare, i);
     if (s != core::Status::kOk) return s;
     std::swap(active, spare);
     if (first == 1) {
       live[members.front()].clear();
       live_slots[members.front()].clear();
+      live_quality[members.front()].clear();
       members.pop_front();
     }
     members.push_back(i);
@@ -174,11 +185,13 @@ core::Status replay(const core::WindowFile& f, const core::Params& params, std::
         if (culled[live_slots[j][r]]) continue;
         live[j][w] = live[j][r];
         live_slots[j][w] = live_slots[j][r];
+        if (!live_quality[j].empty()) live_quality[j][w] = live_quality[j][r];
         ++w;
       }
       if (w != live[j].size()) changed[j] = true;
       live[j].resize(w);
       live_slots[j].resize(w);
+      if (!live_quality[j].empty()) live_quality[j].resize(w);
     }
   }
   out->capacities = caps;

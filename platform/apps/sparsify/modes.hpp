@@ -33,6 +33,9 @@ struct ModeResult {
   std::uint32_t slides = 0;
   core::Capacities capacities{0, 0, 0, 0};  // what the windows were sized to
   std::size_t memory_bytes = 0;
+  // kWhole with a keep budget: each decision's keep threshold M*
+  // (core::Sparsifier::keep_thresholds()), indexed like `decisions`.
+  std::vector<std::uint32_t> thresholds;
 };
 
 // Decides `keyframes` (in their order). kOk, or the first failing status.

@@ -126,9 +126,10 @@ Keyframes keyframes_from_colmap(const ColmapModel& model, KeyframeOrder order, c
   }
   std::unordered_map<std::uint32_t, const ColmapCamera*> cameras;
   for (const ColmapCamera& c : model.cameras) cameras.emplace(c.id, &c);
-  std::unordered_map<std::uint64_t, const double*> xyz;
-  for (const ColmapPoint3D& p : model.points) xyz.emplace(p.id, p.xyz);
+  std::unordered_map<std::uint64_t, const ColmapPoint3D*> points;
+  for (const ColmapPoint3D& p : model.points) points.emplace(p.id, &p);
   Keyframes out;
+  out.quality.resize(im.size());
   if (unmapped) {
     std::size_t total = 0;
     for (const ColmapImage& image : im) {
@@ -155,6 +156,7 @@ Keyframes keyframes_from_colmap(const ColmapModel& model, KeyframeOrder order, c
     detail::quaternion_matrix(image.qvec, r);
     const std::size_t first_unmapped = out.unmapped.size();
     std::vector<core::Observation> obs;
+    std::vector<core::PointQuality>& quality = out.quality[out.file.keyframes.size()];
     seen.clear();
     for (const ColmapPoint2D& p : image.points2D) {
       if (p.point3D_id == kNoPoint3D) {
@@ -166,14 +168,20 @@ Keyframes keyframes_from_colmap(const ColmapModel& model, KeyframeOrder order, c
         continue;
       }
       core::Observation& o = obs.emplace_back(core::Observation{p.point3D_id, p.x, p.y});
-      const auto x = xyz.find(p.point3D_id);
-      if (x != xyz.end()) {
-        const double* X = x->second;
+      core::PointQuality& q = quality.emplace_back();
+      const auto x = points.find(p.point3D_id);
+      if (x != points.end()) {
+        const double* X = x->second->xyz;
         o.depth = metric_depth(r[6] * X[0] + r[7] * X[1] + r[8] * X[2] + image.tvec[2], to_metric_frame);
+        q.track_length = static_cast<std::uint32_t>(x->second->track.size());
+        if (std::isfinite(x->second->error) && x->second->error >= 0) {
+          q.reprojection_error = static_cast<float>(x->second->error);
+        }
       }
     }
     kf.unmapped_count = static_cast<std::uint32_t>(out.unmapped.size() - first_unmapped);
     if (kf.unmapped_count > 0) kf.unmapped = out.unmapped.data() + first_unmapped;
+    kf.quality = quality.empty() ? nullptr : quality.data();
     out.file.keyframes.push_back(kf);
     out.file.keyframe_lines.push_back(0);
     out.file.observations.push_back(std::move(obs));
@@ -216,6 +224,19 @@ Keyframes keyframes_from_bal(const BalProblem& problem, KeyframeOrder /*order: i
     double P[3];
     detail::angle_axis_rotate(cam, &problem.point_params[3 * std::size_t{o.point}], P);
     out.file.observations[o.camera].push_back({o.point, o.x, o.y, metric_depth(-(P[2] + cam[5]), to_metric_frame)});
+  }
+  // Track lengths: each point's observations (duplicates in one camera once).
+  std::vector<std::uint32_t> views(problem.num_points, 0);
+  for (const auto& obs : out.file.observations) {
+    for (const core::Observation& o : obs) ++views[o.point];
+  }
+  out.quality.resize(problem.num_cameras);
+  for (std::uint32_t i = 0; i < problem.num_cameras; ++i) {
+    for (const core::Observation& o : out.file.observations[i]) {
+      core::PointQuality& q = out.quality[i].emplace_back();
+      q.track_length = views[o.point];
+    }
+    if (!out.quality[i].empty()) out.file.keyframes[i].quality = out.quality[i].data();
   }
   out.file.needs = core::compute_needs(out.file);
   return out;

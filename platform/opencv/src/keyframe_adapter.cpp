@@ -85,6 +85,7 @@ KeyframeAdapter::KeyframeAdapter(const core::Capacities& capacities) {
   record_.observations.reserve(capacities.max_observations);
   record_.unmapped.reserve(capacities.max_unmapped_keypoints);
   record_.tracked.reserve(capacities.max_observations);
+  record_.quality.reserve(capacities.max_observations);
   sorted_.reserve(capacities.max_observations);
 }
 
@@ -97,6 +98,12 @@ Status KeyframeAdapter::convert(core::KeyframeId id, const CameraPose& pose,
   if (keypoints.size() != point_ids.size()) return Status::kSizeMismatch;
   if (depths != nullptr && depths->size() != point_ids.size()) return Status::kSizeMismatch;
   if (extras.tracked != nullptr && extras.tracked->size() != point_ids.size()) return Status::kSizeMismatch;
+  if (extras.quality != nullptr) {
+    if (extras.quality->size() != point_ids.size()) return Status::kSizeMismatch;
+    for (const core::PointQuality& q : *extras.quality) {
+      if (!std::isfinite(q.reprojection_error) || !std::isfinite(q.triangulation_angle)) return Status::kNonFinite;
+    }
+  }
   if (!pose.centre.allFinite() || !pose.orientation.coeffs().allFinite()) return Status::kNonFinite;
   if (std::abs(pose.orientation.norm() - 1.0) > kRotationTolerance) return Status::kNotRotation;
   const Intrinsics& in = extras.intrinsics;
@@ -158,6 +165,12 @@ Status KeyframeAdapter::convert(core::KeyframeId id, const CameraPose& pose,
     out->tracked.resize(out->observations.size(), 0);
   }
   out->keyframe.tracked = out->tracked.empty() ? nullptr : out->tracked.data();
+  out->quality.clear();
+  if (extras.quality != nullptr) {
+    out->quality.assign(extras.quality->begin(), extras.quality->end());
+    out->quality.resize(out->observations.size());
+  }
+  out->keyframe.quality = out->quality.empty() ? nullptr : out->quality.data();
   return Status::kOk;
 }
 

@@ -21,6 +21,10 @@ struct Capacities {
   // Observations of one keyframe; 0: max_observations. The per-keyframe
   // scratch (duplicate check, N(p, f)) is sized by it, not by the window's.
   std::uint32_t max_keyframe_observations = 0;
+  // Hold Keyframe::quality (16 bytes per observation, max_observations of
+  // them), for CostModel::kTrack; false: a keyframe's quality is not held
+  // (the window's keyframes carry none, and kTrack ranks by the window).
+  bool hold_quality = true;
 };
 
 // What one keyframe may carry: max_keyframe_observations, at most the
@@ -61,8 +65,25 @@ enum class Scope : std::uint8_t { kWindow, kNewest };
 //     without intrinsics, with fewer than 4 observations with a depth (every
 //     leverage is then exactly the mean) or with a singular L, cost the
 //     neutral level 2.
+//   kTrack (beyond the paper): c_s is replaced by what the map knows about
+//     the point beyond the window (Keyframe::quality, per observation): its
+//     observations in the whole map, its age, its reprojection error and its
+//     triangulation angle, each quantised to a level 0 (best) .. 4 and the
+//     levels of Params::track_terms summed per observation; the arc costs
+//     the sum of its two observations' sums. An unknown value (or a keyframe
+//     without quality, Summary::track_fallback) costs the neutral level 2, so
+//     the window's connectivity c_c alone ranks what the map did not say.
 // c_c, the cost terms' mask and theta apply to every model.
-enum class CostModel : std::uint8_t { kPaper, kAuthors, kInformation };
+enum class CostModel : std::uint8_t { kPaper, kAuthors, kInformation, kTrack };
+
+// Bits of Params::track_terms: which of a point's qualities CostModel::kTrack
+// sums (see PointQuality).
+enum TrackTerm : std::uint8_t {
+  kTrackLength = 1,
+  kTrackAge = 2,
+  kTrackError = 4,
+  kTrackAngle = 8,
+};
 
 // --- Keep budgets ---------------------------------------------------------
 // A budget states how much to keep instead of the pair capacity M. With the
@@ -130,14 +151,21 @@ struct Params {
   // everything else unchanged). Read by the callers that hold the culls (the
   // node, the adapter's users), not by the Sparsifier.
   std::uint32_t defer_keyframes = 0;
+  // The qualities CostModel::kTrack sums (TrackTerm bits; 0: every arc
+  // costs the same c_s, only c_c ranks).
+  std::uint8_t track_terms = kTrackLength | kTrackAge | kTrackError | kTrackAngle;
 };
 
 // The options' names as command lines spell them: "window", "newest";
-// "paper", "authors", "information". parse_* return false (and leave *out
+// "paper", "authors", "information", "track". parse_* return false (and leave *out
 // alone) for any other text.
 const char* to_string(Scope scope);
 const char* to_string(CostModel model);
 bool parse_scope(const char* text, Scope* out);
 bool parse_cost_model(const char* text, CostModel* out);
+// Params::track_terms from a comma-separated list of "length", "age",
+// "error", "angle" (each at most once); false (and *out unchanged) for
+// anything else, an empty list included.
+bool parse_track_terms(const char* text, std::uint8_t* out);
 
 }  // namespace keepless::core

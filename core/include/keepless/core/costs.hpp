@@ -56,4 +56,16 @@ constexpr std::uint32_t kNeutralInformationLevel = 2;
 void information_levels(const Keyframe& kf, const Observation* observations, std::uint32_t count,
                         std::uint32_t* out);
 
+// CostModel::kTrack's level of every observation of a keyframe: the sum over
+// the qualities in `terms` (TrackTerm bits) of each one's level, 0 (best) ..
+// 4, from kf.quality (absent, or a value unknown: the neutral 2):
+//   track length T: 4 - min(4, floor(log2 T))  (1: 4, 2-3: 3, .. >= 16: 0);
+//   age a: 4 - min(4, floor(log2(a + 1)))       (0: 4, 1-2: 3, .. >= 15: 0);
+//   reprojection error e: < 0.5 px 0, < 1 1, < 2 2, < 4 3, else 4;
+//   triangulation angle: >= 8 deg 0, >= 4 1, >= 2 2, >= 1 3, else 4.
+// Integer shifts and comparisons with constants only: exact everywhere.
+constexpr std::uint32_t kNeutralTrackLevel = 2;
+void track_levels(const Keyframe& kf, std::uint32_t count, std::uint8_t terms,
+                  std::uint32_t* out);
+
 }  // namespace keepless::core

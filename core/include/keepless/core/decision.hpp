@@ -51,6 +51,9 @@ struct Summary {
   // `skipped`, each point in one of them.
   std::uint32_t guarded = 0;
   std::uint32_t tracked = 0;
+  // CostModel::kTrack: window keyframes without point quality
+  // (Keyframe::quality), priced by the window's connectivity alone.
+  std::uint32_t track_fallback = 0;
 };
 
 }  // namespace keepless::core

@@ -17,6 +17,16 @@ struct Keypoint {
   double v = 0;
 };
 
+// What the map knows about a point beyond the window, as the SLAM knew it
+// when it sent the keyframe (CostModel::kTrack). Unknown values: 0 track
+// length, negative age, negative error, angle <= 0.
+struct PointQuality {
+  std::uint32_t track_length = 0;   // observations of the point in the whole map
+  std::int32_t age = -1;            // keyframes since the point was made (0: by this one)
+  float reprojection_error = -1.f;  // pixels (BA residual, COLMAP's ERROR)
+  float triangulation_angle = 0.f;  // degrees, largest between its observing rays
+};
+
 struct Keyframe {
   KeyframeId id = 0;
   double centre[3] = {0, 0, 0};          // camera centre, metres
@@ -37,6 +47,11 @@ struct Keyframe {
   // not read. add_keyframe copies them; a keyframe read back from a Window
   // points at the window's copy.
   const std::uint8_t* tracked = nullptr;
+  // Optional point quality, one per observation in add_keyframe's order
+  // (null: none; CostModel::kTrack). Copied like `tracked` (unless
+  // Capacities::hold_quality is false); a non-finite error or angle is
+  // refused.
+  const PointQuality* quality = nullptr;
 };
 
 struct Observation {

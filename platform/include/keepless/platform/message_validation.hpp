@@ -56,6 +56,11 @@ constexpr std::size_t kKeyframeOptionalCountBytes = 12;
 // After the arrays: int64 publisher_id, int32 num_tracked, then its int8
 // flags (0 or num_observations of them).
 constexpr std::size_t kKeyframeTrailerBytes = 12;
+// After the flags: int32 num_quality, then per observation int32
+// track_length, int32 age, float reprojection_error, float
+// triangulation_angle (four arrays of num_quality each).
+constexpr std::size_t kKeyframeQualityCountBytes = 4;
+constexpr std::size_t kKeyframeBytesPerQuality = 16;
 constexpr std::size_t kMapEventCountOffset = 25;          // 3 x int32: deleted, merged, removed
 constexpr std::size_t kMapEventHeaderBytes = 37;
 constexpr std::size_t kMapEventTrailerBytes = 8;          // int64 publisher_id

@@ -48,6 +48,9 @@ struct NodeCounters {
   std::uint64_t points_excluded = 0;
   std::uint64_t points_deleted = 0;
   std::uint64_t deferred_observations = 0;
+  // --cost track: accepted keyframes without point quality (num_quality 0),
+  // priced by the window's connectivity alone.
+  std::uint64_t track_fallback = 0;
 };
 
 class Node {

@@ -98,6 +98,7 @@ class SlidingWindow {
   std::vector<std::uint32_t> order_scratch_;        // one keyframe, for de-duplication
   std::vector<std::uint8_t> keep_scratch_;
   std::vector<std::uint8_t> tracked_scratch_;       // one keyframe's tracked flags, beside obs_scratch_
+  std::vector<core::PointQuality> quality_scratch_;  // one keyframe's point quality, beside obs_scratch_
   std::vector<core::PointId> drop_table_;           // sorted
   std::vector<Merge> merge_table_;                  // sorted by from
   std::uint32_t merges_effective_ = 0;

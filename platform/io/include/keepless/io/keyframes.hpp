@@ -23,6 +23,11 @@
 //   which leaves every leverage unchanged). Not finite or <= 0: 0 (unknown).
 // - Unmapped keypoints (COLMAP only, and only with `unmapped`): an image's
 //   2D points that name no 3D point. BAL stores observations only, so none.
+// - Point quality (CostModel::kTrack), per observation: COLMAP, the track's
+//   length (its elements, all images) and its ERROR (mean reprojection
+//   error, pixels); BAL, the point's observations (track length) only. Age
+//   and triangulation angle are unknown (neither model orders its images in
+//   time; the angle is left to the SLAM that sends it).
 
 #include <array>
 #include <cstdint>
@@ -62,6 +67,9 @@ struct Keyframes {
   // keyframes point into it, so Keyframes moves (which keeps the storage)
   // but does not copy.
   std::vector<core::Keypoint> unmapped;
+  // Every keyframe's point quality (one per observation), in keyframe order:
+  // the keyframes point into it.
+  std::vector<std::vector<core::PointQuality>> quality;
 
   Keyframes() = default;
   Keyframes(Keyframes&&) = default;

@@ -15,7 +15,8 @@
 // CostModel::kAuthors counts.
 //
 // Intrinsics and depths (KeyframeExtras) are what CostModel::kInformation
-// needs; the other models ignore them.
+// needs, point quality what CostModel::kTrack needs; the other models
+// ignore them.
 
 #include <cstdint>
 #include <vector>
@@ -93,15 +94,22 @@ struct KeyframeExtras {
   // newest window keyframe those points are never culled. A length other
   // than point_ids' is kSizeMismatch.
   const std::vector<std::uint8_t>* tracked = nullptr;
+  // Per mapped keypoint (in point_ids' order), what the map knows about its
+  // point (core::PointQuality: map observations, age, reprojection error,
+  // triangulation angle) for CostModel::kTrack; reserved-id unmapped
+  // keypoints get the unknown quality. A non-finite error or angle is
+  // kNonFinite, a length other than point_ids' kSizeMismatch.
+  const std::vector<core::PointQuality>* quality = nullptr;
 };
 
 // A keyframe converted for the window: what add_keyframe and keyframe_t take.
 struct KeyframeRecord {
-  core::Keyframe keyframe;  // keyframe.unmapped/.tracked point into `unmapped`/`tracked` (re-point them after a copy)
+  core::Keyframe keyframe;  // keyframe.unmapped/.tracked/.quality point into the vectors below (re-point them after a copy)
   std::vector<core::Observation> observations;  // mapped first, then reserved-id unmapped
   std::uint32_t mapped = 0;                     // observations[0, mapped) are map points
   std::vector<core::Keypoint> unmapped;         // UnmappedAs::kKeypointList
   std::vector<std::uint8_t> tracked;            // per observation, or empty (keyframe.tracked points here)
+  std::vector<core::PointQuality> quality;      // per observation, or empty (keyframe.quality points here)
 };
 
 // Converts keyframes into a window. Its buffers are reserved once from the

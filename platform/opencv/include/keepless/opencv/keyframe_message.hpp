@@ -15,7 +15,8 @@ namespace keepless::opencv {
 // or the keyframe's native list as unmapped_u/v), so the node's N(p, f)
 // counts them as the window's did. The optional arrays carry the observations'
 // depths when any is known and the keyframe's intrinsics when set (the
-// information cost model), and the tracked flags when the record has them;
+// information cost model), the tracked flags and the point quality (the
+// track cost model) when the record has them;
 // publisher_id names this process to the node's stream-order policy. No status: the record was validated when it was made.
 inline void to_keyframe_message(const KeyframeRecord& record, std::int64_t sequence, std::int64_t utime,
                                 std::int32_t image_width, std::int32_t image_height, bool with_unmapped,
@@ -62,6 +63,20 @@ inline void to_keyframe_message(const KeyframeRecord& record, std::int64_t seque
   out->num_tracked = tracked ? static_cast<std::int32_t>(n) : 0;
   out->tracked.resize(tracked ? n : 0);
   for (std::uint32_t i = 0; tracked && i < n; ++i) out->tracked[i] = static_cast<std::int8_t>(record.tracked[i] != 0);
+  // Point quality (KeyframeExtras::quality), one per observation sent.
+  const std::uint32_t q = record.quality.empty() ? 0 : n;
+  out->num_quality = static_cast<std::int32_t>(q);
+  out->track_length.resize(q);
+  out->age.resize(q);
+  out->reprojection_error.resize(q);
+  out->triangulation_angle.resize(q);
+  for (std::uint32_t i = 0; i < q; ++i) {
+    const core::PointQuality& p = record.quality[i];
+    out->track_length[i] = static_cast<std::int32_t>(std::min<std::uint32_t>(p.track_length, INT32_MAX));
+    out->age[i] = p.age;
+    out->reprojection_error[i] = p.reprojection_error;
+    out->triangulation_angle[i] = p.triangulation_angle;
+  }
 }
 
 }  // namespace keepless::opencv

@@ -1,0 +1,30 @@
+#pragma once
+// A whole model kept at exactly a requested count of points with every
+// image's floor (keepless_maps_bench's keepless_exact rows).
+
+#include <cstdint>
+#include <vector>
+
+#include "keepless/core/decision.hpp"
+
+namespace keepless::sparsify {
+
+struct ExactCount {
+  std::uint64_t kept = 0;      // points not culled at the end (== count unless the floor alone needs more)
+  std::uint64_t from_order = 0;  // kept by the threshold order (the rest: the floor's and the skipped)
+  std::uint32_t restored = 0;  // kept by the floor
+  bool floor_fits = true;      // false: the floor alone keeps more than `count`
+};
+
+// `decisions` (ascending id, every point of the model) and `thresholds` (each
+// decision's keep threshold M*, core::Sparsifier::keep_thresholds(): 0 for a
+// skipped point) from one budgeted whole-model decision. Points are taken in
+// the budget's order (smallest M*, then smaller id): the largest prefix that,
+// with apply_floor's restorations and the skipped points (never culled),
+// stays within `count` (binary search), then the next points of the order
+// until exactly `count` are kept. Adding points never breaks the floor.
+ExactCount keep_exactly(const std::vector<std::vector<core::PointId>>& images, std::uint32_t floor,
+                        std::uint64_t count, const std::vector<std::uint32_t>& thresholds,
+                        std::vector<core::PointDecision>* decisions);
+
+}  // namespace keepless::sparsify
