@@ -268,23 +268,16 @@ int main(int argc, char** argv) {
       {"--work", "DIR", "where the models and BA runs go (default: a new /tmp/keepless_maps_bench_*)"},
       {"--cost", "paper|authors|information|track", "keepless's cost model (default paper)"},
   };
+  const std::string help =
+      cli::usage("usage: keepless_maps_bench [options]", flags,
+                 "Sparsifies the 51-image KITTI 06 COLMAP fixture at each M (replay, whole,\n"
+                 "and baselines at replay's count), re-solves every model with `colmap\n"
+                 "bundle_adjuster` and prints accuracy per row; the last line is a JSON summary.");
   for (int i = 1; i < argc; ++i) {
     const cli::Flag* flag = nullptr;
     const char* value = nullptr;
-    std::string error;
-    switch (cli::next(flags, argc, argv, &i, &flag, &value, &error)) {
-      case cli::Arg::kHelp:
-        std::fputs(cli::usage("usage: keepless_maps_bench [options]", flags,
-                              "Sparsifies the 51-image KITTI 06 COLMAP fixture at each M (replay, whole,\n"
-                              "and baselines at replay's count), re-solves every model with `colmap\n"
-                              "bundle_adjuster` and prints accuracy per row; the last line is a JSON summary.")
-                       .c_str(),
-                   stdout);
-        return 0;
-      case cli::Arg::kVersion: return cli::print_version(kTool);
-      case cli::Arg::kError: return cli::usage_error(kTool, error);
-      case cli::Arg::kFlag: break;
-    }
+    int status = 0;
+    if (!cli::next_flag(kTool, help, flags, argc, argv, &i, &flag, &value, &status)) return status;
     const std::string f = flag->name;
     std::uint64_t n = 0;
     const auto count = [&](std::uint64_t lo, std::uint64_t hi) {

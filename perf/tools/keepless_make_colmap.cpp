@@ -32,22 +32,14 @@ int main(int argc, char** argv) {
   std::string out;
   std::uint32_t images = 1000, points = 100000;
   std::uint64_t seed = 1;
+  const std::string help = cli::usage("usage: keepless_make_colmap --out DIR [options]", flags,
+                                      "Writes a synthetic COLMAP binary model: a PINHOLE camera driving straight\n"
+                                      "ahead, 1 m per image, tracks of mean length ~6. Deterministic for a seed.");
   for (int i = 1; i < argc; ++i) {
     const cli::Flag* flag = nullptr;
     const char* value = nullptr;
-    std::string error;
-    switch (cli::next(flags, argc, argv, &i, &flag, &value, &error)) {
-      case cli::Arg::kHelp:
-        std::fputs(cli::usage("usage: keepless_make_colmap --out DIR [options]", flags,
-                              "Writes a synthetic COLMAP binary model: a PINHOLE camera driving straight\n"
-                              "ahead, 1 m per image, tracks of mean length ~6. Deterministic for a seed.")
-                       .c_str(),
-                   stdout);
-        return 0;
-      case cli::Arg::kVersion: return cli::print_version(kTool);
-      case cli::Arg::kError: return cli::usage_error(kTool, error);
-      case cli::Arg::kFlag: break;
-    }
+    int status = 0;
+    if (!cli::next_flag(kTool, help, flags, argc, argv, &i, &flag, &value, &status)) return status;
     const std::string f = flag->name;
     std::uint64_t n = 0;
     const bool number = keepless::core::parse_uint64(value, &n);

@@ -56,21 +56,14 @@ int main(int argc, char** argv) {
       return usage_error(std::string("unknown workload '") + argv[i + 1] + "'");
     }
   }
+  const std::string help =
+      keepless::cli::usage("usage: keepless_make_window --out FILE [options]", kFlags,
+                           "Explicit counts override the preset. Prints one JSON line with the counts.");
   for (int i = 1; i < argc; ++i) {
     const keepless::cli::Flag* entry = nullptr;
     const char* value = nullptr;
-    std::string error;
-    switch (keepless::cli::next(kFlags, argc, argv, &i, &entry, &value, &error)) {
-      case keepless::cli::Arg::kHelp:
-        std::fputs(keepless::cli::usage("usage: keepless_make_window --out FILE [options]", kFlags,
-                                        "Explicit counts override the preset. Prints one JSON line with the counts.")
-                       .c_str(),
-                   stdout);
-        return 0;
-      case keepless::cli::Arg::kVersion: return keepless::cli::print_version(kTool);
-      case keepless::cli::Arg::kError: return usage_error(error);
-      case keepless::cli::Arg::kFlag: break;
-    }
+    int status = 0;
+    if (!keepless::cli::next_flag(kTool, help, kFlags, argc, argv, &i, &entry, &value, &status)) return status;
     const std::string flag = entry->name;
     const std::string bad = "bad value for " + flag + ": '" + value + "'";
     if (flag == "--workload") {

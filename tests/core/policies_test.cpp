@@ -178,25 +178,16 @@ TEST(Policies, UpdateMatchesRunAndReference) {
     test::random_policies(c, 7000 + seed);
     if (seed % 4 == 0) c.params.coverage_floor = 20;  // binds often
     const std::uint32_t size = 3 + static_cast<std::uint32_t>(seed % 6);
-    Window window(kCaps);
-    Sparsifier run(kCaps, c.params);
-    Sparsifier closed(kCaps, c.params, SolveMode::kIncremental, Start::kClosedForm);
-    Sparsifier zero(kCaps, c.params, SolveMode::kIncremental, Start::kZeroFlow);
-    for (const auto& f : c.frames) {
-      if (window.keyframe_count() == size) {
-        ASSERT_EQ(window.remove_keyframe(window.keyframe(seed % 3 == 0 ? 1 : 0).id), Status::kOk);
-      }
-      ASSERT_EQ(test::add_frame(window, f), Status::kOk);
-      ASSERT_EQ(run.run(window), Status::kOk);
-      ASSERT_EQ(closed.update(window), Status::kOk);
-      ASSERT_EQ(zero.update(window), Status::kOk);
+    const auto check = [&](const Window& window, const Sparsifier& run, const Sparsifier& closed,
+                           const Sparsifier& zero, const test::RefKeyframe& f) {
       ASSERT_TRUE(same(run, closed)) << "seed " << seed << " keyframe " << f.id;
       ASSERT_TRUE(same(run, zero)) << "seed " << seed << " keyframe " << f.id;
       ASSERT_TRUE(agrees(run, test::reference_decide(test::ref_frames_of(window), c.params)))
           << "seed " << seed << " keyframe " << f.id;
       ++windows;
       promoted += run.summary().floor_promoted;
-    }
+    };
+    test::slide_run_and_update(kCaps, c, size, seed % 3 == 0, check);
   }
   EXPECT_GT(windows, 500u);
   EXPECT_GT(promoted, 100u);

@@ -4,6 +4,8 @@
 // are hit exactly and c_s repeats), and camera centres drawn from a small pool
 // (so c_b repeats). Heavy ties are the point: they exercise the tie-break.
 
+#include <gtest/gtest.h>
+
 #include <algorithm>
 #include <cstdint>
 #include <random>
@@ -11,6 +13,7 @@
 #include <vector>
 
 #include "keepless/core/config.hpp"
+#include "keepless/core/sparsifier.hpp"
 #include "keepless/core/window.hpp"
 #include "reference_sparsifier.hpp"
 
@@ -238,6 +241,31 @@ inline bool load(core::Window& window, const std::vector<RefKeyframe>& frames) {
     if (add_frame(window, f) != core::Status::kOk) return false;
   }
   return true;
+}
+
+// A window of at most `size` keyframes sliding over a case's frames (the
+// oldest dropped first, or the second oldest with `drop_second`): per
+// keyframe, run() from scratch and update() on the incremental network from
+// both starts, then check(window, run, closed, zero, frame), which asserts
+// what the caller compares (update() decides what run() does, ...).
+template <typename Check>
+void slide_run_and_update(const core::Capacities& caps, const RandomCase& c, std::uint32_t size,
+                          bool drop_second, Check check) {
+  core::Window window(caps);
+  core::Sparsifier run(caps, c.params);
+  core::Sparsifier closed(caps, c.params, core::SolveMode::kIncremental, core::Start::kClosedForm);
+  core::Sparsifier zero(caps, c.params, core::SolveMode::kIncremental, core::Start::kZeroFlow);
+  for (const auto& f : c.frames) {
+    if (window.keyframe_count() == size) {
+      ASSERT_EQ(window.remove_keyframe(window.keyframe(drop_second ? 1 : 0).id), core::Status::kOk);
+    }
+    ASSERT_EQ(add_frame(window, f), core::Status::kOk);
+    ASSERT_EQ(run.run(window), core::Status::kOk);
+    ASSERT_EQ(closed.update(window), core::Status::kOk);
+    ASSERT_EQ(zero.update(window), core::Status::kOk);
+    check(window, run, closed, zero, f);
+    if (::testing::Test::HasFailure()) return;
+  }
 }
 
 }  // namespace keepless::test

@@ -138,18 +138,8 @@ TEST(TrackingGuard, UpdateMatchesRunAndReference) {
     if (c.params.maturity_keyframes == 0) c.params.maturity_keyframes = 1 + seed % 3;
     if (seed % 4 == 0) c.params.coverage_floor = 20;
     const std::uint32_t size = 3 + static_cast<std::uint32_t>(seed % 6);
-    Window window(kCaps);
-    Sparsifier run(kCaps, c.params);
-    Sparsifier closed(kCaps, c.params, SolveMode::kIncremental, Start::kClosedForm);
-    Sparsifier zero(kCaps, c.params, SolveMode::kIncremental, Start::kZeroFlow);
-    for (const auto& f : c.frames) {
-      if (window.keyframe_count() == size) {
-        ASSERT_EQ(window.remove_keyframe(window.keyframe(seed % 3 == 0 ? 1 : 0).id), Status::kOk);
-      }
-      ASSERT_EQ(test::add_frame(window, f), Status::kOk);
-      ASSERT_EQ(run.run(window), Status::kOk);
-      ASSERT_EQ(closed.update(window), Status::kOk);
-      ASSERT_EQ(zero.update(window), Status::kOk);
+    const auto check = [&](const Window& window, const Sparsifier& run, const Sparsifier& closed,
+                           const Sparsifier& zero, const test::RefKeyframe& f) {
       ASSERT_TRUE(same(run, closed)) << "seed " << seed << " keyframe " << f.id;
       ASSERT_TRUE(same(run, zero)) << "seed " << seed << " keyframe " << f.id;
       ASSERT_TRUE(agrees(run, test::reference_decide(test::ref_frames_of(window), c.params)))
@@ -158,7 +148,8 @@ TEST(TrackingGuard, UpdateMatchesRunAndReference) {
       ++windows;
       guarded += run.summary().guarded;
       tracked += run.summary().tracked;
-    }
+    };
+    test::slide_run_and_update(kCaps, c, size, seed % 3 == 0, check);
   }
   EXPECT_GT(windows, 400u);
   EXPECT_GT(guarded, 1000u);

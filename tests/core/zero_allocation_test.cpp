@@ -97,32 +97,89 @@ TEST(ZeroAllocation, DecisionPathAllocatesNothing) {
   EXPECT_GT(kept, 0u);
 }
 
+// A keyframe of a random case with its arrays (what Keyframe points into).
+struct Frame {
+  Keyframe keyframe;
+  std::vector<Observation> observations;
+  std::vector<Keypoint> unmapped;
+  std::vector<std::uint8_t> tracked;
+  std::vector<PointQuality> quality;
+};
+
+// Seeds 1..12 with random policies, point quality for kTrack (the other
+// cost models ignore it) and, with `guard`, the tracking guard's flags; every
+// input is prepared before counting starts.
+std::vector<std::vector<Frame>> policy_windows(bool guard) {
+  std::vector<std::vector<Frame>> windows;
+  for (std::uint64_t seed = 1; seed <= 12; ++seed) {
+    auto c = test::random_case(seed, 12, 150);
+    test::random_policies(c, seed);
+    test::random_quality(c, seed);
+    if (guard) test::random_guard(c, seed);
+    std::vector<Frame> frames(c.frames.size());
+    for (std::size_t i = 0; i < frames.size(); ++i) {
+      frames[i].tracked = c.frames[i].tracked;
+      frames[i].keyframe = test::keyframe_of(c.frames[i], frames[i].unmapped);
+      frames[i].keyframe.tracked = frames[i].tracked.empty() ? nullptr : frames[i].tracked.data();
+      frames[i].quality = c.frames[i].quality;
+      frames[i].keyframe.quality = frames[i].quality.empty() ? nullptr : frames[i].quality.data();
+      frames[i].observations = test::observations_of(c.frames[i]);
+    }
+    windows.push_back(std::move(frames));
+  }
+  return windows;
+}
+
+struct Counted {
+  std::uint64_t allocations = 0, calls = 0, ok = 0, tally = 0;
+};
+
+// After a warm-up pass on the first window, slides a window of at most 6
+// keyframes over every window's frames and calls run() then update() on each
+// sparsifier per keyframe, counting allocations; `tally` sums what `count`
+// reads from each run()'s summary.
+Counted slide_counted(const Capacities& caps, const std::vector<std::unique_ptr<Sparsifier>>& sparsifiers,
+                      const std::vector<std::vector<Frame>>& windows, std::uint64_t (*count)(const Summary&)) {
+  Window window(caps);
+  Counted out;
+  const auto run_all = [&]() {
+    for (const auto& s : sparsifiers) {
+      out.ok += s->run(window) == Status::kOk;
+      out.tally += count(s->summary());
+      out.ok += s->update(window) == Status::kOk;
+    }
+    out.calls += 2 * sparsifiers.size();
+  };
+  for (const auto& f : windows[0]) {
+    EXPECT_EQ(window.add_keyframe(f.keyframe, f.observations.data(),
+                                  static_cast<std::uint32_t>(f.observations.size())),
+              Status::kOk);
+  }
+  run_all();
+  EXPECT_EQ(out.ok, out.calls);  // warm-up
+  window.clear();
+
+  out = Counted{};
+  test::AllocationCounter counter;
+  for (const auto& frames : windows) {
+    for (const auto& f : frames) {
+      if (window.keyframe_count() == 6) (void)window.remove_keyframe(window.keyframe(0).id);
+      (void)window.add_keyframe(f.keyframe, f.observations.data(),
+                                static_cast<std::uint32_t>(f.observations.size()));
+      run_all();
+    }
+    window.clear();
+  }
+  out.allocations = counter.stop();
+  return out;
+}
+
 // The same with every policy on: the newest keyframe's scope, a floor that
 // binds, and each cost model reading depths, intrinsics and unmapped
 // keypoints, without and with each keep budget; from-scratch and
 // incremental, both starts.
 TEST(ZeroAllocation, PoliciesAndCostModelsAllocateNothing) {
   const Capacities caps{12, 2048, 8192, 32768, 2048};
-  struct Frame {
-    Keyframe keyframe;
-    std::vector<Observation> observations;
-    std::vector<Keypoint> unmapped;
-    std::vector<PointQuality> quality;
-  };
-  std::vector<std::vector<Frame>> windows;
-  for (std::uint64_t seed = 1; seed <= 12; ++seed) {
-    auto c = test::random_case(seed, 12, 150);
-    test::random_policies(c, seed);
-    test::random_quality(c, seed);  // point quality for kTrack (the others ignore it)
-    std::vector<Frame> frames(c.frames.size());
-    for (std::size_t i = 0; i < frames.size(); ++i) {
-      frames[i].keyframe = test::keyframe_of(c.frames[i], frames[i].unmapped);
-      frames[i].observations = test::observations_of(c.frames[i]);
-      frames[i].quality = c.frames[i].quality;
-      frames[i].keyframe.quality = frames[i].quality.empty() ? nullptr : frames[i].quality.data();
-    }
-    windows.push_back(std::move(frames));
-  }
   std::vector<std::unique_ptr<Sparsifier>> sparsifiers;
   // Each with no budget and with each kind of keep budget.
   const KeepBudget budgets[] = {{}, {BudgetKind::kPoints, 40, 0.0}, {BudgetKind::kFraction, 0, 0.3},
@@ -140,68 +197,18 @@ TEST(ZeroAllocation, PoliciesAndCostModelsAllocateNothing) {
       }
     }
   }
-  Window window(caps);
-  const auto run_all = [&](std::uint64_t* promoted) {
-    std::uint32_t ok = 0;
-    for (auto& s : sparsifiers) {
-      ok += s->run(window) == Status::kOk;
-      *promoted += s->summary().floor_promoted;
-      ok += s->update(window) == Status::kOk;
-    }
-    return ok;
-  };
-  std::uint64_t promoted = 0;
-  for (const auto& f : windows[0]) {
-    ASSERT_EQ(window.add_keyframe(f.keyframe, f.observations.data(),
-                                  static_cast<std::uint32_t>(f.observations.size())),
-              Status::kOk);
-  }
-  ASSERT_EQ(run_all(&promoted), 2 * sparsifiers.size());  // warm-up
-  window.clear();
-
-  std::uint64_t calls = 0, ok = 0;
-  promoted = 0;
-  test::AllocationCounter counter;
-  for (const auto& frames : windows) {
-    for (const auto& f : frames) {
-      if (window.keyframe_count() == 6) (void)window.remove_keyframe(window.keyframe(0).id);
-      (void)window.add_keyframe(f.keyframe, f.observations.data(),
-                                static_cast<std::uint32_t>(f.observations.size()));
-      ok += run_all(&promoted);
-      calls += 2 * sparsifiers.size();
-    }
-    window.clear();
-  }
-  EXPECT_EQ(counter.stop(), 0u);
-  EXPECT_EQ(ok, calls);
-  EXPECT_GT(calls, 200u);
-  EXPECT_GT(promoted, 0u);
+  const Counted c = slide_counted(caps, sparsifiers, policy_windows(false),
+                                  [](const Summary& s) -> std::uint64_t { return s.floor_promoted; });
+  EXPECT_EQ(c.allocations, 0u);
+  EXPECT_EQ(c.ok, c.calls);
+  EXPECT_GT(c.calls, 200u);
+  EXPECT_GT(c.tally, 0u) << "the floor should have promoted points";
 }
 
 // Tracking-safe culling on: a maturity guard with each scope and a floor,
 // and tracked flags on the keyframes; from-scratch and incremental.
 TEST(ZeroAllocation, TrackingGuardAllocatesNothing) {
   const Capacities caps{12, 2048, 8192, 32768, 2048};
-  struct Frame {
-    Keyframe keyframe;
-    std::vector<Observation> observations;
-    std::vector<Keypoint> unmapped;
-    std::vector<std::uint8_t> tracked;
-  };
-  std::vector<std::vector<Frame>> windows;
-  for (std::uint64_t seed = 1; seed <= 12; ++seed) {
-    auto c = test::random_case(seed, 12, 150);
-    test::random_policies(c, seed);
-    test::random_guard(c, seed);
-    std::vector<Frame> frames(c.frames.size());
-    for (std::size_t i = 0; i < frames.size(); ++i) {
-      frames[i].tracked = c.frames[i].tracked;
-      frames[i].keyframe = test::keyframe_of(c.frames[i], frames[i].unmapped);
-      frames[i].keyframe.tracked = frames[i].tracked.empty() ? nullptr : frames[i].tracked.data();
-      frames[i].observations = test::observations_of(c.frames[i]);
-    }
-    windows.push_back(std::move(frames));
-  }
   std::vector<std::unique_ptr<Sparsifier>> sparsifiers;
   for (Scope scope : {Scope::kWindow, Scope::kNewest}) {
     Params p;
@@ -213,42 +220,12 @@ TEST(ZeroAllocation, TrackingGuardAllocatesNothing) {
       sparsifiers.push_back(std::make_unique<Sparsifier>(caps, p, SolveMode::kIncremental, start));
     }
   }
-  Window window(caps);
-  const auto run_all = [&](std::uint64_t* guarded) {
-    std::uint32_t ok = 0;
-    for (auto& s : sparsifiers) {
-      ok += s->run(window) == Status::kOk;
-      *guarded += s->summary().guarded + s->summary().tracked;
-      ok += s->update(window) == Status::kOk;
-    }
-    return ok;
-  };
-  std::uint64_t guarded = 0;
-  for (const auto& f : windows[0]) {
-    ASSERT_EQ(window.add_keyframe(f.keyframe, f.observations.data(),
-                                  static_cast<std::uint32_t>(f.observations.size())),
-              Status::kOk);
-  }
-  ASSERT_EQ(run_all(&guarded), 2 * sparsifiers.size());  // warm-up
-  window.clear();
-
-  std::uint64_t calls = 0, ok = 0;
-  guarded = 0;
-  test::AllocationCounter counter;
-  for (const auto& frames : windows) {
-    for (const auto& f : frames) {
-      if (window.keyframe_count() == 6) (void)window.remove_keyframe(window.keyframe(0).id);
-      (void)window.add_keyframe(f.keyframe, f.observations.data(),
-                                static_cast<std::uint32_t>(f.observations.size()));
-      ok += run_all(&guarded);
-      calls += 2 * sparsifiers.size();
-    }
-    window.clear();
-  }
-  EXPECT_EQ(counter.stop(), 0u);
-  EXPECT_EQ(ok, calls);
-  EXPECT_GT(calls, 200u);
-  EXPECT_GT(guarded, 0u);
+  const Counted c = slide_counted(caps, sparsifiers, policy_windows(true),
+                                  [](const Summary& s) -> std::uint64_t { return s.guarded + s.tracked; });
+  EXPECT_EQ(c.allocations, 0u);
+  EXPECT_EQ(c.ok, c.calls);
+  EXPECT_GT(c.calls, 200u);
+  EXPECT_GT(c.tally, 0u) << "the guard should have skipped points";
 }
 
 }  // namespace

@@ -117,16 +117,12 @@ std::string usage() {
 
 // Returns -1 to go on, else the exit status.
 int parse(int argc, char** argv, Options* o) {
+  const std::string help = usage();
   for (int i = 1; i < argc; ++i) {
     const cli::Flag* flag = nullptr;
     const char* v = nullptr;
-    std::string error;
-    switch (cli::next(kFlags, argc, argv, &i, &flag, &v, &error)) {
-      case cli::Arg::kHelp: std::fputs(usage().c_str(), stdout); return 0;
-      case cli::Arg::kVersion: return cli::print_version(kTool);
-      case cli::Arg::kError: return cli::usage_error(kTool, error);
-      case cli::Arg::kFlag: break;
-    }
+    int status = 0;
+    if (!cli::next_flag(kTool, help, kFlags, argc, argv, &i, &flag, &v, &status)) return status;
     const std::string a = flag->name;
     char* end = nullptr;
     const auto bad = [&](const char* expected) {

@@ -113,4 +113,20 @@ Arg next(const std::vector<Flag>& flags, int argc, char** argv, int* i, const Fl
   return Arg::kFlag;
 }
 
+bool next_flag(const char* tool, const std::string& usage_text, const std::vector<Flag>& flags, int argc,
+               char** argv, int* i, const Flag** flag, const char** value, int* exit_status) {
+  std::string error;
+  switch (next(flags, argc, argv, i, flag, value, &error)) {
+    case Arg::kFlag: return true;
+    case Arg::kHelp:
+      std::fputs(usage_text.c_str(), stdout);
+      *exit_status = 0;
+      return false;
+    case Arg::kVersion: *exit_status = print_version(tool); return false;
+    case Arg::kError: break;
+  }
+  *exit_status = usage_error(tool, error);
+  return false;
+}
+
 }  // namespace keepless::cli

@@ -46,4 +46,12 @@ enum class Arg { kFlag, kHelp, kVersion, kError };
 Arg next(const std::vector<Flag>& flags, int argc, char** argv, int* i, const Flag** flag, const char** value,
          std::string* error);
 
+// next() with what every tool does with the rest: --help prints `usage_text`
+// on stdout and --version "<tool> <version>" (exit status 0); an unknown
+// option or a missing value goes through usage_error. True for a flag of
+// `flags` (*flag and *value as next() sets them); false with *exit_status
+// for main() to return.
+bool next_flag(const char* tool, const std::string& usage_text, const std::vector<Flag>& flags, int argc,
+               char** argv, int* i, const Flag** flag, const char** value, int* exit_status);
+
 }  // namespace keepless::cli
