@@ -232,10 +232,26 @@ TEST(NodeEndToEnd, RecordedBusReplaysToIdenticalDecisions) {
   // 1. Record a closed-loop run.
   std::vector<Message> recorded;
   {
-    kt::ChildProcess logger({LCM_LOGGER_BIN, "-q", "-f", "--lcm-url=" + url, tmp.file("bus.lcmlog")},
+    // A large receive buffer: on a loaded machine the logger may fall behind a burst.
+    kt::ChildProcess logger({LCM_LOGGER_BIN, "-q", "-f", "--flush-interval=20",
+                             "--lcm-url=" + url + "&recv_buf_size=4194304", tmp.file("bus.lcmlog")},
                             tmp.file("logger.log"));
     ASSERT_TRUE(logger.started());
-    std::this_thread::sleep_for(std::chrono::milliseconds(500));  // subscribed before anything is sent
+    // Subscribed before anything is sent: probes until one reaches the log
+    // (a fixed sleep was too short on a loaded machine).
+    {
+      lcm::LCM probe(url);
+      ASSERT_TRUE(probe.good());
+      const std::uint8_t byte = 0;
+      bool logged = false;
+      for (int i = 0; i < 300 && !logged; ++i) {
+        probe.publish("KEEPLESS_E2E_PROBE", &byte, 1);
+        std::this_thread::sleep_for(std::chrono::milliseconds(100));
+        lcm::LogFile log(tmp.file("bus.lcmlog"), "r");
+        logged = log.good() && log.readNextEvent() != nullptr;
+      }
+      ASSERT_TRUE(logged) << "lcm-logger recorded nothing in 30 s\n" << logger.log();
+    }
     kt::ChildProcess node(target_argv({KEEPLESS_NODE_BIN, "--latency-target-ms", "0", "--url", url, "--max-keyframes", std::to_string(n),
                            "--status-period-ms", "100"}),
                           tmp.file("node.log"));
