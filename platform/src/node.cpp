@@ -211,6 +211,8 @@ struct Node::Impl {
       }
     }
     const auto n = static_cast<std::uint32_t>(kf.num_observations);
+    // Point quality only where the window holds it (--cost track); other cost models never read it.
+    const bool quality_in = capacities.hold_quality && kf.num_quality != 0;
     std::uint32_t kept = 0, excluded = 0;
     for (std::uint32_t i = 0; i < n; ++i) {
       const auto point = static_cast<core::PointId>(kf.point_id[i]);
@@ -225,7 +227,7 @@ struct Node::Impl {
       observations[kept].v = static_cast<double>(kf.v[i]);
       observations[kept].depth = kf.num_depths != 0 ? static_cast<double>(kf.depth[i]) : 0.0;
       tracked[kept] = kf.num_tracked != 0 ? static_cast<std::uint8_t>(kf.tracked[i]) : 0;
-      if (kf.num_quality != 0) {
+      if (quality_in) {
         quality[kept] = {static_cast<std::uint32_t>(kf.track_length[i]), kf.age[i], kf.reprojection_error[i],
                          kf.triangulation_angle[i]};
       }
@@ -248,7 +250,7 @@ struct Node::Impl {
     keyframe.unmapped = unmapped.data();
     keyframe.unmapped_count = m;
     keyframe.tracked = kf.num_tracked != 0 ? tracked.data() : nullptr;
-    keyframe.quality = kf.num_quality != 0 ? quality.data() : nullptr;
+    keyframe.quality = quality_in ? quality.data() : nullptr;
     const core::Status s = sliding.push(keyframe, observations.data(), kept, evicted);
     if (s != core::Status::kOk) return reason_of(s);
     if (*evicted > 0) note_window_overflow(kf.sequence);
@@ -393,10 +395,11 @@ struct Node::Impl {
                    static_cast<long long>(req.sequence), core::to_string(run));
     }
     publish_decision();
-    counters.points_culled += deferring ? 0 : n_culled;
     if (deferring) {
       counters.points_excluded += n_culled;
       counters.points_deleted += n_deleted;
+    } else {
+      counters.points_culled += n_culled;
     }
     finish_timing(req, arrival, t0, t1, t2, t3, sparsifier.solver().stats().work_units,
                   sparsifier.solver().stats().phases);

@@ -105,6 +105,17 @@ Eigen::Isometry3d motion_fraction(const Eigen::Isometry3d& T, int n) {
   return out;
 }
 
+// The DLT point of rows x * P.row(2) - P.row(0|1), one pair per view: the
+// right singular vector of the smallest singular value, dehomogenised.
+template <typename Rows>
+bool dlt_point(const Rows& A, Eigen::Vector3d* X) {
+  Eigen::JacobiSVD<typename Rows::PlainObject> svd(A, Eigen::ComputeFullV);
+  const Eigen::Vector4d h = svd.matrixV().col(3);
+  if (std::abs(h(3)) < 1e-12) return false;
+  *X = h.head<3>() / h(3);
+  return X->allFinite();
+}
+
 // Linear triangulation (ORB-SLAM2's Initializer::Triangulate).
 bool triangulate(const Eigen::Matrix<double, 3, 4>& P1, const Eigen::Matrix<double, 3, 4>& P2,
                  const cv::Point2f& x1, const cv::Point2f& x2, Eigen::Vector3d* X) {
@@ -113,11 +124,7 @@ bool triangulate(const Eigen::Matrix<double, 3, 4>& P1, const Eigen::Matrix<doub
   A.row(1) = x1.y * P1.row(2) - P1.row(1);
   A.row(2) = x2.x * P2.row(2) - P2.row(0);
   A.row(3) = x2.y * P2.row(2) - P2.row(1);
-  Eigen::JacobiSVD<Eigen::Matrix4d> svd(A, Eigen::ComputeFullV);
-  const Eigen::Vector4d h = svd.matrixV().col(3);
-  if (std::abs(h(3)) < 1e-12) return false;
-  *X = h.head<3>() / h(3);
-  return X->allFinite();
+  return dlt_point(A, X);
 }
 
 struct FrameRecord {
@@ -882,12 +889,9 @@ void Vo::retriangulate_excluded(const std::vector<int>& local) {
       A.row(rows++) = x.x * P.row(2) - P.row(0);
       A.row(rows++) = x.y * P.row(2) - P.row(1);
     }
-    if (rows < 4) continue;
-    Eigen::JacobiSVD<Eigen::MatrixXd> svd(A.topRows(rows), Eigen::ComputeFullV);
-    const Eigen::Vector4d h = svd.matrixV().col(3);
-    if (std::abs(h(3)) < 1e-12) continue;
-    const Eigen::Vector3d X = h.head<3>() / h(3);
-    bool in_front = X.allFinite();
+    Eigen::Vector3d X;
+    if (rows < 4 || !dlt_point(A.topRows(rows), &X)) continue;
+    bool in_front = true;
     for (const auto& [k, i] : m.obs) {
       if (!map_.kfs[static_cast<std::size_t>(k)].bad) in_front = in_front && (map_.kfs[static_cast<std::size_t>(k)].Tcw * X).z() > 0;
     }
