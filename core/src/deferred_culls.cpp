@@ -73,6 +73,22 @@ std::uint32_t DeferredCulls::expire(PointId* out) {
   return n;
 }
 
+std::uint32_t DeferredCulls::defer(const PointId* culled, std::uint32_t n, PointId* excluded,
+                                   std::uint32_t* excluded_count, PointId* deleted) {
+  std::uint32_t kept = 0, refused = 0;
+  for (std::uint32_t i = 0; i < n; ++i) {
+    if (exclude(culled[i]) == Status::kOk) {
+      excluded[kept++] = culled[i];
+    } else {
+      deleted[refused++] = culled[i];
+    }
+  }
+  *excluded_count = kept;
+  const std::uint32_t total = refused + expire(deleted + refused);
+  std::sort(deleted, deleted + total);
+  return total;
+}
+
 bool DeferredCulls::forget(PointId point) {
   const std::uint32_t* i = impl_->index.find(point);
   if (i == nullptr) return false;

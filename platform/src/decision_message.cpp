@@ -96,36 +96,23 @@ std::uint32_t fill_decision(keepless::decision_t& msg, const DecisionRequest& re
 }
 
 std::uint32_t defer_culls(keepless::decision_t& msg, core::DeferredCulls& deferred) {
-  // Within the reserve (reserve_decision with the deferred capacity).
-  const std::size_t culled = msg.culled_point_id.size();
+  // Within the reserve (reserve_decision with the deferred capacity). The
+  // ids travel as int64 bit patterns; int64 and uint64 may alias.
+  const auto culled = static_cast<std::uint32_t>(msg.culled_point_id.size());
   msg.excluded_point_id.resize(culled);
   msg.deleted_point_id.resize(msg.deleted_point_id.capacity());
-  // The ids travel as int64 bit patterns; int64 and uint64 may alias.
-  auto* deleted = reinterpret_cast<core::PointId*>(msg.deleted_point_id.data());
-  // Refused ids go past the first capacity() slots, which expire() fills
-  // (it lists at most what is held); then they join the expired ones.
-  core::PointId* refused = deleted + deferred.capacity();
-  std::size_t n_excluded = 0, n_refused = 0;
-  for (std::size_t i = 0; i < culled; ++i) {
-    const std::int64_t id = msg.culled_point_id[i];
-    if (deferred.exclude(static_cast<core::PointId>(id)) == core::Status::kOk) {
-      msg.excluded_point_id[n_excluded++] = id;
-    } else {
-      refused[n_refused++] = static_cast<core::PointId>(id);
-    }
-  }
-  const std::uint32_t expired = deferred.expire(deleted);
-  // Down to just after the expired ids (overlapping ranges: forward is safe).
-  if (expired != deferred.capacity()) std::copy_n(refused, n_refused, deleted + expired);
-  const std::size_t n_deleted = expired + n_refused;
-  std::sort(deleted, deleted + n_deleted);  // as unsigned
+  std::uint32_t n_excluded = 0;
+  const std::uint32_t n_deleted = deferred.defer(
+      reinterpret_cast<const core::PointId*>(msg.culled_point_id.data()), culled,
+      reinterpret_cast<core::PointId*>(msg.excluded_point_id.data()), &n_excluded,
+      reinterpret_cast<core::PointId*>(msg.deleted_point_id.data()));
   msg.excluded_point_id.resize(n_excluded);
   msg.num_excluded = static_cast<std::int32_t>(n_excluded);
   msg.deleted_point_id.resize(n_deleted);
   msg.num_deleted = static_cast<std::int32_t>(n_deleted);
   msg.culled_point_id.resize(0);
   msg.num_culled = 0;
-  return static_cast<std::uint32_t>(n_deleted);
+  return n_deleted;
 }
 
 void fill_rejected_decision(keepless::decision_t& msg, const DecisionRequest& request,

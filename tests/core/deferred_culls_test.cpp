@@ -104,6 +104,39 @@ struct Reference {
   }
 };
 
+// A decision's step: refusals are deleted at once, beside what expires, in
+// ascending order; the excluded keep the order given.
+TEST(DeferredCulls, DeferExcludesWhatFitsAndDeletesTheRestWithWhatExpires) {
+  DeferredCulls deferred(2, 1);
+  deferred.begin_keyframe();
+  const PointId culled[] = {9, 3, 7};
+  PointId excluded[3], deleted[5];
+  std::uint32_t n_excluded = 0;
+  ASSERT_EQ(deferred.defer(culled, 3, excluded, &n_excluded, deleted), 1u);
+  ASSERT_EQ(n_excluded, 2u);
+  EXPECT_EQ(excluded[0], 9u);
+  EXPECT_EQ(excluded[1], 3u);
+  EXPECT_EQ(deleted[0], 7u);  // refused: the table holds two
+  EXPECT_EQ(deferred.refused(), 1u);
+
+  // Nothing matched them: T = 1 deletes both. The new cull is excluded
+  // before they expire, so the full table refuses it too.
+  deferred.begin_keyframe();
+  const PointId more[] = {4};
+  ASSERT_EQ(deferred.defer(more, 1, excluded, &n_excluded, deleted), 3u);
+  EXPECT_EQ(n_excluded, 0u);
+  EXPECT_EQ(deleted[0], 3u);
+  EXPECT_EQ(deleted[1], 4u);
+  EXPECT_EQ(deleted[2], 9u);
+  EXPECT_EQ(deferred.size(), 0u);
+
+  deferred.begin_keyframe();
+  ASSERT_EQ(deferred.defer(more, 1, excluded, &n_excluded, deleted), 0u);
+  ASSERT_EQ(n_excluded, 1u);
+  EXPECT_EQ(excluded[0], 4u);
+  EXPECT_TRUE(deferred.contains(4));
+}
+
 TEST(DeferredCulls, DeletesExactlyWhenTheRuleSaysOnRandomStreams) {
   for (std::uint64_t seed = 1; seed <= 60; ++seed) {
     test::Rng rng(seed);

@@ -207,20 +207,13 @@ Status note_keyframe(core::DeferredCulls& deferred, const std::vector<core::Poin
 
 void defer_culls(const std::vector<core::PointId>& culled, core::DeferredCulls& deferred,
                  std::vector<core::PointId>* excluded, std::vector<core::PointId>* deleted) {
-  excluded->clear();
-  deleted->clear();
-  for (const core::PointId id : culled) {
-    if (deferred.exclude(id) == core::Status::kOk) {
-      excluded->push_back(id);
-    } else {
-      deleted->push_back(id);
-    }
-  }
-  const std::size_t refused = deleted->size();
-  deleted->resize(refused + deferred.capacity());
-  deleted->resize(refused + deferred.expire(deleted->data() + refused));
+  excluded->resize(culled.size());
+  deleted->resize(culled.size() + deferred.capacity());
+  std::uint32_t n_excluded = 0;
+  const auto n = static_cast<std::uint32_t>(culled.size());
+  deleted->resize(deferred.defer(culled.data(), n, excluded->data(), &n_excluded, deleted->data()));
+  excluded->resize(n_excluded);
   std::sort(excluded->begin(), excluded->end());
-  std::sort(deleted->begin(), deleted->end());
 }
 
 }  // namespace keepless::opencv

@@ -46,6 +46,13 @@ class DeferredCulls {
   // The excluded points the rule deletes at this tick, ascending, into
   // `out` (room for capacity() ids); returns how many. They are forgotten.
   std::uint32_t expire(PointId* out);
+  // A decision's whole step: each of the `n` culled points is excluded
+  // (copied to `excluded` in the order given; *excluded_count set) or, when
+  // refused, deleted at once; the points expire() deletes at this tick join
+  // those in `deleted` (room for n + capacity() ids), ascending. Returns how
+  // many are deleted.
+  std::uint32_t defer(const PointId* culled, std::uint32_t n, PointId* excluded, std::uint32_t* excluded_count,
+                      PointId* deleted);
   // The map deleted or merged `point` itself: forgotten without a deletion
   // to report. False if it was not held.
   bool forget(PointId point);
