@@ -9,8 +9,15 @@
 # observations, one curve per method, failed seeds ringed). Each job's wall
 # time is in OUT/jobs.tsv.
 #
+# A variant is a keepless configuration run through the same sweep (every
+# selector alike where the flag applies to all); with several, each goes to
+# OUT/VARIANT. paper: the paper's network (default); maturity: tracking-safe
+# culling, --maturity 2; track: --cost track, keepless only (the baselines
+# are paper's); defer: deferred culling, --defer 2.
+#
 #   scripts/eval_sweep.sh [--data-root DIR] [--fractions 0.1,0.2,0.3,0.4,0.6] [--seeds 5] [-j 2]
 #                         [--out DIR] [--only 7scenes,kitti00,kitti06,colmap] [--bin DIR]
+#                         [--variants paper,maturity,track,defer] [--eval-flags "FLAGS"]
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -21,6 +28,8 @@ jobs=2
 out=sweep_out
 only=7scenes,kitti00,kitti06,colmap
 bin=build/bin
+variants=paper
+extra=
 while (($#)); do
   case "$1" in
     --data-root) data=$2; shift 2 ;;
@@ -30,7 +39,9 @@ while (($#)); do
     --out) out=$2; shift 2 ;;
     --only) only=$2; shift 2 ;;
     --bin) bin=$2; shift 2 ;;
-    -h|--help) sed -n 2,13p "$0"; exit 0 ;;
+    --variants) variants=$2; shift 2 ;;
+    --eval-flags) extra=$2; shift 2 ;;
+    -h|--help) sed -n 2,20p "$0"; exit 0 ;;
     *) echo "eval_sweep: unknown option $1" >&2; exit 2 ;;
   esac
 done
@@ -38,7 +49,7 @@ for b in keepless_eval keepless_maps_bench; do
   [ -x "$bin/$b" ] || { echo "eval_sweep: $bin/$b is missing: cmake --build build --target $b" >&2; exit 1; }
 done
 data=$(cd "$data" && pwd)
-mkdir -p "$out/runs"
+mkdir -p "$out"
 out=$(cd "$out" && pwd)
 bin=$(cd "$bin" && pwd)
 
@@ -50,47 +61,83 @@ inputs=(
 )
 selected() { [[ ",$only," == *",$1,"* ]]; }
 
+# variant|keepless_eval flags|keepless_maps_bench flags ("-": no COLMAP run, the bench has no such option)
+variant_flags() {
+  case "$1" in
+    paper) echo "||" ;;
+    maturity) echo "|--maturity 2|-" ;;
+    track) echo "|--cost track --no-baselines|--cost track" ;;
+    defer) echo "|--defer 2|-" ;;
+    *) echo "eval_sweep: unknown variant $1 (paper, maturity, track, defer)" >&2; return 1 ;;
+  esac
+}
+
 joblist="$out/jobs.txt"
 : > "$joblist"
-for entry in "${inputs[@]}"; do
-  name=${entry%%|*}
-  selected "$name" || continue
-  for ((seed = 1; seed <= seeds; ++seed)); do
-    echo "$name|$seed|${entry#*|}" >> "$joblist"
+IFS=, read -r -a variant_list <<< "$variants"
+for variant in "${variant_list[@]}"; do
+  vf=$(variant_flags "$variant")
+  IFS='|' read -r _ eval_flags maps_flags <<< "$vf"
+  vdir=$out
+  ((${#variant_list[@]} > 1)) && vdir=$out/$variant
+  mkdir -p "$vdir/runs"
+  for entry in "${inputs[@]}"; do
+    name=${entry%%|*}
+    selected "$name" || continue
+    for ((seed = 1; seed <= seeds; ++seed)); do
+      echo "$variant|$vdir|$name|$seed|${entry#*|} $eval_flags $extra" >> "$joblist"
+    done
   done
+  if selected colmap && [ "$maps_flags" != - ]; then echo "$variant|$vdir|colmap|all|$maps_flags" >> "$joblist"; fi
 done
-if selected colmap; then echo "colmap|all|" >> "$joblist"; fi
 
+# Each job's wall and CPU seconds (its processes' user + system) go to jobs.tsv.
 run_job() {
-  IFS='|' read -r name seed flags <<< "$1"
-  local start end dir rc=0
+  IFS='|' read -r variant vdir name seed flags <<< "$1"
+  local start end dir rc=0 cpu
   start=$(date +%s)
   if [ "$name" = colmap ]; then
-    dir="$out/colmap"
+    dir="$vdir/colmap"
     mkdir -p "$dir/work"
+    # shellcheck disable=SC2086  # flags are words
     "$bin/keepless_maps_bench" --data "$data" --keep-fraction "$fractions" --seeds "$seeds" --work "$dir/work" \
-      > "$dir/stdout.txt" 2> "$dir/stderr.txt" || rc=$?
+      $flags > "$dir/stdout.txt" 2> "$dir/stderr.txt" || rc=$?
   else
-    dir="$out/runs/${name}_seed$seed"
+    dir="$vdir/runs/${name}_seed$seed"
     # shellcheck disable=SC2086  # flags are words
     "$bin/keepless_eval" $flags --kept-fraction "$fractions" --seed "$seed" --seeds 1 --out "$dir" \
       > "$dir.stdout" 2> "$dir.stderr" || rc=$?
   fi
   end=$(date +%s)
-  printf '%s\t%s\t%d\t%d\n' "$name" "$seed" $((end - start)) "$rc" >> "$out/jobs.tsv"
-  echo "eval_sweep: $name seed $seed done in $((end - start)) s (exit $rc)" >&2
+  # `times`' second line: this shell's children, user then system ("1m2.5s");
+  # it runs in this shell, not a pipeline's subshell, which has no children.
+  times > "$dir.times"
+  cpu=$(sed -n 2p "$dir.times" | awk '{ n = 0; for (i = 1; i <= 2; ++i) { split($i, a, /[ms]/); n += a[1] * 60 + a[2] } printf "%.0f", n }')
+  printf '%s\t%s\t%s\t%d\t%s\t%d\n' "$variant" "$name" "$seed" $((end - start)) "$cpu" "$rc" >> "$out/jobs.tsv"
+  echo "eval_sweep: $variant $name seed $seed done in $((end - start)) s, ${cpu} s CPU (exit $rc)" >&2
 }
 export -f run_job
 export out data bin seeds fractions
 
-printf 'input\tseed\twall_s\texit\n' > "$out/jobs.tsv"
+printf 'variant\tinput\tseed\twall_s\tcpu_s\texit\n' > "$out/jobs.tsv"
 t0=$(date +%s)
 tr '\n' '\0' < "$joblist" | xargs -0 -P "$jobs" -I{} bash -c 'run_job "$1"' _ {}
 
-reports=()
-for d in "$out"/runs/*/; do [ -f "$d/runs.csv" ] && reports+=(--report "$d"); done
-if ((${#reports[@]})); then
-  "$bin/keepless_eval" "${reports[@]}" --out "$out" > "$out/report.stdout"
+failed=0
+for variant in "${variant_list[@]}"; do
+  vdir=$out
+  ((${#variant_list[@]} > 1)) && vdir=$out/$variant
+  reports=()
+  for d in "$vdir"/runs/*/; do [ -f "$d/runs.csv" ] && reports+=(--report "$d"); done
+  if ((${#reports[@]})); then
+    "$bin/keepless_eval" "${reports[@]}" --out "$vdir" > "$vdir/report.stdout" || failed=1
+  fi
+done
+awk -F'\t' 'NR > 1 { cpu += $5; if ($6 != 0) bad++ } END { printf "eval_sweep: %d s CPU in all jobs, %d failed\n", cpu, bad }' \
+  "$out/jobs.tsv" >&2
+echo "eval_sweep: $(($(date +%s) - t0)) s wall with -j $jobs; tables in $out/[VARIANT/]tables.md, plots" \
+     "sweep_*.svg beside them, the COLMAP fixture's rows in colmap/stdout.txt" >&2
+if [ "$failed" != 0 ] || awk -F'\t' 'NR > 1 && $6 != 0 { bad = 1 } END { exit !bad }' "$out/jobs.tsv"; then
+  echo "eval_sweep: a job or a report failed (exit column of $out/jobs.tsv)" >&2
+  exit 1
 fi
-echo "eval_sweep: $(($(date +%s) - t0)) s wall with -j $jobs; tables in $out/tables.md, plots $out/sweep_*.svg," \
-     "the COLMAP fixture's rows in $out/colmap/stdout.txt" >&2
