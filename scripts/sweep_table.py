@@ -1,0 +1,122 @@
+#!/usr/bin/env python3
+"""The budget sweep's variants side by side, from scripts/eval_sweep.sh's output.
+
+    scripts/sweep_table.py OUT [--variants paper,maturity,track,defer]
+
+OUT holds one directory per variant (OUT/VARIANT/runs.csv, as eval_sweep.sh
+--variants writes them). Prints, per sequence, one Markdown table: per kept
+fraction F and per method of each variant, failed seeds, frames tracked,
+ATE (mean ± sd over seeds, failed runs included), ATE over the original's,
+local-BA observations and CPU seconds, map points and keyframes; then the
+smallest F from which each method never failed, and per F the method with the
+lowest mean ATE among those with no failure. A failed run (lost tracking or a
+diverged BA) counts in every mean: its ATE is over all frames.
+"""
+import csv
+import os
+import statistics
+import sys
+from collections import defaultdict
+
+METHODS = [("ours", "keepless"), ("random", "random"), ("longest_track", "longest track"), ("anms", "ANMS")]
+FLAGS = {"paper": "", "maturity": "--maturity 2", "track": "--cost track", "defer": "--defer 2"}
+
+
+def load(out, variants):
+    # (sequence) -> (F, label) -> [rows]; original rows are shared by every variant (same seeds).
+    table = defaultdict(lambda: defaultdict(list))
+    originals = defaultdict(dict)
+    order = {}  # label -> (method, variant) rank: keepless's variants first, then each baseline's
+    for variant in variants:
+        path = os.path.join(out, variant, "runs.csv")
+        if not os.path.exists(path):
+            sys.exit(f"sweep_table: {path} is missing")
+        with open(path) as f:
+            for row in csv.DictReader(f):
+                name, method, fraction = row["name"], row["variant"], float(row["target_fraction"])
+                if method == "original":
+                    originals[name][int(row["seed"])] = row
+                    continue
+                label = dict(METHODS).get(method, method)
+                if variant != "paper":
+                    if method != "ours" and variant == "track":
+                        continue  # track runs keepless only
+                    label = f"{label}, {FLAGS[variant]}"
+                table[name][(fraction, label)].append(row)
+                order[label] = ([m for m, _ in METHODS].index(method) if method in dict(METHODS) else len(METHODS),
+                                variants.index(variant))
+    return table, originals, order
+
+
+def stat(rows, key):
+    values = [float(r[key]) for r in rows]
+    mean = statistics.mean(values)
+    return mean, (statistics.stdev(values) if len(values) > 1 else 0.0)
+
+
+def failed(row):
+    return row["failed"] not in ("0", "", "null")
+
+
+def sequence_table(name, cells, originals, order):
+    orig = list(originals.values())
+    ate0, sd0 = stat(orig, "ate_m")
+    lines = [f"#### {name}", "",
+             "| F | method | failed | frames tracked | ATE (m) | / original | local-BA obs | local-BA CPU (s) |"
+             " map points | keyframes |",
+             "|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|"]
+
+    def row_line(fraction, label, rows):
+        ate, sd = stat(rows, "ate_m")
+        cpu, cpu_sd = stat(rows, "ba_cpu_s")
+        fails = sum(failed(r) for r in rows)
+        return (f"| {fraction} | {label} | {fails} / {len(rows)} | {stat(rows, 'frames_tracked')[0]:.1f} |"
+                f" {ate:.4g} ± {sd:.2g} | {ate / ate0:.2f} | {stat(rows, 'observations')[0]:,.0f} |"
+                f" {cpu:.2f} ± {cpu_sd:.2f} | {stat(rows, 'mps')[0]:,.0f} | {stat(rows, 'kfs')[0]:.0f} |")
+
+    lines.append(row_line("–", "original", orig))
+    labels = sorted({label for (_, label) in cells}, key=lambda label: order[label])
+    fractions = sorted({f for (f, _) in cells})
+    for fraction in fractions:
+        for label in labels:
+            if (fraction, label) in cells:
+                lines.append(row_line(f"{fraction:.2f}", label, cells[(fraction, label)]))
+    lines.append("")
+    # Smallest F from which a method never failed (scanning down from the largest).
+    safe = []
+    for label in labels:
+        smallest = None
+        for fraction in reversed(fractions):
+            rows = cells.get((fraction, label))
+            if not rows or any(failed(r) for r in rows):
+                break
+            smallest = fraction
+        safe.append(f"{label} {smallest:.1f}" if smallest is not None else f"{label}: never")
+    lines.append("No failure from F = " + "; ".join(safe) + ".")
+    lines.append("")
+    best = []
+    for fraction in fractions:
+        ok = [(stat(rows, "ate_m")[0], label) for (f, label), rows in cells.items()
+              if f == fraction and not any(failed(r) for r in rows)]
+        best.append(f"F = {fraction:.1f}: " + (f"{min(ok)[1]} ({min(ok)[0]:.4g} m)" if ok else "none without failure"))
+    lines.append(f"Lowest mean ATE without a failure (original {ate0:.4g} ± {sd0:.2g} m): " + "; ".join(best) + ".")
+    lines.append("")
+    return "\n".join(lines)
+
+
+def main(argv):
+    if len(argv) < 2 or argv[1] in ("-h", "--help"):
+        print(__doc__)
+        return 0 if len(argv) >= 2 else 2
+    out = argv[1]
+    variants = ["paper", "maturity", "track", "defer"]
+    if len(argv) >= 4 and argv[2] == "--variants":
+        variants = argv[3].split(",")
+    table, originals, order = load(out, variants)
+    for name in sorted(table):
+        print(sequence_table(name, table[name], originals[name], order))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv))
