@@ -17,7 +17,10 @@
 #
 #   scripts/eval_sweep.sh [--data-root DIR] [--fractions 0.1,0.2,0.3,0.4,0.6] [--seeds 5] [-j 2]
 #                         [--out DIR] [--only 7scenes,kitti00,kitti06,colmap] [--bin DIR]
-#                         [--variants paper,maturity,track,defer] [--eval-flags "FLAGS"]
+#                         [--variants paper,maturity,track,defer] [--eval-flags "FLAGS"] [--resume]
+#
+# --resume keeps OUT's finished jobs (a run directory with its runs.csv, the
+# COLMAP rows with their JSON line) and runs the rest.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -30,6 +33,7 @@ only=7scenes,kitti00,kitti06,colmap
 bin=build/bin
 variants=paper
 extra=
+resume=0
 while (($#)); do
   case "$1" in
     --data-root) data=$2; shift 2 ;;
@@ -41,7 +45,8 @@ while (($#)); do
     --bin) bin=$2; shift 2 ;;
     --variants) variants=$2; shift 2 ;;
     --eval-flags) extra=$2; shift 2 ;;
-    -h|--help) sed -n 2,20p "$0"; exit 0 ;;
+    --resume) resume=1; shift ;;
+    -h|--help) sed -n 2,24p "$0"; exit 0 ;;
     *) echo "eval_sweep: unknown option $1" >&2; exit 2 ;;
   esac
 done
@@ -98,12 +103,14 @@ run_job() {
   start=$(date +%s)
   if [ "$name" = colmap ]; then
     dir="$vdir/colmap"
+    if [ "$resume" = 1 ] && tail -n 1 "$dir/stdout.txt" 2>/dev/null | grep -q '^{'; then return 0; fi
     mkdir -p "$dir/work"
     # shellcheck disable=SC2086  # flags are words
     "$bin/keepless_maps_bench" --data "$data" --keep-fraction "$fractions" --seeds "$seeds" --work "$dir/work" \
       $flags > "$dir/stdout.txt" 2> "$dir/stderr.txt" || rc=$?
   else
     dir="$vdir/runs/${name}_seed$seed"
+    if [ "$resume" = 1 ] && [ -f "$dir/runs.csv" ]; then return 0; fi
     # shellcheck disable=SC2086  # flags are words
     "$bin/keepless_eval" $flags --kept-fraction "$fractions" --seed "$seed" --seeds 1 --out "$dir" \
       > "$dir.stdout" 2> "$dir.stderr" || rc=$?
@@ -117,9 +124,11 @@ run_job() {
   echo "eval_sweep: $variant $name seed $seed done in $((end - start)) s, ${cpu} s CPU (exit $rc)" >&2
 }
 export -f run_job
-export out data bin seeds fractions
+export out data bin seeds fractions resume
 
-printf 'variant\tinput\tseed\twall_s\tcpu_s\texit\n' > "$out/jobs.tsv"
+if [ "$resume" = 0 ] || [ ! -f "$out/jobs.tsv" ]; then
+  printf 'variant\tinput\tseed\twall_s\tcpu_s\texit\n' > "$out/jobs.tsv"
+fi
 t0=$(date +%s)
 tr '\n' '\0' < "$joblist" | xargs -0 -P "$jobs" -I{} bash -c 'run_job "$1"' _ {}
 
@@ -133,11 +142,14 @@ for variant in "${variant_list[@]}"; do
     "$bin/keepless_eval" "${reports[@]}" --out "$vdir" > "$vdir/report.stdout" || failed=1
   fi
 done
-awk -F'\t' 'NR > 1 { cpu += $5; if ($6 != 0) bad++ } END { printf "eval_sweep: %d s CPU in all jobs, %d failed\n", cpu, bad }' \
-  "$out/jobs.tsv" >&2
+# The last line per job counts (--resume may have run a job again).
+summary=$(awk -F'\t' 'NR > 1 { cpu[$1 FS $2 FS $3] = $5; rc[$1 FS $2 FS $3] = $6 }
+  END { for (k in cpu) { total += cpu[k]; if (rc[k] != 0) bad++ } printf "%d %d", total, bad }' "$out/jobs.tsv")
+read -r cpu_total bad_jobs <<< "$summary"
+echo "eval_sweep: $cpu_total s CPU in all jobs, $bad_jobs failed" >&2
 echo "eval_sweep: $(($(date +%s) - t0)) s wall with -j $jobs; tables in $out/[VARIANT/]tables.md, plots" \
      "sweep_*.svg beside them, the COLMAP fixture's rows in colmap/stdout.txt" >&2
-if [ "$failed" != 0 ] || awk -F'\t' 'NR > 1 && $6 != 0 { bad = 1 } END { exit !bad }' "$out/jobs.tsv"; then
+if [ "$failed" != 0 ] || [ "$bad_jobs" != 0 ]; then
   echo "eval_sweep: a job or a report failed (exit column of $out/jobs.tsv)" >&2
   exit 1
 fi
