@@ -1,6 +1,7 @@
 #include "matching.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 
@@ -19,6 +20,22 @@ struct Best {
       dist = d, index = i, level = level_i;
     } else if (d < dist2) {
       dist2 = d, level2 = level_i;
+    }
+  }
+};
+
+// Best with ties to the lowest index, so candidates may come in any order
+// (the triangulation search visits b's keypoints level by level) and the
+// outcome is that of offering them in index order.
+struct BestOfAny {
+  int dist = std::numeric_limits<int>::max(), dist2 = std::numeric_limits<int>::max();
+  int index = -1;
+  void offer(int d, int i) {
+    if (d < dist || (d == dist && i < index)) {
+      dist2 = dist;
+      dist = d, index = i;
+    } else if (d < dist2) {
+      dist2 = d;
     }
   }
 };
@@ -155,9 +172,28 @@ std::vector<std::pair<int, int>> search_for_triangulation(const Map& map, int a,
   const Eigen::Vector3d ca = kb.Tcw * ka.centre();
   const double eu = cam.fx * ca.x() / ca.z() + cam.cx, ev = cam.fy * ca.y() / ca.z() + cam.cy;
 
-  std::vector<int> free_b;
+  // b's unmatched keypoints by level, flat (the loop below runs |a| x |b|
+  // times per neighbour): position, index, and whether it is near the epipole.
+  struct Level {
+    std::vector<double> x, y;
+    std::vector<int> index;
+    std::vector<char> near_epipole;
+  };
+  std::array<Level, kLevels> free_b;
+  std::array<double, kLevels> max_e2{};  // chi2 3.84 x sigma^2 of the level
+  for (int l = 0; l < kLevels; ++l) {
+    const double s = pyramid().scale[static_cast<std::size_t>(l)];
+    max_e2[static_cast<std::size_t>(l)] = 3.84 * s * s;
+  }
   for (std::size_t j = 0; j < kb.mp.size(); ++j) {
-    if (kb.mp[j] < 0) free_b.push_back(static_cast<int>(j));
+    if (kb.mp[j] >= 0) continue;
+    const cv::KeyPoint& pb = kb.f.keys[j];
+    Level& level = free_b[static_cast<std::size_t>(pb.octave)];
+    const double du = eu - pb.pt.x, dv = ev - pb.pt.y;
+    level.x.push_back(pb.pt.x);
+    level.y.push_back(pb.pt.y);
+    level.index.push_back(static_cast<int>(j));
+    level.near_epipole.push_back(du * du + dv * dv < 100 * pyramid().scale[static_cast<std::size_t>(pb.octave)]);
   }
   std::vector<std::pair<int, int>> out;
   std::vector<int> taken(kb.mp.size(), -1);
@@ -168,22 +204,24 @@ std::vector<std::pair<int, int>> search_for_triangulation(const Map& map, int a,
     const Eigen::Vector3d line = F * Eigen::Vector3d(pa.pt.x, pa.pt.y, 1);
     const double norm2 = line.x() * line.x() + line.y() * line.y();
     if (norm2 <= 0) continue;
-    Best best;
-    for (int j : free_b) {
-      const cv::KeyPoint& pb = kb.f.keys[static_cast<std::size_t>(j)];
-      if (std::abs(pb.octave - pa.octave) > 1) continue;
-      const double num = line.x() * pb.pt.x + line.y() * pb.pt.y + line.z();
-      if (num * num / norm2 >= 3.84 * pyramid().scale[static_cast<std::size_t>(pb.octave)] *
-                                      pyramid().scale[static_cast<std::size_t>(pb.octave)]) {
-        continue;
+    const bool monocular = ka.f.ur[i] < 0;
+    const std::uint8_t* da = ka.f.descriptors.ptr(static_cast<int>(i));
+    BestOfAny best;
+    for (int l = std::max(0, pa.octave - 1); l <= std::min(kLevels - 1, pa.octave + 1); ++l) {
+      const Level& level = free_b[static_cast<std::size_t>(l)];
+      const double max_e2_l = max_e2[static_cast<std::size_t>(l)];
+      // |num| beyond this bound fails the chi2 test below for certain (the
+      // margin dwarfs rounding), so most keypoints skip the division.
+      const double bound = norm2 > 1e-300 ? std::sqrt(max_e2_l * norm2) * (1 + 1e-6)
+                                          : std::numeric_limits<double>::infinity();
+      for (std::size_t k = 0; k < level.index.size(); ++k) {
+        const double num = line.x() * level.x[k] + line.y() * level.y[k] + line.z();
+        if (std::abs(num) > bound || num * num / norm2 >= max_e2_l) continue;
+        if (monocular && level.near_epipole[k]) continue;
+        const int j = level.index[k];
+        const int d = hamming(da, kb.f.descriptors.ptr(j));
+        if (d <= kHammingLow) best.offer(d, j);
       }
-      const int d = hamming(ka.f.descriptors, static_cast<int>(i), kb.f.descriptors, j);
-      if (d > kHammingLow) continue;
-      const double du = eu - pb.pt.x, dv = ev - pb.pt.y;
-      if (ka.f.ur[i] < 0 && du * du + dv * dv < 100 * pyramid().scale[static_cast<std::size_t>(pb.octave)]) {
-        continue;
-      }
-      best.offer(d, j, 0);
     }
     if (best.index < 0) continue;
     if (best.dist2 != std::numeric_limits<int>::max() && best.dist > kTriangulationRatio * best.dist2) continue;

@@ -6,6 +6,7 @@
 
 #include <array>
 #include <cstdint>
+#include <cstring>
 #include <vector>
 
 #include <opencv2/core.hpp>
@@ -58,6 +59,24 @@ class OrbExtractor {
   cv::Ptr<cv::ORB> strict_, loose_;
 };
 
-int hamming(const cv::Mat& a, int ra, const cv::Mat& b, int rb);
+// Hamming distance of two 32-byte ORB descriptors. Inline and popcount by
+// bit arithmetic: the x86-64 baseline has no popcnt instruction, so
+// __builtin_popcountll would be a libgcc call per word, and this is the
+// inner loop of every descriptor search. Byte counts (<= 8 each) are summed
+// over the four words before the final horizontal add (<= 32 per byte).
+inline int hamming(const std::uint8_t* a, const std::uint8_t* b) {
+  std::uint64_t bytes = 0;
+  for (int i = 0; i < 4; ++i) {
+    std::uint64_t wa, wb;
+    std::memcpy(&wa, a + 8 * i, 8);
+    std::memcpy(&wb, b + 8 * i, 8);
+    std::uint64_t x = wa ^ wb;
+    x -= (x >> 1) & 0x5555555555555555ULL;
+    x = (x & 0x3333333333333333ULL) + ((x >> 2) & 0x3333333333333333ULL);
+    bytes += (x + (x >> 4)) & 0x0f0f0f0f0f0f0f0fULL;
+  }
+  return static_cast<int>((bytes * 0x0101010101010101ULL) >> 56);
+}
+inline int hamming(const cv::Mat& a, int ra, const cv::Mat& b, int rb) { return hamming(a.ptr(ra), b.ptr(rb)); }
 
 }  // namespace keepless::eval::vo
