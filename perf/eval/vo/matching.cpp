@@ -40,6 +40,50 @@ struct BestOfAny {
   }
 };
 
+// Keypoints (`which`, of one level) flat and sorted by x or by y, with
+// whether each lies within the monocular triangulation's epipole radius.
+struct SortedKeys {
+  std::vector<double> key, x, y;  // key: the sorted coordinate
+  std::vector<int> index;
+  std::vector<char> near_epipole;
+  double other_min = 0, other_max = 0;  // range of the other coordinate
+
+  SortedKeys() = default;
+  SortedKeys(const std::vector<cv::KeyPoint>& keys, std::vector<int> which, double eu, double ev, bool by_x) {
+    const auto coord = [&](int j, bool along_x) {
+      const cv::Point2f& p = keys[static_cast<std::size_t>(j)].pt;
+      return along_x ? p.x : p.y;
+    };
+    std::stable_sort(which.begin(), which.end(), [&](int a, int b) { return coord(a, by_x) < coord(b, by_x); });
+    other_min = std::numeric_limits<double>::infinity();
+    other_max = -other_min;
+    for (int j : which) {
+      const cv::KeyPoint& pb = keys[static_cast<std::size_t>(j)];
+      const double du = eu - pb.pt.x, dv = ev - pb.pt.y;
+      key.push_back(coord(j, by_x));
+      x.push_back(pb.pt.x);
+      y.push_back(pb.pt.y);
+      index.push_back(j);
+      near_epipole.push_back(du * du + dv * dv < 100 * pyramid().scale[static_cast<std::size_t>(pb.octave)]);
+      other_min = std::min<double>(other_min, coord(j, !by_x));
+      other_max = std::max<double>(other_max, coord(j, !by_x));
+    }
+  }
+
+  // Index range of the keypoints within `bound` of a x + b y + c = 0
+  // (|a x + b y + c| <= bound), a superset: the line crosses the sorted
+  // coordinate over the other's range, widened by bound / |a| and a pixel.
+  std::pair<std::size_t, std::size_t> band(const Eigen::Vector3d& line, bool steep, double bound) const {
+    if (!std::isfinite(bound) || key.empty()) return {0, key.size()};
+    const double a = steep ? line.x() : line.y(), b = steep ? line.y() : line.x();
+    const double e0 = -(line.z() + b * other_min) / a, e1 = -(line.z() + b * other_max) / a;
+    const double slack = bound / std::abs(a) * (1 + 1e-6) + 1;
+    const auto lo = std::lower_bound(key.begin(), key.end(), std::min(e0, e1) - slack);
+    const auto hi = std::upper_bound(lo, key.end(), std::max(e0, e1) + slack);
+    return {static_cast<std::size_t>(lo - key.begin()), static_cast<std::size_t>(hi - key.begin())};
+  }
+};
+
 bool project(const PinholeCamera& cam, const Eigen::Isometry3d& Tcw, const Eigen::Vector3d& X, double* u,
              double* v, double* z) {
   const Eigen::Vector3d p = Tcw * X;
@@ -173,27 +217,19 @@ std::vector<std::pair<int, int>> search_for_triangulation(const Map& map, int a,
   const double eu = cam.fx * ca.x() / ca.z() + cam.cx, ev = cam.fy * ca.y() / ca.z() + cam.cy;
 
   // b's unmatched keypoints by level, flat (the loop below runs |a| x |b|
-  // times per neighbour): position, index, and whether it is near the epipole.
-  struct Level {
-    std::vector<double> x, y;
-    std::vector<int> index;
-    std::vector<char> near_epipole;
-  };
-  std::array<Level, kLevels> free_b;
-  std::array<double, kLevels> max_e2{};  // chi2 3.84 x sigma^2 of the level
-  for (int l = 0; l < kLevels; ++l) {
-    const double s = pyramid().scale[static_cast<std::size_t>(l)];
-    max_e2[static_cast<std::size_t>(l)] = 3.84 * s * s;
-  }
+  // times per neighbour), sorted by x and by y: a line's band is then a range
+  // of the coordinate it crosses faster.
+  std::array<std::vector<int>, kLevels> level_b;
   for (std::size_t j = 0; j < kb.mp.size(); ++j) {
-    if (kb.mp[j] >= 0) continue;
-    const cv::KeyPoint& pb = kb.f.keys[j];
-    Level& level = free_b[static_cast<std::size_t>(pb.octave)];
-    const double du = eu - pb.pt.x, dv = ev - pb.pt.y;
-    level.x.push_back(pb.pt.x);
-    level.y.push_back(pb.pt.y);
-    level.index.push_back(static_cast<int>(j));
-    level.near_epipole.push_back(du * du + dv * dv < 100 * pyramid().scale[static_cast<std::size_t>(pb.octave)]);
+    if (kb.mp[j] < 0) level_b[static_cast<std::size_t>(kb.f.keys[j].octave)].push_back(static_cast<int>(j));
+  }
+  std::array<SortedKeys, kLevels> by_x, by_y;
+  std::array<double, kLevels> max_e2{};  // chi2 3.84 x sigma^2 of the level
+  for (std::size_t l = 0; l < kLevels; ++l) {
+    const double s = pyramid().scale[l];
+    max_e2[l] = 3.84 * s * s;
+    by_x[l] = SortedKeys(kb.f.keys, level_b[l], eu, ev, true);
+    by_y[l] = SortedKeys(kb.f.keys, level_b[l], eu, ev, false);
   }
   std::vector<std::pair<int, int>> out;
   std::vector<int> taken(kb.mp.size(), -1);
@@ -205,20 +241,23 @@ std::vector<std::pair<int, int>> search_for_triangulation(const Map& map, int a,
     const double norm2 = line.x() * line.x() + line.y() * line.y();
     if (norm2 <= 0) continue;
     const bool monocular = ka.f.ur[i] < 0;
+    const bool steep = std::abs(line.x()) >= std::abs(line.y());
     const std::uint8_t* da = ka.f.descriptors.ptr(static_cast<int>(i));
     BestOfAny best;
     for (int l = std::max(0, pa.octave - 1); l <= std::min(kLevels - 1, pa.octave + 1); ++l) {
-      const Level& level = free_b[static_cast<std::size_t>(l)];
+      const SortedKeys& keys = (steep ? by_x : by_y)[static_cast<std::size_t>(l)];
       const double max_e2_l = max_e2[static_cast<std::size_t>(l)];
       // |num| beyond this bound fails the chi2 test below for certain (the
-      // margin dwarfs rounding), so most keypoints skip the division.
-      const double bound = norm2 > 1e-300 ? std::sqrt(max_e2_l * norm2) * (1 + 1e-6)
-                                          : std::numeric_limits<double>::infinity();
-      for (std::size_t k = 0; k < level.index.size(); ++k) {
-        const double num = line.x() * level.x[k] + line.y() * level.y[k] + line.z();
+      // margin dwarfs rounding), so most keypoints skip the division; a
+      // non-finite bound (degenerate line) visits every keypoint as before.
+      const double bound = line.allFinite() && norm2 > 1e-300 ? std::sqrt(max_e2_l * norm2) * (1 + 1e-6)
+                                                              : std::numeric_limits<double>::infinity();
+      const auto [k0, k1] = keys.band(line, steep, bound);
+      for (std::size_t k = k0; k < k1; ++k) {
+        const double num = line.x() * keys.x[k] + line.y() * keys.y[k] + line.z();
         if (std::abs(num) > bound || num * num / norm2 >= max_e2_l) continue;
-        if (monocular && level.near_epipole[k]) continue;
-        const int j = level.index[k];
+        if (monocular && keys.near_epipole[k]) continue;
+        const int j = keys.index[k];
         const int d = hamming(da, kb.f.descriptors.ptr(j));
         if (d <= kHammingLow) best.offer(d, j);
       }
