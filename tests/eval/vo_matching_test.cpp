@@ -6,6 +6,7 @@
 // monocular keypoints, repeated descriptors (ties) and keypoints near the
 // epipole.
 
+#include <algorithm>
 #include <cstdint>
 #include <cstdlib>
 #include <limits>
