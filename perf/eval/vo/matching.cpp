@@ -1,6 +1,7 @@
 #include "matching.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 
@@ -20,6 +21,66 @@ struct Best {
     } else if (d < dist2) {
       dist2 = d, level2 = level_i;
     }
+  }
+};
+
+// Best with ties to the lowest index, so candidates may come in any order
+// (the triangulation search visits b's keypoints level by level) and the
+// outcome is that of offering them in index order.
+struct BestOfAny {
+  int dist = std::numeric_limits<int>::max(), dist2 = std::numeric_limits<int>::max();
+  int index = -1;
+  void offer(int d, int i) {
+    if (d < dist || (d == dist && i < index)) {
+      dist2 = dist;
+      dist = d, index = i;
+    } else if (d < dist2) {
+      dist2 = d;
+    }
+  }
+};
+
+// Keypoints (`which`, of one level) flat and sorted by x or by y, with
+// whether each lies within the monocular triangulation's epipole radius.
+struct SortedKeys {
+  std::vector<double> key, x, y;  // key: the sorted coordinate
+  std::vector<int> index;
+  std::vector<char> near_epipole;
+  double other_min = 0, other_max = 0;  // range of the other coordinate
+
+  SortedKeys() = default;
+  SortedKeys(const std::vector<cv::KeyPoint>& keys, std::vector<int> which, double eu, double ev, bool by_x) {
+    const auto coord = [&](int j, bool along_x) {
+      const cv::Point2f& p = keys[static_cast<std::size_t>(j)].pt;
+      return along_x ? p.x : p.y;
+    };
+    std::stable_sort(which.begin(), which.end(), [&](int a, int b) { return coord(a, by_x) < coord(b, by_x); });
+    other_min = std::numeric_limits<double>::infinity();
+    other_max = -other_min;
+    for (int j : which) {
+      const cv::KeyPoint& pb = keys[static_cast<std::size_t>(j)];
+      const double du = eu - pb.pt.x, dv = ev - pb.pt.y;
+      key.push_back(coord(j, by_x));
+      x.push_back(pb.pt.x);
+      y.push_back(pb.pt.y);
+      index.push_back(j);
+      near_epipole.push_back(du * du + dv * dv < 100 * pyramid().scale[static_cast<std::size_t>(pb.octave)]);
+      other_min = std::min<double>(other_min, coord(j, !by_x));
+      other_max = std::max<double>(other_max, coord(j, !by_x));
+    }
+  }
+
+  // Index range of the keypoints within `bound` of a x + b y + c = 0
+  // (|a x + b y + c| <= bound), a superset: the line crosses the sorted
+  // coordinate over the other's range, widened by bound / |a| and a pixel.
+  std::pair<std::size_t, std::size_t> band(const Eigen::Vector3d& line, bool steep, double bound) const {
+    if (!std::isfinite(bound) || key.empty()) return {0, key.size()};
+    const double a = steep ? line.x() : line.y(), b = steep ? line.y() : line.x();
+    const double e0 = -(line.z() + b * other_min) / a, e1 = -(line.z() + b * other_max) / a;
+    const double slack = bound / std::abs(a) * (1 + 1e-6) + 1;
+    const auto lo = std::lower_bound(key.begin(), key.end(), std::min(e0, e1) - slack);
+    const auto hi = std::upper_bound(lo, key.end(), std::max(e0, e1) + slack);
+    return {static_cast<std::size_t>(lo - key.begin()), static_cast<std::size_t>(hi - key.begin())};
   }
 };
 
@@ -155,9 +216,20 @@ std::vector<std::pair<int, int>> search_for_triangulation(const Map& map, int a,
   const Eigen::Vector3d ca = kb.Tcw * ka.centre();
   const double eu = cam.fx * ca.x() / ca.z() + cam.cx, ev = cam.fy * ca.y() / ca.z() + cam.cy;
 
-  std::vector<int> free_b;
+  // b's unmatched keypoints by level, flat (the loop below runs |a| x |b|
+  // times per neighbour), sorted by x and by y: a line's band is then a range
+  // of the coordinate it crosses faster.
+  std::array<std::vector<int>, kLevels> level_b;
   for (std::size_t j = 0; j < kb.mp.size(); ++j) {
-    if (kb.mp[j] < 0) free_b.push_back(static_cast<int>(j));
+    if (kb.mp[j] < 0) level_b[static_cast<std::size_t>(kb.f.keys[j].octave)].push_back(static_cast<int>(j));
+  }
+  std::array<SortedKeys, kLevels> by_x, by_y;
+  std::array<double, kLevels> max_e2{};  // chi2 3.84 x sigma^2 of the level
+  for (std::size_t l = 0; l < kLevels; ++l) {
+    const double s = pyramid().scale[l];
+    max_e2[l] = 3.84 * s * s;
+    by_x[l] = SortedKeys(kb.f.keys, level_b[l], eu, ev, true);
+    by_y[l] = SortedKeys(kb.f.keys, level_b[l], eu, ev, false);
   }
   std::vector<std::pair<int, int>> out;
   std::vector<int> taken(kb.mp.size(), -1);
@@ -168,22 +240,27 @@ std::vector<std::pair<int, int>> search_for_triangulation(const Map& map, int a,
     const Eigen::Vector3d line = F * Eigen::Vector3d(pa.pt.x, pa.pt.y, 1);
     const double norm2 = line.x() * line.x() + line.y() * line.y();
     if (norm2 <= 0) continue;
-    Best best;
-    for (int j : free_b) {
-      const cv::KeyPoint& pb = kb.f.keys[static_cast<std::size_t>(j)];
-      if (std::abs(pb.octave - pa.octave) > 1) continue;
-      const double num = line.x() * pb.pt.x + line.y() * pb.pt.y + line.z();
-      if (num * num / norm2 >= 3.84 * pyramid().scale[static_cast<std::size_t>(pb.octave)] *
-                                      pyramid().scale[static_cast<std::size_t>(pb.octave)]) {
-        continue;
+    const bool monocular = ka.f.ur[i] < 0;
+    const bool steep = std::abs(line.x()) >= std::abs(line.y());
+    const std::uint8_t* da = ka.f.descriptors.ptr(static_cast<int>(i));
+    BestOfAny best;
+    for (int l = std::max(0, pa.octave - 1); l <= std::min(kLevels - 1, pa.octave + 1); ++l) {
+      const SortedKeys& keys = (steep ? by_x : by_y)[static_cast<std::size_t>(l)];
+      const double max_e2_l = max_e2[static_cast<std::size_t>(l)];
+      // |num| beyond this bound fails the chi2 test below for certain (the
+      // margin dwarfs rounding), so most keypoints skip the division; a
+      // non-finite bound (degenerate line) visits every keypoint as before.
+      const double bound = line.allFinite() && norm2 > 1e-300 ? std::sqrt(max_e2_l * norm2) * (1 + 1e-6)
+                                                              : std::numeric_limits<double>::infinity();
+      const auto [k0, k1] = keys.band(line, steep, bound);
+      for (std::size_t k = k0; k < k1; ++k) {
+        const double num = line.x() * keys.x[k] + line.y() * keys.y[k] + line.z();
+        if (std::abs(num) > bound || num * num / norm2 >= max_e2_l) continue;
+        if (monocular && keys.near_epipole[k]) continue;
+        const int j = keys.index[k];
+        const int d = hamming(da, kb.f.descriptors.ptr(j));
+        if (d <= kHammingLow) best.offer(d, j);
       }
-      const int d = hamming(ka.f.descriptors, static_cast<int>(i), kb.f.descriptors, j);
-      if (d > kHammingLow) continue;
-      const double du = eu - pb.pt.x, dv = ev - pb.pt.y;
-      if (ka.f.ur[i] < 0 && du * du + dv * dv < 100 * pyramid().scale[static_cast<std::size_t>(pb.octave)]) {
-        continue;
-      }
-      best.offer(d, j, 0);
     }
     if (best.index < 0) continue;
     if (best.dist2 != std::numeric_limits<int>::max() && best.dist > kTriangulationRatio * best.dist2) continue;

@@ -17,14 +17,6 @@ const ScalePyramid& pyramid() {
   return p;
 }
 
-int hamming(const cv::Mat& a, int ra, const cv::Mat& b, int rb) {
-  const auto* pa = reinterpret_cast<const std::uint64_t*>(a.ptr(ra));
-  const auto* pb = reinterpret_cast<const std::uint64_t*>(b.ptr(rb));
-  int d = 0;
-  for (int i = 0; i < 4; ++i) d += __builtin_popcountll(pa[i] ^ pb[i]);
-  return d;
-}
-
 void Frame::build_grid(int width, int height) {
   cols_ = (width + kCell - 1) / kCell;
   rows_ = (height + kCell - 1) / kCell;

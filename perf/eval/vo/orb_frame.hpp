@@ -6,6 +6,7 @@
 
 #include <array>
 #include <cstdint>
+#include <cstring>
 #include <vector>
 
 #include <opencv2/core.hpp>
@@ -58,6 +59,26 @@ class OrbExtractor {
   cv::Ptr<cv::ORB> strict_, loose_;
 };
 
-int hamming(const cv::Mat& a, int ra, const cv::Mat& b, int rb);
+// Hamming distance of two 32-byte ORB descriptors. Inline and popcount by
+// bit arithmetic: the x86-64 baseline has no popcnt instruction, so
+// __builtin_popcountll would be a libgcc call per word, and this is the
+// inner loop of every descriptor search. Byte counts (<= 8 each) are summed
+// over the four words (<= 32 per byte) before the horizontal add.
+inline int hamming(const std::uint8_t* a, const std::uint8_t* b) {
+  std::uint64_t bytes = 0;
+  for (int i = 0; i < 4; ++i) {
+    std::uint64_t wa, wb;
+    std::memcpy(&wa, a + 8 * i, 8);
+    std::memcpy(&wb, b + 8 * i, 8);
+    std::uint64_t x = wa ^ wb;
+    x -= (x >> 1) & 0x5555555555555555ULL;
+    x = (x & 0x3333333333333333ULL) + ((x >> 2) & 0x3333333333333333ULL);
+    bytes += (x + (x >> 4)) & 0x0f0f0f0f0f0f0f0fULL;
+  }
+  // Bytes to 16-bit lanes (<= 64 each) first: the total, up to 256, does not fit a byte.
+  const std::uint64_t halves = (bytes & 0x00ff00ff00ff00ffULL) + ((bytes >> 8) & 0x00ff00ff00ff00ffULL);
+  return static_cast<int>((halves * 0x0001000100010001ULL) >> 48);
+}
+inline int hamming(const cv::Mat& a, int ra, const cv::Mat& b, int rb) { return hamming(a.ptr(ra), b.ptr(rb)); }
 
 }  // namespace keepless::eval::vo

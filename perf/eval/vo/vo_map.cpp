@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <map>
 
 namespace keepless::eval::vo {
 
@@ -120,16 +119,16 @@ void Map::update_point(int p) {
 }
 
 std::vector<std::pair<int, int>> Map::covisibles(int kf, int min_weight) const {
-  std::map<int, int> weight;
+  std::vector<int> weight(kfs.size(), 0);  // by keyframe index (a std::map cost a node per keyframe)
   for (int p : kfs[static_cast<std::size_t>(kf)].mp) {
     if (p < 0 || points[static_cast<std::size_t>(p)].bad) continue;
     for (const auto& o : points[static_cast<std::size_t>(p)].obs) {
-      if (o.first != kf && !kfs[static_cast<std::size_t>(o.first)].bad) ++weight[o.first];
+      if (o.first != kf && !kfs[static_cast<std::size_t>(o.first)].bad) ++weight[static_cast<std::size_t>(o.first)];
     }
   }
   std::vector<std::pair<int, int>> out;
-  for (const auto& [k, w] : weight) {
-    if (w >= min_weight) out.emplace_back(k, w);
+  for (std::size_t k = 0; k < weight.size(); ++k) {
+    if (weight[k] > 0 && weight[k] >= min_weight) out.emplace_back(static_cast<int>(k), weight[k]);
   }
   std::sort(out.begin(), out.end(), [](const auto& a, const auto& b) {
     return a.second != b.second ? a.second > b.second : a.first > b.first;
