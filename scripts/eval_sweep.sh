@@ -12,7 +12,8 @@
 # A variant is a keepless configuration run through the same sweep (every
 # selector alike where the flag applies to all); with several, each goes to
 # OUT/VARIANT. paper: the paper's network (default); maturity: tracking-safe
-# culling, --maturity 2; track: --cost track, keepless only (the baselines
+# culling, --maturity 2 --scope newest (every selector decides the keyframe
+# that just became 2 old); track: --cost track, keepless only (the baselines
 # are paper's); defer: deferred culling, --defer 2.
 #
 #   scripts/eval_sweep.sh [--data-root DIR] [--fractions 0.1,0.2,0.3,0.4,0.6] [--seeds 5] [-j 2]
@@ -70,7 +71,7 @@ selected() { [[ ",$only," == *",$1,"* ]]; }
 variant_flags() {
   case "$1" in
     paper) echo "||" ;;
-    maturity) echo "|--maturity 2|-" ;;
+    maturity) echo "|--maturity 2 --scope newest|-" ;;
     track) echo "|--cost track --no-baselines|--cost track" ;;
     defer) echo "|--defer 2|-" ;;
     *) echo "eval_sweep: unknown variant $1 (paper, maturity, track, defer)" >&2; return 1 ;;

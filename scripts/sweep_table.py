@@ -19,7 +19,7 @@ import sys
 from collections import defaultdict
 
 METHODS = [("ours", "keepless"), ("random", "random"), ("longest_track", "longest track"), ("anms", "ANMS")]
-FLAGS = {"paper": "", "maturity": "--maturity 2", "track": "--cost track", "defer": "--defer 2"}
+FLAGS = {"paper": "", "maturity": "--maturity 2 --scope newest", "track": "--cost track", "defer": "--defer 2"}
 
 
 def load(out, variants):

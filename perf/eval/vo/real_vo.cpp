@@ -700,8 +700,17 @@ void Vo::select_points(int kf, const std::vector<int>& local) {
     return;
   }
   result_.selector.add(sparsifier_.summary());
-  // The authors' integration: only the new keyframe's points are decided.
-  const KeyFrame& f = map_.kfs[static_cast<std::size_t>(kf)];
+  // The authors' integration: only the new keyframe's points are decided;
+  // with the maturity guard A, those of the keyframe that just became A old
+  // (as core's Scope::kNewest decides it): deciding the new keyframe's
+  // matured points instead would cull exactly those the tracker still sees.
+  const std::size_t maturity = opt_.params.maturity_keyframes;
+  if (maturity > 0 && ordered.size() <= maturity) {  // every point is young yet
+    kept_fraction_sum_ += 1.0;
+    result_.selector_seconds += seconds_since(start);
+    return;
+  }
+  const KeyFrame& f = map_.kfs[static_cast<std::size_t>(maturity > 0 ? ordered[ordered.size() - 1 - maturity] : kf)];
   std::vector<Candidate> candidates;
   std::vector<core::PointId> keepless_culls;
   opencv::culled_points(sparsifier_, &keepless_culls);
