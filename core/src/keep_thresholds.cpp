@@ -28,7 +28,9 @@ struct KeepThresholds::Impl {
   std::vector<Point> point;            // [max_nodes] by node
   std::vector<std::uint32_t> thr;      // [max_nodes] M* by node
   std::vector<std::int64_t> flow;      // [max_nodes] by node, after evaluate_at
-  std::vector<solver::ArcId> out;      // [max_nodes] a pair's sink arc
+  std::vector<std::int32_t> way_cost;  // [max_nodes] a pair's sink arc's cost (0: none)
+  std::vector<solver::NodeId> pairs;   // [max_nodes] the nodes with units, as first met
+  std::int32_t pair_count = 0;
   std::vector<std::int32_t> at;        // [max_nodes + 1] a point's units (by rank)
   std::vector<std::int32_t> first;     // [max_nodes + 1] a pair's units (by node); its cells
   std::vector<std::uint32_t> lo, hi;   // [max_nodes] a pair's unit costs
@@ -51,7 +53,8 @@ struct KeepThresholds::Impl {
     point.resize(n);
     thr.resize(n);
     flow.resize(n);
-    out.resize(n);
+    way_cost.resize(n);
+    pairs.resize(n);
     at.resize(n + 1);
     first.resize(n + 1);
     lo.resize(n);
@@ -83,10 +86,10 @@ struct KeepThresholds::Impl {
   // would not fit in by_pair (costs too spread).
   bool positions_by_cells(std::int32_t listed_count) {
     std::int64_t cells = 0;
-    for (std::int32_t v = 0; v < nodes; ++v) {
-      const std::int32_t units_of = first[v + 1];   // counted, not yet summed
+    for (std::int32_t i = 0; i < pair_count; ++i) {  // only they have units (first[v + 1] > 0)
+      const solver::NodeId v = pairs[i];
       first[v] = static_cast<std::int32_t>(cells);  // the pair's first cell
-      cells += units_of > 0 ? std::int64_t{hi[v]} - lo[v] + 1 : 0;
+      cells += std::int64_t{hi[v]} - lo[v] + 1;
     }
     if (cells > static_cast<std::int64_t>(by_pair.size())) return false;
     std::int32_t* cell = by_pair.data();
@@ -97,9 +100,10 @@ struct KeepThresholds::Impl {
       pos[u] = c;
       ++cell[c];
     }
-    for (std::int32_t v = 0; v < nodes; ++v) {  // exclusive prefix within each pair
+    for (std::int32_t i = 0; i < pair_count; ++i) {  // exclusive prefix within each pair
+      const solver::NodeId v = pairs[i];
       const std::int32_t b = first[v];
-      const std::int32_t e = v + 1 < nodes ? first[v + 1] : static_cast<std::int32_t>(cells);
+      const auto e = static_cast<std::int32_t>(b + (hi[v] - lo[v]) + 1);
       std::int32_t sum = 0;
       for (std::int32_t c = b; c < e; ++c) {
         const std::int32_t n = cell[c];
@@ -175,7 +179,7 @@ struct KeepThresholds::Impl {
     arc = solver.arc_data();
     std::fill(point.begin(), point.begin() + nodes, Point{});
     std::fill(thr.begin(), thr.begin() + nodes, kNever);
-    std::fill(out.begin(), out.begin() + nodes, -1);
+    std::fill(way_cost.begin(), way_cost.begin() + nodes, 0);
     std::fill(first.begin(), first.begin() + nodes + 1, 0);
     std::fill(lo.begin(), lo.begin() + nodes, ~0u);
     std::fill(hi.begin(), hi.begin() + nodes, 0u);
@@ -191,18 +195,23 @@ struct KeepThresholds::Impl {
     // incrementally edited network scatters the kinds over the ids, as in
     // PairwiseStart): a pair's sink arc is its way out, a point's pair arc
     // becomes a unit; per pair its unit count and cost range.
+    // A pair is listed when its first unit is met (written always, counted
+    // then), so later passes visit the pairs, not every node.
     std::int32_t listed_count = 0;
+    pair_count = 0;
     for (solver::ArcId a = 0; a < arcs; ++a) {
       const solver::Arc e = arc[a];
       const bool live = e.capacity != 0;
       const bool way_out = live && e.head == sink;
-      if (way_out) out[e.tail] = a;  // one per pair: predictable
+      if (way_out) way_cost[e.tail] = e.cost;  // one per pair: predictable
       const Point p = point[e.tail];
       const bool unit = live && !way_out && p.rank >= 0;
       const std::uint32_t cost = static_cast<std::uint32_t>(p.cost) + static_cast<std::uint32_t>(e.cost);
       listed[listed_count] = Listed{cost, p.rank, e.head};
       listed_count += unit ? 1 : 0;
       const solver::NodeId q = unit ? e.head : sink;  // the sink collects what is not a unit
+      pairs[pair_count] = q;
+      pair_count += unit && first[q + 1] == 0 ? 1 : 0;
       at[unit ? p.rank + 1 : 0] += unit ? 1 : 0;
       first[q + 1] += unit ? 1 : 0;
       lo[q] = std::min(lo[q], cost);
@@ -246,8 +255,7 @@ struct KeepThresholds::Impl {
       for (std::int32_t u = at[k]; u < at[k + 1]; ++u) {  // no branch on the (unpredictable) cut
         const bool carried = static_cast<std::int64_t>(pos[u]) < m;
         const Unit& unit = units[u];
-        const solver::ArcId way_out = out[unit.pair];
-        const std::int64_t cost = static_cast<std::int64_t>(unit.cost) + (way_out >= 0 ? arc[way_out].cost : 0);
+        const std::int64_t cost = static_cast<std::int64_t>(unit.cost) + way_cost[unit.pair];
         f += carried ? 1 : 0;
         total_cost += carried ? cost : 0;
       }
@@ -265,6 +273,8 @@ void KeepThresholds::compute(const solver::MinCostFlow& solver, solver::NodeId s
   impl_->compute(solver, sink, order, count, theta);
 }
 std::uint32_t KeepThresholds::threshold(solver::NodeId node) const { return impl_->thr[node]; }
+const std::uint32_t* KeepThresholds::threshold_data() const { return impl_->thr.data(); }
+const std::int64_t* KeepThresholds::flow_data() const { return impl_->flow.data(); }
 void KeepThresholds::evaluate_at(std::int64_t m) { impl_->evaluate_at(m); }
 std::int64_t KeepThresholds::flow_at(solver::NodeId node) const { return impl_->flow[node]; }
 std::int64_t KeepThresholds::max_flow() const { return impl_->max_flow; }
@@ -274,7 +284,7 @@ std::size_t KeepThresholds::memory_bytes() const {
   const Impl& s = *impl_;
   return sizeof(Impl) + s.point.capacity() * sizeof(Impl::Point) +
          s.thr.capacity() * sizeof(std::uint32_t) + s.flow.capacity() * sizeof(std::int64_t) +
-         s.out.capacity() * sizeof(solver::ArcId) +
+         s.way_cost.capacity() * sizeof(std::int32_t) + s.pairs.capacity() * sizeof(solver::NodeId) +
          (s.at.capacity() + s.first.capacity()) * sizeof(std::int32_t) +
          (s.lo.capacity() + s.hi.capacity() + s.pos.capacity()) * sizeof(std::uint32_t) +
          s.listed.capacity() * sizeof(Impl::Listed) + s.units.capacity() * sizeof(Impl::Unit) +
