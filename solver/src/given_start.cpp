@@ -14,46 +14,51 @@ using namespace detail;
 // residual arc's reduced cost is >= 0, so a larger gap proves the flow
 // maximum while the reduced costs prove it cheapest for its value.
 bool MinCostFlow::Impl::adopt(NodeId s, NodeId t, const Flow* flow, const Cost* potential) {
-  // Locals, not members, in the loops: the compiler cannot keep a member
-  // in a register across stores through other pointers (one pass is most
-  // of a decision's certificate).
+  // Locals, not members, in the loops: a store through a byte pointer
+  // would make the compiler reload every member on every iteration.
   const NodeId n = nodes;
-  const ArcId m = arcs;
   Cost* pot = pot_ext.data();
   std::int64_t* ex = excess.data();
-  std::int32_t* carried = arc_flow.data();
-  const Arc* arc_at = arc.data();
+  std::uint8_t* seen_at = seen.data();
+  std::uint8_t* renewed_at = renewed.data();
   bool ok = true;
   for (NodeId v = 0; v < n; ++v) {
     ok &= potential[v] >= -kPotentialBound && potential[v] <= kPotentialBound;
     pot[v] = std::clamp(potential[v], -kPotentialBound, kPotentialBound);
+    ex[v] = 0;  // user numbering here
+    seen_at[v] = 1;  // the given potentials stand (see estimate_potentials)
+    renewed_at[v] = 0;
   }
-  std::fill(ex, ex + n, 0);  // user numbering here
-  std::fill(seen.begin(), seen.begin() + n, std::uint8_t{1});  // the given potentials stand (see estimate_potentials)
-  std::fill(renewed.begin(), renewed.begin() + n, std::uint8_t{0});
   Cost max_cost = 0;
   Cost total = 0;
+  const ArcId m = arcs;
   // No branches (`&`, `|`): an edited network scatters retired arcs over
   // the ids. A retired arc's flow must be 0, and is taken as 0.
   for (ArcId a = 0; a < m; ++a) {
     const Flow f = flow[a];
-    const Arc e = arc_at[a];
+    const Arc& e = arc[a];
     const bool live = (e.capacity > 0) & (e.tail != e.head);  // active(a)
-    const std::int32_t mask = -static_cast<std::int32_t>(live);  // masks, not selects: no jumps
-    const std::int32_t cap = e.capacity & mask;
-    const Cost rc = e.cost + pot[e.tail] - pot[e.head];
+    const std::int32_t cap = live ? e.capacity : 0;
+    const Cost rc = e.cost + pot_ext[e.tail] - pot_ext[e.head];
     ok &= (f >= 0) & (f <= cap) & ((f == cap) | (rc >= 0)) & ((f == 0) | (rc <= 0));
-    const auto fl = static_cast<std::int32_t>(std::min<Flow>(std::max<Flow>(f, 0), cap));
-    carried[a] = fl;
-    ex[e.tail] -= fl;
-    ex[e.head] += fl;
-    max_cost = std::max<Cost>(max_cost, e.cost & mask);
+    const auto fl = static_cast<std::int32_t>(std::clamp<Flow>(f, 0, cap));
+    arc_flow[a] = fl;
+    excess[e.tail] -= fl;
+    excess[e.head] += fl;
+    max_cost = std::max<Cost>(max_cost, live ? e.cost : 0);
     total += Cost{fl} * e.cost;
   }
   cost_total = total;
-  for (NodeId v = 0; v < n; ++v) ok &= (v == s) | (v == t) | (ex[v] == 0);
-  value = -ex[s];
-  return ok && pot[t] - pot[s] > Cost{n - 1} * max_cost;
+  // Conservation but at the terminals: an OR over the excesses with theirs
+  // set aside (no branch per node, and it vectorises).
+  const std::int64_t at_s = ex[s], at_t = ex[t];
+  ex[s] = ex[t] = 0;
+  std::int64_t unbalanced = 0;
+  for (NodeId v = 0; v < n; ++v) unbalanced |= ex[v];
+  ex[s] = at_s;
+  ex[t] = at_t;
+  value = -at_s;
+  return ok && unbalanced == 0 && pot[t] - pot[s] > Cost{n - 1} * max_cost;
 }
 
 Status MinCostFlow::Impl::solve_from(NodeId s, NodeId t, const Flow* flow, const Cost* potential,
