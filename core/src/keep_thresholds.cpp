@@ -29,7 +29,8 @@ struct KeepThresholds::Impl {
   std::vector<std::uint32_t> thr;      // [max_nodes] M* by node
   std::vector<std::int64_t> flow;      // [max_nodes] by node, after evaluate_at
   std::vector<std::int32_t> way_cost;  // [max_nodes] a pair's sink arc's cost (0: none)
-  std::vector<solver::NodeId> pairs;   // [max_nodes] the nodes with units, as first met
+  std::vector<solver::NodeId> pairs;   // [max_nodes] the pairs (nodes with units)
+  std::vector<std::uint8_t> listed_pair;  // [max_nodes] in `pairs` (met by a sink arc)
   std::int32_t pair_count = 0;
   std::vector<std::int32_t> at;        // [max_nodes + 1] a point's units (by rank)
   std::vector<std::int32_t> first;     // [max_nodes + 1] a pair's units (by node); its cells
@@ -55,6 +56,7 @@ struct KeepThresholds::Impl {
     flow.resize(n);
     way_cost.resize(n);
     pairs.resize(n);
+    listed_pair.resize(n);
     at.resize(n + 1);
     first.resize(n + 1);
     lo.resize(n);
@@ -85,6 +87,24 @@ struct KeepThresholds::Impl {
   // all in passes over the units in order. Returns false if the cells
   // would not fit in by_pair (costs too spread).
   bool positions_by_cells(std::int32_t listed_count) {
+    // The pairs met by their sink arcs, those with units kept, must hold
+    // every unit; else (a unit into a node without a way out: not the
+    // paper's network) the list is made from every node.
+    std::int64_t listed_units = 0;
+    std::int32_t kept = 0;
+    for (std::int32_t i = 0; i < pair_count; ++i) {
+      const solver::NodeId v = pairs[i];
+      listed_units += first[v + 1];
+      pairs[kept] = v;
+      kept += first[v + 1] > 0 ? 1 : 0;
+    }
+    pair_count = kept;
+    if (listed_units != listed_count) {
+      pair_count = 0;
+      for (solver::NodeId v = 0; v < nodes; ++v) {
+        if (first[v + 1] > 0) pairs[pair_count++] = v;
+      }
+    }
     std::int64_t cells = 0;
     for (std::int32_t i = 0; i < pair_count; ++i) {  // only they have units (first[v + 1] > 0)
       const solver::NodeId v = pairs[i];
@@ -180,6 +200,7 @@ struct KeepThresholds::Impl {
     std::fill(point.begin(), point.begin() + nodes, Point{});
     std::fill(thr.begin(), thr.begin() + nodes, kNever);
     std::fill(way_cost.begin(), way_cost.begin() + nodes, 0);
+    std::fill(listed_pair.begin(), listed_pair.begin() + nodes, std::uint8_t{0});
     std::fill(first.begin(), first.begin() + nodes + 1, 0);
     std::fill(lo.begin(), lo.begin() + nodes, ~0u);
     std::fill(hi.begin(), hi.begin() + nodes, 0u);
@@ -195,23 +216,27 @@ struct KeepThresholds::Impl {
     // incrementally edited network scatters the kinds over the ids, as in
     // PairwiseStart): a pair's sink arc is its way out, a point's pair arc
     // becomes a unit; per pair its unit count and cost range.
-    // A pair is listed when its first unit is met (written always, counted
-    // then), so later passes visit the pairs, not every node.
+    // The pairs are listed as their sink arcs are met, so later passes
+    // visit the pairs, not every node.
     std::int32_t listed_count = 0;
     pair_count = 0;
     for (solver::ArcId a = 0; a < arcs; ++a) {
       const solver::Arc e = arc[a];
       const bool live = e.capacity != 0;
-      const bool way_out = live && e.head == sink;
-      if (way_out) way_cost[e.tail] = e.cost;  // one per pair: predictable
+      const bool way_out = live & (e.head == sink);
+      if (way_out) {  // one per pair: predictable
+        way_cost[e.tail] = e.cost;
+        if (!listed_pair[e.tail]) {
+          listed_pair[e.tail] = 1;
+          pairs[pair_count++] = e.tail;
+        }
+      }
       const Point p = point[e.tail];
-      const bool unit = live && !way_out && p.rank >= 0;
+      const bool unit = live & !way_out & (p.rank >= 0);
       const std::uint32_t cost = static_cast<std::uint32_t>(p.cost) + static_cast<std::uint32_t>(e.cost);
       listed[listed_count] = Listed{cost, p.rank, e.head};
       listed_count += unit ? 1 : 0;
       const solver::NodeId q = unit ? e.head : sink;  // the sink collects what is not a unit
-      pairs[pair_count] = q;
-      pair_count += unit && first[q + 1] == 0 ? 1 : 0;
       at[unit ? p.rank + 1 : 0] += unit ? 1 : 0;
       first[q + 1] += unit ? 1 : 0;
       lo[q] = std::min(lo[q], cost);
@@ -285,6 +310,7 @@ std::size_t KeepThresholds::memory_bytes() const {
   return sizeof(Impl) + s.point.capacity() * sizeof(Impl::Point) +
          s.thr.capacity() * sizeof(std::uint32_t) + s.flow.capacity() * sizeof(std::int64_t) +
          s.way_cost.capacity() * sizeof(std::int32_t) + s.pairs.capacity() * sizeof(solver::NodeId) +
+         s.listed_pair.capacity() +
          (s.at.capacity() + s.first.capacity()) * sizeof(std::int32_t) +
          (s.lo.capacity() + s.hi.capacity() + s.pos.capacity()) * sizeof(std::uint32_t) +
          s.listed.capacity() * sizeof(Impl::Listed) + s.units.capacity() * sizeof(Impl::Unit) +
