@@ -336,14 +336,19 @@ std::uint32_t FractionBudget::take(double fraction, const PointDecision* d, std:
   n = std::min(n, static_cast<std::uint32_t>(known_.size()));
   std::uint32_t candidates = 0, kept_before = 0, fresh = 0;
   std::uint32_t h = 0;
+  // Locals: a byte store (known) would make every member reload per point.
+  const Entry* held = held_.data();
+  const std::uint32_t held_count = count_;
+  std::uint8_t* known_at = known_.data();
   for (std::uint32_t i = 0; i < n; ++i) {
-    while (h < count_ && held_[h].point < d[i].point) ++h;
-    const bool known = h < count_ && held_[h].point == d[i].point;
-    known_[i] = known ? (held_[h].kept ? kKnownKept : kKnown) : kFresh;
-    if (d[i].verdict == Verdict::kSkip) continue;
-    ++candidates;
-    kept_before += known_[i] == kKnownKept ? 1 : 0;
-    fresh += known ? 0 : 1;
+    while (h < held_count && held[h].point < d[i].point) ++h;
+    const bool known = h < held_count && held[h].point == d[i].point;
+    const std::uint8_t k = known ? (held[h].kept ? kKnownKept : kKnown) : kFresh;
+    known_at[i] = k;
+    const bool candidate = d[i].verdict != Verdict::kSkip;
+    candidates += candidate ? 1 : 0;
+    kept_before += candidate && k == kKnownKept ? 1 : 0;
+    fresh += candidate && !known ? 1 : 0;
   }
   evaluated_ += fresh;
   const auto due = static_cast<std::uint64_t>(std::floor(fraction * static_cast<double>(evaluated_) + 0.5));
@@ -355,12 +360,13 @@ std::uint32_t FractionBudget::take(double fraction, const PointDecision* d, std:
 void FractionBudget::record(const PointDecision* d, std::uint32_t n) {
   n = std::min(n, static_cast<std::uint32_t>(known_.size()));
   std::uint32_t m = 0;
+  Entry* next = next_.data();
+  const std::uint8_t* known_at = known_.data();
   for (std::uint32_t i = 0; i < n; ++i) {
-    if (d[i].verdict != Verdict::kSkip) {
-      next_[m++] = Entry{d[i].point, d[i].verdict == Verdict::kKeep};
-    } else if (known_[i] != kFresh) {
-      next_[m++] = Entry{d[i].point, known_[i] == kKnownKept};
-    }
+    const bool candidate = d[i].verdict != Verdict::kSkip;
+    // A candidate: kept by the budget or not; a skip: what was remembered, if anything.
+    next[m] = Entry{d[i].point, candidate ? d[i].verdict == Verdict::kKeep : known_at[i] == kKnownKept};
+    m += candidate || known_at[i] != kFresh ? 1 : 0;
   }
   held_.swap(next_);
   count_ = m;
