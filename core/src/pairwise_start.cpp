@@ -144,7 +144,7 @@ void PairwiseStart::Impl::compute(const solver::MinCostFlow& solver, solver::Nod
       out[e.tail] = a;
     }
     max_cost = std::max<solver::Cost>(max_cost, live ? e.cost : 0);
-    next[e.head] += live & !way_out & (point[e.tail].rank >= 0) ? 1 : 0;
+    next[e.head] += live && !way_out && point[e.tail].rank >= 0 ? 1 : 0;
   }
   std::int32_t grouped = 0;
   for (std::int32_t i = 0; i < pair_count; ++i) {
@@ -157,7 +157,7 @@ void PairwiseStart::Impl::compute(const solver::MinCostFlow& solver, solver::Nod
   for (solver::ArcId a = 0; a < arcs; ++a) {
     const solver::Arc e = arc[a];
     const Point p = point[e.tail];
-    const bool unit = (e.capacity != 0) & (e.head != sink) & (p.rank >= 0) & (out[e.head] >= 0);
+    const bool unit = e.capacity != 0 && e.head != sink && p.rank >= 0 && out[e.head] >= 0;
     std::int32_t& at = next[e.head];
     const auto cost = static_cast<std::uint32_t>(p.cost) + static_cast<std::uint32_t>(e.cost);
     units[unit ? at : dump] = Unit{cost, static_cast<std::uint32_t>(p.rank), a};
