@@ -223,7 +223,7 @@ struct KeepThresholds::Impl {
     for (solver::ArcId a = 0; a < arcs; ++a) {
       const solver::Arc e = arc[a];
       const bool live = e.capacity != 0;
-      const bool way_out = live & (e.head == sink);
+      const bool way_out = live && e.head == sink;
       if (way_out) {  // one per pair: predictable
         way_cost[e.tail] = e.cost;
         if (!listed_pair[e.tail]) {
@@ -232,7 +232,7 @@ struct KeepThresholds::Impl {
         }
       }
       const Point p = point[e.tail];
-      const bool unit = live & !way_out & (p.rank >= 0);
+      const bool unit = live && !way_out && p.rank >= 0;
       const std::uint32_t cost = static_cast<std::uint32_t>(p.cost) + static_cast<std::uint32_t>(e.cost);
       listed[listed_count] = Listed{cost, p.rank, e.head};
       listed_count += unit ? 1 : 0;
@@ -360,13 +360,12 @@ std::uint32_t FractionBudget::take(double fraction, const PointDecision* d, std:
 void FractionBudget::record(const PointDecision* d, std::uint32_t n) {
   n = std::min(n, static_cast<std::uint32_t>(known_.size()));
   std::uint32_t m = 0;
-  Entry* next = next_.data();
-  const std::uint8_t* known_at = known_.data();
   for (std::uint32_t i = 0; i < n; ++i) {
-    const bool candidate = d[i].verdict != Verdict::kSkip;
-    // A candidate: kept by the budget or not; a skip: what was remembered, if anything.
-    next[m] = Entry{d[i].point, candidate ? d[i].verdict == Verdict::kKeep : known_at[i] == kKnownKept};
-    m += candidate || known_at[i] != kFresh ? 1 : 0;
+    if (d[i].verdict != Verdict::kSkip) {
+      next_[m++] = Entry{d[i].point, d[i].verdict == Verdict::kKeep};
+    } else if (known_[i] != kFresh) {
+      next_[m++] = Entry{d[i].point, known_[i] == kKnownKept};
+    }
   }
   held_.swap(next_);
   count_ = m;
