@@ -221,15 +221,14 @@ struct Sparsifier::Impl {
       PointDecision& d = decisions[i];
       d.point = id;
       d.flow = 0;
+      views_of[i] = views;
       if (a < 0) {
         d.verdict = Verdict::kSkip;
         d.capacity = 0;
         threshold_of[i] = 0;
-        views_of[i] = views;
         ++sum.skipped;
         return;
       }
-      views_of[i] = views;
       const std::int64_t n = views;
       d.capacity = n * (n - 1) / 2;
       d.verdict = Verdict::kCull;
@@ -652,7 +651,8 @@ std::size_t Sparsifier::memory_bytes() const {
          s.pairwise.memory_bytes() + (s.thresholds ? s.thresholds->memory_bytes() : 0) +
          (s.fraction ? s.fraction->memory_bytes() : 0) +
          (s.threshold_of.capacity() + s.curve.capacity() + s.cursor.capacity() +
-          s.ranked.capacity() + s.views_of.capacity()) * sizeof(std::uint32_t) + s.head_of.capacity() * sizeof(solver::NodeId) +
+          s.ranked.capacity() + s.views_of.capacity()) * sizeof(std::uint32_t) +
+         s.head_of.capacity() * sizeof(solver::NodeId) +
          s.decisions.capacity() * sizeof(PointDecision) +
          s.in_scope.capacity() +
          (s.slots_at.capacity() + s.slots.capacity() + s.covered.capacity() +
