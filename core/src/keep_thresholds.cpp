@@ -29,9 +29,6 @@ struct KeepThresholds::Impl {
   std::vector<std::uint32_t> thr;      // [max_nodes] M* by node
   std::vector<std::int64_t> flow;      // [max_nodes] by node, after evaluate_at
   std::vector<std::int32_t> way_cost;  // [max_nodes] a pair's sink arc's cost (0: none)
-  std::vector<solver::NodeId> pairs;   // [max_nodes] the pairs (nodes with units)
-  std::vector<std::uint8_t> listed_pair;  // [max_nodes] in `pairs` (met by a sink arc)
-  std::int32_t pair_count = 0;
   std::vector<std::int32_t> at;        // [max_nodes + 1] a point's units (by rank)
   std::vector<std::int32_t> first;     // [max_nodes + 1] a pair's units (by node); its cells
   std::vector<std::uint32_t> lo, hi;   // [max_nodes] a pair's unit costs
@@ -55,8 +52,6 @@ struct KeepThresholds::Impl {
     thr.resize(n);
     flow.resize(n);
     way_cost.resize(n);
-    pairs.resize(n);
-    listed_pair.resize(n);
     at.resize(n + 1);
     first.resize(n + 1);
     lo.resize(n);
@@ -87,29 +82,11 @@ struct KeepThresholds::Impl {
   // all in passes over the units in order. Returns false if the cells
   // would not fit in by_pair (costs too spread).
   bool positions_by_cells(std::int32_t listed_count) {
-    // The pairs met by their sink arcs, those with units kept, must hold
-    // every unit; else (a unit into a node without a way out: not the
-    // paper's network) the list is made from every node.
-    std::int64_t listed_units = 0;
-    std::int32_t kept = 0;
-    for (std::int32_t i = 0; i < pair_count; ++i) {
-      const solver::NodeId v = pairs[i];
-      listed_units += first[v + 1];
-      pairs[kept] = v;
-      kept += first[v + 1] > 0 ? 1 : 0;
-    }
-    pair_count = kept;
-    if (listed_units != listed_count) {
-      pair_count = 0;
-      for (solver::NodeId v = 0; v < nodes; ++v) {
-        if (first[v + 1] > 0) pairs[pair_count++] = v;
-      }
-    }
     std::int64_t cells = 0;
-    for (std::int32_t i = 0; i < pair_count; ++i) {  // only they have units (first[v + 1] > 0)
-      const solver::NodeId v = pairs[i];
+    for (std::int32_t v = 0; v < nodes; ++v) {
+      const std::int32_t units_of = first[v + 1];   // counted, not yet summed
       first[v] = static_cast<std::int32_t>(cells);  // the pair's first cell
-      cells += std::int64_t{hi[v]} - lo[v] + 1;
+      cells += units_of > 0 ? std::int64_t{hi[v]} - lo[v] + 1 : 0;
     }
     if (cells > static_cast<std::int64_t>(by_pair.size())) return false;
     std::int32_t* cell = by_pair.data();
@@ -120,10 +97,9 @@ struct KeepThresholds::Impl {
       pos[u] = c;
       ++cell[c];
     }
-    for (std::int32_t i = 0; i < pair_count; ++i) {  // exclusive prefix within each pair
-      const solver::NodeId v = pairs[i];
+    for (std::int32_t v = 0; v < nodes; ++v) {  // exclusive prefix within each pair
       const std::int32_t b = first[v];
-      const auto e = static_cast<std::int32_t>(b + (hi[v] - lo[v]) + 1);
+      const std::int32_t e = v + 1 < nodes ? first[v + 1] : static_cast<std::int32_t>(cells);
       std::int32_t sum = 0;
       for (std::int32_t c = b; c < e; ++c) {
         const std::int32_t n = cell[c];
@@ -200,7 +176,6 @@ struct KeepThresholds::Impl {
     std::fill(point.begin(), point.begin() + nodes, Point{});
     std::fill(thr.begin(), thr.begin() + nodes, kNever);
     std::fill(way_cost.begin(), way_cost.begin() + nodes, 0);
-    std::fill(listed_pair.begin(), listed_pair.begin() + nodes, std::uint8_t{0});
     std::fill(first.begin(), first.begin() + nodes + 1, 0);
     std::fill(lo.begin(), lo.begin() + nodes, ~0u);
     std::fill(hi.begin(), hi.begin() + nodes, 0u);
@@ -216,21 +191,12 @@ struct KeepThresholds::Impl {
     // incrementally edited network scatters the kinds over the ids, as in
     // PairwiseStart): a pair's sink arc is its way out, a point's pair arc
     // becomes a unit; per pair its unit count and cost range.
-    // The pairs are listed as their sink arcs are met, so later passes
-    // visit the pairs, not every node.
     std::int32_t listed_count = 0;
-    pair_count = 0;
     for (solver::ArcId a = 0; a < arcs; ++a) {
       const solver::Arc e = arc[a];
       const bool live = e.capacity != 0;
       const bool way_out = live && e.head == sink;
-      if (way_out) {  // one per pair: predictable
-        way_cost[e.tail] = e.cost;
-        if (!listed_pair[e.tail]) {
-          listed_pair[e.tail] = 1;
-          pairs[pair_count++] = e.tail;
-        }
-      }
+      if (way_out) way_cost[e.tail] = e.cost;  // one per pair: predictable
       const Point p = point[e.tail];
       const bool unit = live && !way_out && p.rank >= 0;
       const std::uint32_t cost = static_cast<std::uint32_t>(p.cost) + static_cast<std::uint32_t>(e.cost);
@@ -309,8 +275,7 @@ std::size_t KeepThresholds::memory_bytes() const {
   const Impl& s = *impl_;
   return sizeof(Impl) + s.point.capacity() * sizeof(Impl::Point) +
          s.thr.capacity() * sizeof(std::uint32_t) + s.flow.capacity() * sizeof(std::int64_t) +
-         s.way_cost.capacity() * sizeof(std::int32_t) + s.pairs.capacity() * sizeof(solver::NodeId) +
-         s.listed_pair.capacity() +
+         s.way_cost.capacity() * sizeof(std::int32_t) +
          (s.at.capacity() + s.first.capacity()) * sizeof(std::int32_t) +
          (s.lo.capacity() + s.hi.capacity() + s.pos.capacity()) * sizeof(std::uint32_t) +
          s.listed.capacity() * sizeof(Impl::Listed) + s.units.capacity() * sizeof(Impl::Unit) +
