@@ -14,8 +14,9 @@ using namespace detail;
 // residual arc's reduced cost is >= 0, so a larger gap proves the flow
 // maximum while the reduced costs prove it cheapest for its value.
 bool MinCostFlow::Impl::adopt(NodeId s, NodeId t, const Flow* flow, const Cost* potential) {
-  // Locals, not members, in the loops: a store through a byte pointer
-  // would make the compiler reload every member on every iteration.
+  // Locals, not members, in the node loops: a store through a byte pointer
+  // would make the compiler reload every member on every iteration. (The
+  // arc pass keeps reading members: written with locals, it spilled.)
   const NodeId n = nodes;
   Cost* pot = pot_ext.data();
   std::int64_t* ex = excess.data();
