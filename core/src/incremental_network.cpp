@@ -1018,6 +1018,17 @@ std::uint32_t IncrementalNetwork::point_views(std::uint32_t i) const {
 solver::ArcId IncrementalNetwork::point_source_arc(std::uint32_t i) const {
   return impl_->source_of[impl_->ranks[impl_->cur].slot[impl_->rank_begin + i]];
 }
+void IncrementalNetwork::read_points(std::uint32_t begin, std::uint32_t count, PointId* id,
+                                     std::uint32_t* views, solver::ArcId* source_arc) const {
+  const Impl& n = *impl_;
+  const std::uint32_t* slot = n.ranks[n.cur].slot.data() + n.rank_begin + begin;
+  const PointId* ids = n.ranks[n.cur].id.data() + n.rank_begin + begin;
+  for (std::uint32_t i = 0; i < count; ++i) {
+    id[i] = ids[i];
+    views[i] = n.views[slot[i]];
+    source_arc[i] = n.source_of[slot[i]];
+  }
+}
 const solver::ArcId* IncrementalNetwork::canonical_order() const {
   return impl_->order.data() + impl_->order_begin;
 }

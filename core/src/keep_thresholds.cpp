@@ -28,7 +28,7 @@ struct KeepThresholds::Impl {
   std::vector<Point> point;            // [max_nodes] by node
   std::vector<std::uint32_t> thr;      // [max_nodes] M* by node
   std::vector<std::int64_t> flow;      // [max_nodes] by node, after evaluate_at
-  std::vector<solver::ArcId> out;      // [max_nodes] a pair's sink arc
+  std::vector<std::int32_t> way_cost;  // [max_nodes] a pair's sink arc's cost (0: none)
   std::vector<std::int32_t> at;        // [max_nodes + 1] a point's units (by rank)
   std::vector<std::int32_t> first;     // [max_nodes + 1] a pair's units (by node); its cells
   std::vector<std::uint32_t> lo, hi;   // [max_nodes] a pair's unit costs
@@ -51,7 +51,7 @@ struct KeepThresholds::Impl {
     point.resize(n);
     thr.resize(n);
     flow.resize(n);
-    out.resize(n);
+    way_cost.resize(n);
     at.resize(n + 1);
     first.resize(n + 1);
     lo.resize(n);
@@ -175,7 +175,7 @@ struct KeepThresholds::Impl {
     arc = solver.arc_data();
     std::fill(point.begin(), point.begin() + nodes, Point{});
     std::fill(thr.begin(), thr.begin() + nodes, kNever);
-    std::fill(out.begin(), out.begin() + nodes, -1);
+    std::fill(way_cost.begin(), way_cost.begin() + nodes, 0);
     std::fill(first.begin(), first.begin() + nodes + 1, 0);
     std::fill(lo.begin(), lo.begin() + nodes, ~0u);
     std::fill(hi.begin(), hi.begin() + nodes, 0u);
@@ -196,7 +196,7 @@ struct KeepThresholds::Impl {
       const solver::Arc e = arc[a];
       const bool live = e.capacity != 0;
       const bool way_out = live && e.head == sink;
-      if (way_out) out[e.tail] = a;  // one per pair: predictable
+      if (way_out) way_cost[e.tail] = e.cost;  // one per pair: predictable
       const Point p = point[e.tail];
       const bool unit = live && !way_out && p.rank >= 0;
       const std::uint32_t cost = static_cast<std::uint32_t>(p.cost) + static_cast<std::uint32_t>(e.cost);
@@ -246,8 +246,7 @@ struct KeepThresholds::Impl {
       for (std::int32_t u = at[k]; u < at[k + 1]; ++u) {  // no branch on the (unpredictable) cut
         const bool carried = static_cast<std::int64_t>(pos[u]) < m;
         const Unit& unit = units[u];
-        const solver::ArcId way_out = out[unit.pair];
-        const std::int64_t cost = static_cast<std::int64_t>(unit.cost) + (way_out >= 0 ? arc[way_out].cost : 0);
+        const std::int64_t cost = static_cast<std::int64_t>(unit.cost) + way_cost[unit.pair];
         f += carried ? 1 : 0;
         total_cost += carried ? cost : 0;
       }
@@ -265,6 +264,8 @@ void KeepThresholds::compute(const solver::MinCostFlow& solver, solver::NodeId s
   impl_->compute(solver, sink, order, count, theta);
 }
 std::uint32_t KeepThresholds::threshold(solver::NodeId node) const { return impl_->thr[node]; }
+const std::uint32_t* KeepThresholds::threshold_data() const { return impl_->thr.data(); }
+const std::int64_t* KeepThresholds::flow_data() const { return impl_->flow.data(); }
 void KeepThresholds::evaluate_at(std::int64_t m) { impl_->evaluate_at(m); }
 std::int64_t KeepThresholds::flow_at(solver::NodeId node) const { return impl_->flow[node]; }
 std::int64_t KeepThresholds::max_flow() const { return impl_->max_flow; }
@@ -274,7 +275,7 @@ std::size_t KeepThresholds::memory_bytes() const {
   const Impl& s = *impl_;
   return sizeof(Impl) + s.point.capacity() * sizeof(Impl::Point) +
          s.thr.capacity() * sizeof(std::uint32_t) + s.flow.capacity() * sizeof(std::int64_t) +
-         s.out.capacity() * sizeof(solver::ArcId) +
+         s.way_cost.capacity() * sizeof(std::int32_t) +
          (s.at.capacity() + s.first.capacity()) * sizeof(std::int32_t) +
          (s.lo.capacity() + s.hi.capacity() + s.pos.capacity()) * sizeof(std::uint32_t) +
          s.listed.capacity() * sizeof(Impl::Listed) + s.units.capacity() * sizeof(Impl::Unit) +
@@ -300,14 +301,19 @@ std::uint32_t FractionBudget::take(double fraction, const PointDecision* d, std:
   n = std::min(n, static_cast<std::uint32_t>(known_.size()));
   std::uint32_t candidates = 0, kept_before = 0, fresh = 0;
   std::uint32_t h = 0;
+  // Locals: a byte store (known) would make every member reload per point.
+  const Entry* held = held_.data();
+  const std::uint32_t held_count = count_;
+  std::uint8_t* known_at = known_.data();
   for (std::uint32_t i = 0; i < n; ++i) {
-    while (h < count_ && held_[h].point < d[i].point) ++h;
-    const bool known = h < count_ && held_[h].point == d[i].point;
-    known_[i] = known ? (held_[h].kept ? kKnownKept : kKnown) : kFresh;
-    if (d[i].verdict == Verdict::kSkip) continue;
-    ++candidates;
-    kept_before += known_[i] == kKnownKept ? 1 : 0;
-    fresh += known ? 0 : 1;
+    while (h < held_count && held[h].point < d[i].point) ++h;
+    const bool known = h < held_count && held[h].point == d[i].point;
+    const std::uint8_t k = known ? (held[h].kept ? kKnownKept : kKnown) : kFresh;
+    known_at[i] = k;
+    const bool candidate = d[i].verdict != Verdict::kSkip;
+    candidates += candidate ? 1 : 0;
+    kept_before += candidate && k == kKnownKept ? 1 : 0;
+    fresh += candidate && !known ? 1 : 0;
   }
   evaluated_ += fresh;
   const auto due = static_cast<std::uint64_t>(std::floor(fraction * static_cast<double>(evaluated_) + 0.5));

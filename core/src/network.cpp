@@ -239,6 +239,13 @@ std::uint32_t PaperNetwork::point_count() const { return impl_->points; }
 PointId PaperNetwork::point_id(std::uint32_t i) const { return impl_->point_id[i]; }
 std::uint32_t PaperNetwork::point_views(std::uint32_t i) const { return impl_->point_views[i]; }
 std::int32_t PaperNetwork::point_source_arc(std::uint32_t i) const { return impl_->point_arc[i]; }
+void PaperNetwork::read_points(std::uint32_t begin, std::uint32_t count, PointId* id,
+                               std::uint32_t* views, solver::ArcId* source_arc) const {
+  const Impl& n = *impl_;
+  std::copy(n.point_id.begin() + begin, n.point_id.begin() + begin + count, id);
+  std::copy(n.point_views.begin() + begin, n.point_views.begin() + begin + count, views);
+  std::copy(n.point_arc.begin() + begin, n.point_arc.begin() + begin + count, source_arc);
+}
 void PaperNetwork::point_slots(std::uint32_t* at, std::uint32_t* slots) const {
   const Impl& n = *impl_;
   std::uint32_t r = 0;  // records are sorted by (point, slot): in point order already

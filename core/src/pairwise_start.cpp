@@ -21,7 +21,8 @@ struct PairwiseStart::Impl {
   std::vector<solver::Cost> potential;  // [max_nodes]
   std::vector<Point> point;             // [max_nodes]
   std::vector<solver::ArcId> out;       // [max_nodes] a pair's sink arc
-  std::vector<std::int32_t> first;      // [max_nodes + 1] a pair's first unit in `units`
+  std::vector<std::int32_t> next;       // [max_nodes] counts a pair's units, then its cursor in `units`
+  std::vector<solver::NodeId> pairs;    // [max_nodes] the nodes with a way out, in arc order
   std::vector<Unit> units;              // [max_arcs + 1] grouped by pair, arc order within one
   std::vector<Unit> ties;               // [max_nodes] one pair's units at the cut
   static constexpr std::uint64_t kBins = 1024;
@@ -34,7 +35,8 @@ struct PairwiseStart::Impl {
     potential.resize(n);
     point.resize(n);
     out.resize(n);
-    first.resize(n + 1);
+    next.resize(n);
+    pairs.resize(n);
     units.resize(m + 1);  // + the dump slot (compute)
     ties.resize(n);
     bins.resize(kBins);
@@ -58,7 +60,8 @@ std::size_t PairwiseStart::memory_bytes() const {
   const Impl& s = *impl_;
   return sizeof(Impl) + s.flow.capacity() * sizeof(solver::Flow) +
          s.potential.capacity() * sizeof(solver::Cost) + s.point.capacity() * sizeof(Impl::Point) +
-         s.out.capacity() * sizeof(solver::ArcId) + s.first.capacity() * sizeof(std::int32_t) +
+         (s.out.capacity() + s.pairs.capacity()) * sizeof(solver::NodeId) +
+         s.next.capacity() * sizeof(std::int32_t) +
          (s.units.capacity() + s.ties.capacity()) * sizeof(Impl::Unit) +
          s.bins.capacity() * sizeof(std::uint32_t);
 }
@@ -111,11 +114,10 @@ void PairwiseStart::Impl::compute(const solver::MinCostFlow& solver, solver::Nod
   const std::int32_t nodes = solver.node_count();
   const std::int32_t arcs = solver.arc_count();
   const solver::Arc* arc = solver.arc_data();
-  std::fill(flow.begin(), flow.begin() + arcs, 0);
   std::fill(potential.begin(), potential.begin() + nodes, 0);
   std::fill(point.begin(), point.begin() + nodes, Point{});
   std::fill(out.begin(), out.begin() + nodes, -1);
-  std::fill(first.begin(), first.begin() + nodes + 1, 0);
+  std::fill(next.begin(), next.begin() + nodes, 0);
 
   for (std::int32_t k = 0; k < count; ++k) {
     const solver::Arc& e = arc[order[k]];
@@ -124,42 +126,55 @@ void PairwiseStart::Impl::compute(const solver::MinCostFlow& solver, solver::Nod
     potential[e.head] = e.cost;
   }
   // Two passes over the arcs: the first finds each pair's sink arc (its way
-  // out) and how many units (a point's pair arcs) it has, and the largest
-  // cost, which bounds every path's; the second writes each unit into its
-  // pair's group (a counting sort, arc order within a pair). No branches on
-  // an arc's kind (an incrementally edited network scatters the kinds over
-  // the ids): a non-unit is written to the dump slot past the end.
+  // out; the pairs are listed, so nothing later scans every node) and how
+  // many units (a point's pair arcs) it has, and the largest cost, which
+  // bounds every path's; the second writes each unit into its pair's group
+  // (a counting sort, arc order within a pair) and clears every arc's flow.
+  // No branches on an arc's kind (an incrementally edited network scatters
+  // the kinds over the ids): a non-unit is written to the dump slot past
+  // the end, as is a unit of a node without a way out (it carries nothing).
   solver::Cost max_cost = 0;
+  std::int32_t pair_count = 0;
   for (solver::ArcId a = 0; a < arcs; ++a) {
     const solver::Arc e = arc[a];
     const bool live = e.capacity != 0;
     const bool way_out = live && e.head == sink;
-    if (way_out) out[e.tail] = a;  // one per pair: predictable
+    if (way_out) {  // one per pair: predictable (listed once, the last one kept, as before)
+      if (out[e.tail] < 0) pairs[pair_count++] = e.tail;
+      out[e.tail] = a;
+    }
     max_cost = std::max<solver::Cost>(max_cost, live ? e.cost : 0);
-    first[e.head + 1] += live && !way_out && point[e.tail].rank >= 0 ? 1 : 0;
+    next[e.head] += live && !way_out && point[e.tail].rank >= 0 ? 1 : 0;
   }
-  for (std::int32_t v = 0; v < nodes; ++v) first[v + 1] += first[v];
+  std::int32_t grouped = 0;
+  for (std::int32_t i = 0; i < pair_count; ++i) {
+    std::int32_t& at = next[pairs[i]];
+    const std::int32_t n = at;
+    at = grouped;
+    grouped += n;
+  }
   const auto dump = static_cast<std::int32_t>(units.size() - 1);
   for (solver::ArcId a = 0; a < arcs; ++a) {
     const solver::Arc e = arc[a];
     const Point p = point[e.tail];
-    const bool unit = e.capacity != 0 && e.head != sink && p.rank >= 0;
-    std::int32_t& at = first[e.head];
+    const bool unit = e.capacity != 0 && e.head != sink && p.rank >= 0 && out[e.head] >= 0;
+    std::int32_t& at = next[e.head];
     const auto cost = static_cast<std::uint32_t>(p.cost) + static_cast<std::uint32_t>(e.cost);
     units[unit ? at : dump] = Unit{cost, static_cast<std::uint32_t>(p.rank), a};
     at += unit ? 1 : 0;
+    flow[a] = 0;
   }
-  for (std::int32_t v = nodes; v > 0; --v) first[v] = first[v - 1];
-  first[0] = 0;
 
-  // Each pair takes its cheapest units, as many as its sink arc carries.
+  // Each pair takes its cheapest units, as many as its sink arc carries
+  // (next[q] is now the end of its group, which starts where the previous
+  // listed pair's ends).
   const solver::Cost top = solver::Cost{nodes} * max_cost + 1;  // the sink: beyond any path
-  for (std::int32_t q = 0; q < nodes; ++q) {
-    Unit* begin = units.data() + first[q];
-    Unit* end = units.data() + first[q + 1];
-    if (begin == end) continue;
+  Unit* begin = units.data();
+  for (std::int32_t i = 0; i < pair_count; ++i) {
+    const solver::NodeId q = pairs[i];
+    Unit* end = units.data() + next[q];
     const solver::ArcId way_out = out[q];
-    const std::int64_t room = way_out >= 0 ? arc[way_out].capacity : 0;
+    const std::int64_t room = arc[way_out].capacity;
     const std::int64_t take = std::min<std::int64_t>(room, end - begin);
     if (take < end - begin) take_cheapest(begin, end, take);
     std::uint32_t marginal = 0;
@@ -168,9 +183,9 @@ void PairwiseStart::Impl::compute(const solver::MinCostFlow& solver, solver::Nod
       ++flow[order[u->rank]];  // the point's source arc
       marginal = std::max(marginal, u->cost);
     }
-    if (way_out < 0) continue;  // nothing carried: potential 0 <= every unit's cost
     flow[way_out] = take;
     potential[q] = take == room ? static_cast<solver::Cost>(marginal) : top - arc[way_out].cost;
+    begin = end;
   }
   potential[sink] = top;
 }

@@ -83,6 +83,7 @@ struct Sparsifier::Impl {
   std::vector<std::uint32_t> cursor;        // [max_points + 4]
   std::vector<std::uint32_t> ranked;        // [max_points]
   std::vector<solver::NodeId> head_of;      // [max_points] a decision's point node
+  std::vector<std::uint32_t> views_of;      // [max_points] a decision's n
   std::uint32_t curve_top = 0;              // the curve's last bucket: the largest finite M*
   std::uint32_t max_points = 0;
   bool budgeted = false;
@@ -114,6 +115,7 @@ struct Sparsifier::Impl {
       cursor.resize(std::size_t{c.max_points} + 4);
       ranked.resize(c.max_points);
       head_of.resize(c.max_points);
+      views_of.resize(c.max_points);
     }
     if (p.budget.kind == BudgetKind::kFraction) fraction = std::make_unique<FractionBudget>(c.max_points);
     // The policies' scratch only where they are on (Params are fixed).
@@ -151,22 +153,38 @@ struct Sparsifier::Impl {
     return from_solver(solver.canonicalize(order, count, rest));
   }
 
+  // f(i, id, views, source arc) for every point of the network, in order,
+  // read in blocks (one call per block, not three per point; the blocks
+  // live on the stack).
+  template <typename Net, typename F>
+  static void for_points(const Net& net, F&& f) {
+    constexpr std::uint32_t kBlock = 256;
+    PointId id[kBlock];
+    std::uint32_t views[kBlock];
+    solver::ArcId arc[kBlock];
+    const std::uint32_t points = net.point_count();
+    for (std::uint32_t b = 0; b < points; b += kBlock) {
+      const std::uint32_t n = std::min(kBlock, points - b);
+      net.read_points(b, n, id, views, arc);
+      for (std::uint32_t j = 0; j < n; ++j) f(b + j, id[j], views[j], arc[j]);
+    }
+  }
+
   // Decisions from the source arcs' flows; an unfinished solve culls nothing.
   template <typename Net>
   void decide_all(const Net& net, bool finished) {
     Summary& sum = summary;
-    for (std::uint32_t i = 0; i < net.point_count(); ++i) {
+    for_points(net, [&](std::uint32_t i, PointId id, std::uint32_t views, solver::ArcId arc) {
       PointDecision& d = decisions[i];
-      d.point = net.point_id(i);
-      const std::int32_t arc = net.point_source_arc(i);
+      d.point = id;
       if (arc < 0) {
         d.verdict = Verdict::kSkip;
         d.flow = 0;
         d.capacity = 0;
         ++sum.skipped;
-        continue;
+        return;
       }
-      const std::int64_t n = net.point_views(i);
+      const std::int64_t n = views;
       d.capacity = n * (n - 1) / 2;
       d.flow = solver.flow(arc);
       d.verdict = finished ? decide(d.flow, d.capacity, params.theta) : Verdict::kKeep;
@@ -175,7 +193,7 @@ struct Sparsifier::Impl {
       } else {
         ++sum.culled;
       }
-    }
+    });
     count = net.point_count();
     sum.points = net.point_count();
     sum.evaluated = net.evaluated_count();
@@ -198,26 +216,27 @@ struct Sparsifier::Impl {
                         static_cast<std::int32_t>(net.evaluated_count()), params.theta);
     count = net.point_count();
     std::uint32_t top = 0;  // the largest finite M*
-    for (std::uint32_t i = 0; i < count; ++i) {
+    const std::uint32_t* threshold_by_node = thresholds->threshold_data();
+    for_points(net, [&](std::uint32_t i, PointId id, std::uint32_t views, solver::ArcId a) {
       PointDecision& d = decisions[i];
-      d.point = net.point_id(i);
+      d.point = id;
       d.flow = 0;
-      const std::int32_t a = net.point_source_arc(i);
+      views_of[i] = views;
       if (a < 0) {
         d.verdict = Verdict::kSkip;
         d.capacity = 0;
         threshold_of[i] = 0;
         ++sum.skipped;
-        continue;
+        return;
       }
-      const std::int64_t n = net.point_views(i);
+      const std::int64_t n = views;
       d.capacity = n * (n - 1) / 2;
       d.verdict = Verdict::kCull;
       head_of[i] = arc[a].head;
-      threshold_of[i] = thresholds->threshold(head_of[i]);
+      threshold_of[i] = threshold_by_node[head_of[i]];
       if (threshold_of[i] != KeepThresholds::kNever) top = std::max(top, threshold_of[i]);
       ++sum.culled;
-    }
+    });
     sum.points = count;
     sum.evaluated = net.evaluated_count();
     sum.pairs = net.pair_count();
@@ -248,8 +267,8 @@ struct Sparsifier::Impl {
     } else if (b.kind == BudgetKind::kFraction) {  // F of the points new to the budget (FractionBudget)
       take = fraction->take(b.fraction, decisions.data(), count);
     } else {  // kObservations: the longest prefix within B
-      while (take < candidates && observations + net.point_views(ranked[take]) <= b.count) {
-        observations += net.point_views(ranked[take++]);
+      while (take < candidates && observations + views_of[ranked[take]] <= b.count) {
+        observations += views_of[ranked[take++]];
       }
     }
     observations = 0;
@@ -257,7 +276,7 @@ struct Sparsifier::Impl {
     for (std::uint32_t j = 0; j < take; ++j) {
       const std::uint32_t i = ranked[j];
       decisions[i].verdict = Verdict::kKeep;
-      observations += net.point_views(i);
+      observations += views_of[i];
       kept_top = std::max(kept_top, std::min(threshold_of[i], never));
     }
     if (fraction) fraction->record(decisions.data(), count);
@@ -267,9 +286,10 @@ struct Sparsifier::Impl {
     // M = kNever's bucket reports as max_points + 1, as before the buckets were bounded.
     sum.budget_m = kept_top == never ? static_cast<std::int64_t>(max_points) + 1 : kept_top;
     thresholds->evaluate_at(sum.budget_m);
+    const std::int64_t* flow_by_node = thresholds->flow_data();
     for (std::uint32_t i = 0; i < count; ++i) {
       if (decisions[i].verdict == Verdict::kSkip) continue;
-      decisions[i].flow = thresholds->flow_at(head_of[i]);
+      decisions[i].flow = flow_by_node[head_of[i]];
     }
     sum.max_flow = thresholds->max_flow();
     sum.total_cost = thresholds->total_cost();
@@ -631,7 +651,8 @@ std::size_t Sparsifier::memory_bytes() const {
          s.pairwise.memory_bytes() + (s.thresholds ? s.thresholds->memory_bytes() : 0) +
          (s.fraction ? s.fraction->memory_bytes() : 0) +
          (s.threshold_of.capacity() + s.curve.capacity() + s.cursor.capacity() +
-          s.ranked.capacity()) * sizeof(std::uint32_t) + s.head_of.capacity() * sizeof(solver::NodeId) +
+          s.ranked.capacity() + s.views_of.capacity()) * sizeof(std::uint32_t) +
+         s.head_of.capacity() * sizeof(solver::NodeId) +
          s.decisions.capacity() * sizeof(PointDecision) +
          s.in_scope.capacity() +
          (s.slots_at.capacity() + s.slots.capacity() + s.covered.capacity() +

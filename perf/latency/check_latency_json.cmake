@@ -2,6 +2,8 @@
 # (a JSON object): every documented key is present, identical_decisions is
 # true and allocations_after_warmup is 0. Timings are not asserted.
 #
+# With -DKEEP=F it also runs --keep-fraction F (see below).
+#
 # With -DCOST=authors|information (optionally -DFLOOR=L) it also runs that
 # cost model and checks the policy's keys: the stream carried what the model
 # reads, the in-process paper reference decided exactly what the plain paper
@@ -56,6 +58,21 @@ string(JSON paper_digest GET "${paper_json}" decisions_digest)
 string(JSON paper_model GET "${paper_json}" cost_model)
 if(NOT reference STREQUAL "self" OR NOT paper_model STREQUAL "paper")
   message(FATAL_ERROR "the default run is its own paper reference: ${paper_json}")
+endif()
+# -DKEEP=F: a kept fraction (its memory of earlier decisions must be the
+# checks' too), against the in-process paper reference.
+if(DEFINED KEEP)
+  run_latency(keep_json --keep-fraction ${KEEP})
+  string(JSON budget GET "${keep_json}" keep_budget)
+  string(JSON reference GET "${keep_json}" reference)
+  string(JSON digest GET "${keep_json}" decisions_digest)
+  string(JSON reference_digest GET "${keep_json}" reference_decisions_digest)
+  if(NOT budget STREQUAL "fraction" OR NOT reference STREQUAL "paper")
+    message(FATAL_ERROR "expected a fraction budget against the paper reference: ${keep_json}")
+  endif()
+  if(NOT reference_digest STREQUAL paper_digest OR digest STREQUAL paper_digest)
+    message(FATAL_ERROR "the reference must decide as the paper run, the budget otherwise: ${keep_json}")
+  endif()
 endif()
 if(NOT DEFINED COST)
   return()

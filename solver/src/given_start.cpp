@@ -14,19 +14,28 @@ using namespace detail;
 // residual arc's reduced cost is >= 0, so a larger gap proves the flow
 // maximum while the reduced costs prove it cheapest for its value.
 bool MinCostFlow::Impl::adopt(NodeId s, NodeId t, const Flow* flow, const Cost* potential) {
+  // Locals, not members, in the node loops: a store through a byte pointer
+  // would make the compiler reload every member on every iteration. (The
+  // arc pass keeps reading members: written with locals, it spilled.)
+  const NodeId n = nodes;
+  Cost* pot = pot_ext.data();
+  std::int64_t* ex = excess.data();
+  std::uint8_t* seen_at = seen.data();
+  std::uint8_t* renewed_at = renewed.data();
   bool ok = true;
-  for (NodeId v = 0; v < nodes; ++v) {
+  for (NodeId v = 0; v < n; ++v) {
     ok &= potential[v] >= -kPotentialBound && potential[v] <= kPotentialBound;
-    pot_ext[v] = std::clamp(potential[v], -kPotentialBound, kPotentialBound);
-    excess[v] = 0;  // user numbering here
-    seen[v] = 1;    // the given potentials stand (see estimate_potentials)
-    renewed[v] = 0;
+    pot[v] = std::clamp(potential[v], -kPotentialBound, kPotentialBound);
+    ex[v] = 0;  // user numbering here
+    seen_at[v] = 1;  // the given potentials stand (see estimate_potentials)
+    renewed_at[v] = 0;
   }
   Cost max_cost = 0;
-  cost_total = 0;
+  Cost total = 0;
+  const ArcId m = arcs;
   // No branches (`&`, `|`): an edited network scatters retired arcs over
   // the ids. A retired arc's flow must be 0, and is taken as 0.
-  for (ArcId a = 0; a < arcs; ++a) {
+  for (ArcId a = 0; a < m; ++a) {
     const Flow f = flow[a];
     const Arc& e = arc[a];
     const bool live = (e.capacity > 0) & (e.tail != e.head);  // active(a)
@@ -38,11 +47,19 @@ bool MinCostFlow::Impl::adopt(NodeId s, NodeId t, const Flow* flow, const Cost* 
     excess[e.tail] -= fl;
     excess[e.head] += fl;
     max_cost = std::max<Cost>(max_cost, live ? e.cost : 0);
-    cost_total += Cost{fl} * e.cost;
+    total += Cost{fl} * e.cost;
   }
-  for (NodeId v = 0; v < nodes; ++v) ok &= v == s || v == t || excess[v] == 0;
-  value = -excess[s];
-  return ok && pot_ext[t] - pot_ext[s] > Cost{nodes - 1} * max_cost;
+  cost_total = total;
+  // Conservation but at the terminals: an OR over the excesses with theirs
+  // set aside (no branch per node, and it vectorises).
+  const std::int64_t at_s = ex[s], at_t = ex[t];
+  ex[s] = ex[t] = 0;
+  std::int64_t unbalanced = 0;
+  for (NodeId v = 0; v < n; ++v) unbalanced |= ex[v];
+  ex[s] = at_s;
+  ex[t] = at_t;
+  value = -at_s;
+  return ok && unbalanced == 0 && pot[t] - pot[s] > Cost{n - 1} * max_cost;
 }
 
 Status MinCostFlow::Impl::solve_from(NodeId s, NodeId t, const Flow* flow, const Cost* potential,

@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <memory>
 #include <vector>
 
 #include "keepless/core/closed_form.hpp"
@@ -55,13 +56,19 @@ TEST(IncrementalZeroAllocation, UpdateAllocatesNothing) {
 
   Window window(caps);
   Sparsifier sparsifier(caps, Params{}, SolveMode::kIncremental);
-  Params budget_params;  // a keep budget decides without a solve
-  budget_params.budget = KeepBudget{BudgetKind::kFraction, 0, 0.3};
-  Sparsifier budgeted(caps, budget_params, SolveMode::kIncremental);
+  // A keep budget of each kind decides without a solve (its thresholds).
+  const KeepBudget budgets[] = {{BudgetKind::kPoints, 40, 0.0}, {BudgetKind::kFraction, 0, 0.3},
+                                {BudgetKind::kObservations, 150, 0.0}};
+  std::vector<std::unique_ptr<Sparsifier>> budgeted;
+  for (const KeepBudget& b : budgets) {
+    Params p;
+    p.budget = b;
+    budgeted.push_back(std::make_unique<Sparsifier>(caps, p, SolveMode::kIncremental));
+  }
   // Warm-up: one stream's first window.
   for (std::size_t i = 0; i < 4; ++i) ASSERT_EQ(add(window, streams[0][i]), Status::kOk);
   ASSERT_EQ(sparsifier.update(window), Status::kOk);
-  ASSERT_EQ(budgeted.update(window), Status::kOk);
+  for (auto& b : budgeted) ASSERT_EQ(b->update(window), Status::kOk);
   window.clear();
 
   std::uint64_t updates = 0, ok = 0, stopped = 0, budget_ok = 0;
@@ -78,20 +85,20 @@ TEST(IncrementalZeroAllocation, UpdateAllocatesNothing) {
         budget.deadline_ns = 0;
       }
       const Status s = sparsifier.update(window, budget);
-      budget_ok += budgeted.update(window, budget) == Status::kOk;
+      for (auto& b : budgeted) budget_ok += b->update(window, budget) == Status::kOk;
       ok += s == Status::kOk;
       stopped += s == Status::kBudgetExhausted;
       ++updates;
     }
     window.clear();
     (void)sparsifier.update(window);
-    (void)budgeted.update(window);
+    for (auto& b : budgeted) (void)b->update(window);
   }
   EXPECT_EQ(counter.stop(), 0u);
   EXPECT_GT(updates, 200u);
   EXPECT_GT(ok, 100u);
   EXPECT_GT(stopped, 20u);
-  EXPECT_GT(budget_ok, 100u);
+  EXPECT_GT(budget_ok, 300u);
 }
 
 }  // namespace

@@ -415,6 +415,11 @@ bool replay(const KeyframeStream& stream, std::uint32_t warmup, std::uint64_t bu
   std::vector<Answer> answers;
   answers.reserve(measured);
   std::uint32_t sampled = 0;
+  // A kept fraction remembers what earlier decisions kept (FractionBudget),
+  // so its checks decide every window the timed pass decided, warm-up
+  // included and deferrals not, to hold the same memory.
+  const bool sequential = params.budget.kind == core::BudgetKind::kFraction;
+  std::vector<std::uint8_t> decided(total, 0);
   test::AllocationCounter counter;  // armed only around the measured decision path
   counter.pause();
   for (std::uint32_t k = 0; k < total; ++k) {
@@ -447,6 +452,7 @@ bool replay(const KeyframeStream& stream, std::uint32_t warmup, std::uint64_t bu
       ++r->failures;
       continue;
     }
+    decided[k] = !inc.deferred();
     if (!measuring) continue;
     const core::StageTimes& st = inc.stage_times();
     r->ingest.ns.push_back(t1 - t0);
@@ -486,11 +492,22 @@ bool replay(const KeyframeStream& stream, std::uint32_t warmup, std::uint64_t bu
   for (std::uint32_t k = 0; k < total && next < answers.size(); ++k) {
     core::Status added = core::Status::kOk;  // a refusal was counted in the first pass
     if (!slide_in(stream, k, check, &added)) return false;
-    if (answers[next].keyframe != k) continue;
+    if (answers[next].keyframe != k) {
+      if (sequential && decided[k]) {
+        (void)scratch.run(check);
+        (void)fresh.run(check);
+      }
+      continue;
+    }
     const Answer& a = answers[next++];
     const std::uint64_t s0 = clock.now_ns();
-    if (scratch.run(check) != core::Status::kOk || !agrees(a, scratch)) ++r->mismatches;
+    if (sequential && !decided[k]) {  // a deferral keeps the window's points (raw: no budget)
+      if (raw->run(check) != core::Status::kOk || !agrees(a, *raw)) ++r->mismatches;
+    } else if (scratch.run(check) != core::Status::kOk || !agrees(a, scratch)) {
+      ++r->mismatches;
+    }
     const std::uint64_t s1 = clock.now_ns();
+    if (sequential && decided[k] && !a.sampled) (void)fresh.run(check);
     if (!a.sampled) continue;
     r->incremental.push_back(a.solve_ns);
     r->slide_incremental.push_back(a.slide_ns);

@@ -75,6 +75,10 @@ class IncrementalNetwork {
   std::uint32_t point_views(std::uint32_t i) const;  // n
   // Source arc of an evaluated point (n >= 2); -1 for a skipped one.
   solver::ArcId point_source_arc(std::uint32_t i) const;
+  // Points begin .. begin + count - 1 at once, as point_id, point_views and
+  // point_source_arc give them (the decision passes read every point).
+  void read_points(std::uint32_t begin, std::uint32_t count, PointId* id, std::uint32_t* views,
+                   solver::ArcId* source_arc) const;
   // Every point's window slots, flattened in point order as
   // PaperNetwork::point_slots, each point's in no particular order.
   void point_slots(std::uint32_t* at, std::uint32_t* slots) const;

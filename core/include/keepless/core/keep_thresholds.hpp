@@ -37,11 +37,14 @@ class KeepThresholds {
 
   // M*(p) of the point node `node` (the head of a source arc in `order`).
   std::uint32_t threshold(solver::NodeId node) const;
+  // threshold() of every node, by node id (a decision reads every point's).
+  const std::uint32_t* threshold_data() const;
 
   // The optimum at pair capacity `m` (m >= 0): flow_at(node) of each point,
   // and the maximum flow and total cost, as a solve at M = m gives them.
   void evaluate_at(std::int64_t m);
   std::int64_t flow_at(solver::NodeId node) const;
+  const std::int64_t* flow_data() const;  // flow_at() of every node, by node id
   std::int64_t max_flow() const;
   std::int64_t total_cost() const;
 

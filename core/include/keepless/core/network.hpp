@@ -39,6 +39,10 @@ class PaperNetwork {
   std::uint32_t point_views(std::uint32_t i) const;  // n
   // Evaluated points (n >= 2) are network nodes; -1 for skipped points.
   std::int32_t point_source_arc(std::uint32_t i) const;
+  // Points begin .. begin + count - 1 at once, as point_id, point_views and
+  // point_source_arc give them (the decision passes read every point).
+  void read_points(std::uint32_t begin, std::uint32_t count, PointId* id, std::uint32_t* views,
+                   solver::ArcId* source_arc) const;
   // Every point's window slots (the keyframes observing it), flattened in
   // point order: point i's are slots[at[i] .. at[i + 1]), ascending. `at`
   // holds point_count() + 1 entries, `slots` the window's observations.
