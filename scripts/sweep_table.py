@@ -8,8 +8,9 @@ OUT holds one directory per variant (OUT/VARIANT/runs.csv, as eval_sweep.sh
 fraction F and per method of each variant, failed seeds, frames tracked,
 ATE (mean ± sd over seeds, failed runs included), ATE over the original's,
 local-BA observations and CPU seconds, map points and keyframes; then the
-smallest F from which each method never failed, and per F the method with the
-lowest mean ATE among those with no failure. A failed run (lost tracking or a
+smallest F from which each method never failed, per F the method with the
+lowest mean ATE among those with no failure, and the accuracy-cost frontier:
+the runs that no other beats on both ATE and local-BA observations. A failed run (lost tracking or a
 diverged BA) counts in every mean: its ATE is over all frames.
 """
 import csv
@@ -100,6 +101,16 @@ def sequence_table(name, cells, originals, order):
               if f == fraction and not any(failed(r) for r in rows)]
         best.append(f"F = {fraction:.1f}: " + (f"{min(ok)[1]} ({min(ok)[0]:.4g} m)" if ok else "none without failure"))
     lines.append(f"Lowest mean ATE without a failure (original {ate0:.4g} ± {sd0:.2g} m): " + "; ".join(best) + ".")
+    lines.append("")
+    # The accuracy-cost frontier: runs without a failure that no other such run
+    # beats on both mean ATE and mean local-BA observations (the original included).
+    points = [(stat(orig, "observations")[0], ate0, "original")]
+    points += [(stat(rows, "observations")[0], stat(rows, "ate_m")[0], f"{label} at F = {f:.1f}")
+               for (f, label), rows in cells.items() if not any(failed(r) for r in rows)]
+    frontier = [p for p in points if not any(q[0] <= p[0] and q[1] <= p[1] and q != p for q in points)]
+    lines.append("Accuracy-cost frontier (no failure; no other run has both fewer local-BA observations and a lower "
+                 "mean ATE), by cost: " + "; ".join(f"{name} ({obs:,.0f} obs, {ate:.4g} m)"
+                                                   for obs, ate, name in sorted(frontier)) + ".")
     lines.append("")
     return "\n".join(lines)
 
