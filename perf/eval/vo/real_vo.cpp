@@ -226,6 +226,8 @@ int Vo::optimize(TrackedFrame& cur) {
     o.v = cur.f.keys[i].pt.y;
     o.ur = cur.f.ur[i];
     o.level = cur.f.keys[i].octave;
+    // Deferred culling: an excluded point, refined by no local BA, counts less.
+    if (map_.points[static_cast<std::size_t>(p)].excluded) o.weight = opt_.defer_track_weight;
     obs.push_back(o);
     keypoint.push_back(static_cast<int>(i));
   }
@@ -800,6 +802,7 @@ void Vo::remove_culls(const std::vector<core::PointId>& culls) {
   for (core::PointId id : excluded) {
     map_.points[static_cast<std::size_t>(id)].excluded = true;
     map_.points[static_cast<std::size_t>(id)].matched_tick = now;
+    map_.points[static_cast<std::size_t>(id)].matches_since_excluded = 0;
   }
   for (core::PointId id : deleted) {
     MapPoint& m = map_.points[static_cast<std::size_t>(id)];
@@ -893,7 +896,15 @@ void Vo::note_matches(int kf) {
   (void)opencv::note_keyframe(deferred_, ids, &tracked);  // the lengths agree
   for (std::size_t j = 0; j < ids.size(); ++j) {
     MapPoint& m = map_.points[ids[j]];
-    if (m.excluded && tracked[j] != 0) m.matched_tick = deferred_.tick();
+    if (!m.excluded || tracked[j] == 0) continue;
+    m.matched_tick = deferred_.tick();
+    // defer_restore: a point the tracker keeps matching has become a long
+    // track, which local BA needs; it returns to BA (the rule forgets it).
+    if (opt_.defer_restore > 0 && ++m.matches_since_excluded >= opt_.defer_restore) {
+      m.excluded = false;
+      (void)deferred_.forget(ids[j]);
+      ++result_.points_restored;
+    }
   }
 }
 
