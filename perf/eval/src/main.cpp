@@ -95,14 +95,6 @@ const std::vector<cli::Flag> kFlags = {
     {"--defer-refine", nullptr, "with --defer: each excluded point's re-triangulation is refined with the\n"
                                 "poses held (robust, as local BA refines a point) and its outlier\n"
                                 "observations are erased"},
-    {"--defer-after-ba", nullptr, "with --defer: a decision's culls leave local BA after the local BA of the\n"
-                                  "keyframe that decided them (it refines them and that keyframe once\n"
-                                  "more) instead of before it"},
-    {"--defer-restore", "R", "with --defer: an excluded point that R keyframes have matched since its\n"
-                             "exclusion returns to local BA (it has become a long track) and is no\n"
-                             "longer deferred (default 0: never)"},
-    {"--defer-track-weight", "W", "with --defer: an excluded point's residual weight in a frame's pose\n"
-                                  "optimisation, 0 < W <= 1 (default 1)"},
     {"--tracked-flags", nullptr, "the real VO sends the new keyframe's tracked flags (the points it\n"
                                  "matched in that frame), which no selector culls"},
     {"--window-sizes", nullptr, "instead of the comparison: the original run of the first seed on each\n"
@@ -150,9 +142,6 @@ struct Args {
   bool tracked_flags = false;     // --tracked-flags (the real VO)
   bool defer_fixed = false;       // --defer-fixed (the real VO)
   bool defer_refine = false;      // --defer-refine (the real VO)
-  bool defer_after_ba = false;    // --defer-after-ba (the real VO)
-  int defer_restore = 0;          // --defer-restore R (the real VO)
-  double defer_track_weight = 1;  // --defer-track-weight W (the real VO)
 };
 
 [[noreturn]] void fail(const std::string& msg) {
@@ -264,9 +253,6 @@ Args parse(int argc, char** argv) {
     else if (f == "--defer") a.policy.defer_keyframes = static_cast<std::uint32_t>(parse_int(f, val(), 1, 1000));
     else if (f == "--defer-fixed") a.defer_fixed = true;
     else if (f == "--defer-refine") a.defer_refine = true;
-    else if (f == "--defer-after-ba") a.defer_after_ba = true;
-    else if (f == "--defer-restore") a.defer_restore = static_cast<int>(parse_int(f, val(), 1, 1000));
-    else if (f == "--defer-track-weight") a.defer_track_weight = parse_double(f, val(), 1e-3, 1);
     else if (f == "--cost") {
       const std::string v = val();
       if (!keepless::core::parse_cost_model(v.c_str(), &a.policy.cost_model))
@@ -497,9 +483,6 @@ int main(int argc, char** argv) {
   if (a.policy.defer_keyframes > 0) summary.settings += ", defer " + std::to_string(a.policy.defer_keyframes);
   if (a.defer_fixed) summary.settings += ", excluded points fixed in BA";
   if (a.defer_refine) summary.settings += ", excluded points refined";
-  if (a.defer_after_ba) summary.settings += ", excluded after their first local BA";
-  if (a.defer_track_weight < 1) summary.settings += ", excluded points weighted " + std::to_string(a.defer_track_weight) + " in tracking";
-  if (a.defer_restore > 0) summary.settings += ", restored to BA after " + std::to_string(a.defer_restore) + " matches";
   if (a.policy.cost_model == keepless::core::CostModel::kTrack) {
     summary.settings += ", track terms " + std::to_string(a.policy.track_terms);
   }
@@ -603,9 +586,6 @@ int main(int argc, char** argv) {
     vo.tracked_flags = a.tracked_flags;
     vo.defer_fixed = a.defer_fixed;
     vo.defer_refine = a.defer_refine;
-    vo.defer_after_ba = a.defer_after_ba;
-    vo.defer_restore = a.defer_restore;
-    vo.defer_track_weight = a.defer_track_weight;
     vo.out = a.out;
     std::string err;
     for (const auto& in : a.vo)

@@ -226,8 +226,6 @@ int Vo::optimize(TrackedFrame& cur) {
     o.v = cur.f.keys[i].pt.y;
     o.ur = cur.f.ur[i];
     o.level = cur.f.keys[i].octave;
-    // Deferred culling: an excluded point, refined by no local BA, counts less.
-    if (map_.points[static_cast<std::size_t>(p)].excluded) o.weight = opt_.defer_track_weight;
     obs.push_back(o);
     keypoint.push_back(static_cast<int>(i));
   }
@@ -802,7 +800,6 @@ void Vo::remove_culls(const std::vector<core::PointId>& culls) {
   for (core::PointId id : excluded) {
     map_.points[static_cast<std::size_t>(id)].excluded = true;
     map_.points[static_cast<std::size_t>(id)].matched_tick = now;
-    map_.points[static_cast<std::size_t>(id)].matches_since_excluded = 0;
   }
   for (core::PointId id : deleted) {
     MapPoint& m = map_.points[static_cast<std::size_t>(id)];
@@ -896,15 +893,7 @@ void Vo::note_matches(int kf) {
   (void)opencv::note_keyframe(deferred_, ids, &tracked);  // the lengths agree
   for (std::size_t j = 0; j < ids.size(); ++j) {
     MapPoint& m = map_.points[ids[j]];
-    if (!m.excluded || tracked[j] == 0) continue;
-    m.matched_tick = deferred_.tick();
-    // defer_restore: a point the tracker keeps matching has become a long
-    // track, which local BA needs; it returns to BA (the rule forgets it).
-    if (opt_.defer_restore > 0 && ++m.matches_since_excluded >= opt_.defer_restore) {
-      m.excluded = false;
-      (void)deferred_.forget(ids[j]);
-      ++result_.points_restored;
-    }
+    if (m.excluded && tracked[j] != 0) m.matched_tick = deferred_.tick();
   }
 }
 
@@ -989,13 +978,8 @@ void Vo::local_mapping(int kf) {
   const std::vector<int> local = local_keyframes(kf, opt_.max_local_keyframes);
   if (opt_.measure_windows) measure_windows(kf);
   if (deferring()) note_matches(kf);
-  std::vector<core::PointId> culls;
-  if (opt_.selector != Selector::kOriginal) culls = select_points(kf, local);
-  // defer_after_ba: the culls' first local BA still refines them, and the new keyframe with them.
-  const bool late = deferring() && opt_.defer_after_ba;
-  if (!late) remove_culls(culls);
+  if (opt_.selector != Selector::kOriginal) remove_culls(select_points(kf, local));
   local_ba(local, false);
-  if (late) remove_culls(culls);
   if (deferring()) retriangulate_excluded(local);
   keyframe_culling(kf);
 }

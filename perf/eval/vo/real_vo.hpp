@@ -40,16 +40,6 @@ struct RealVoOptions {
   // refined with the poses held (robust, as local BA would) and its outlier
   // observations are erased, instead of the DLT alone.
   bool defer_refine = false;
-  // Deferred culling: a decision's culls leave local BA after the local BA of
-  // the keyframe that decided them (it still refines them and that keyframe)
-  // instead of before it.
-  bool defer_after_ba = false;
-  // Deferred culling: an excluded point that R keyframes have matched since
-  // its exclusion returns to local BA and is no longer deferred (0: never).
-  int defer_restore = 0;
-  // Deferred culling: an excluded point's residual weight in the frame's pose
-  // optimisation (1: as a point in BA).
-  double defer_track_weight = 1;
   int max_local_keyframes = 20;      // local BA / keepless window: the new keyframe and its best covisibles
   bool measure_windows = false;  // fill RealRunResult::window_sizes (window_sizes.hpp)
   // With measure_windows: replay the K = 20 windows at these capacities
@@ -77,8 +67,7 @@ struct RealRunResult {
   // Excluded points deleted before, or still held after, T keyframes in a row
   // that did not match them, by the VO's own record (0: the rule held).
   std::int64_t defer_rule_violations = 0;
-  std::int64_t excluded_matches = 0;
-  std::int64_t points_restored = 0;  // RealVoOptions::defer_restore: excluded points returned to BA  // inlier matches of excluded points in tracked frames, summed over frames
+  std::int64_t excluded_matches = 0;  // inlier matches of excluded points in tracked frames, summed over frames
   int local_bas = 0;
   int window_rejections = 0;  // windows the adapter or Sparsifier refused (nothing culled there)
   SelectorCounts selector;  // windows the selector decided, its Sparsifier's floor counts over them

@@ -14,7 +14,7 @@ namespace {
 struct Reprojection {
   Reprojection(const PinholeCamera& c, const BaObservation& o)
       : fx(c.fx), fy(c.fy), cx(c.cx), cy(c.cy), bf(c.bf), u(o.u), v(o.v), ur(o.ur),
-        w(o.weight / pyramid().scale[static_cast<std::size_t>(o.level)]) {}
+        w(1.0 / pyramid().scale[static_cast<std::size_t>(o.level)]) {}
   template <typename T>
   bool project(const T* pose, const T* X, T* r) const {
     T p[3];

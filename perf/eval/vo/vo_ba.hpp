@@ -26,7 +26,6 @@ struct BaObservation {
   int pose = 0, point = 0;
   double u = 0, v = 0, ur = -1;  // ur < 0: monocular
   int level = 0;
-  double weight = 1;  // scales the residual (optimize_pose; chi2 and the outlier tests ignore it)
 };
 
 // Motion-only BA (ORB-SLAM2 PoseOptimization): 4 rounds of 10 iterations,

@@ -33,9 +33,6 @@ struct VoEvalOptions {
   bool tracked_flags = false;  // RealVoOptions::tracked_flags
   bool defer_fixed = false;    // RealVoOptions::defer_fixed
   bool defer_refine = false;   // RealVoOptions::defer_refine
-  bool defer_after_ba = false; // RealVoOptions::defer_after_ba
-  int defer_restore = 0;       // RealVoOptions::defer_restore
-  double defer_track_weight = 1;  // RealVoOptions::defer_track_weight
   std::string out;  // non-empty: NAME_trajectory.svg and NAME_keypoints.svg there
 };
 

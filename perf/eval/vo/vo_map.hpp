@@ -32,7 +32,6 @@ struct MapPoint {
   // The deferral clock's tick at its exclusion or last match since, as the VO
   // records it: the rule's deletions are checked against it.
   std::uint64_t matched_tick = 0;
-  int matches_since_excluded = 0;  // keyframes that matched it since (RealVoOptions::defer_restore)
 };
 
 struct KeyFrame {
