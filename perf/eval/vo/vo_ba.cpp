@@ -106,7 +106,7 @@ bool refine_point(const PinholeCamera& cam, const std::vector<Eigen::Isometry3d>
         if (!(p.z() > 0)) return false;
         const double iz = 1.0 / p.z(), w = 1.0 / pyramid().scale[static_cast<std::size_t>(o.level)];
         const double pu = cam.fx * p.x() * iz + cam.cx;
-        Eigen::Matrix<double, 3, 3> Jp = Eigen::Matrix3d::Zero();  // d(residual)/d(camera point), rows u, v, u_r
+        Eigen::Matrix3d Jp = Eigen::Matrix3d::Zero();  // d(residual)/d(camera point), rows u, v, u_r
         Jp.row(0) << cam.fx * iz, 0, -cam.fx * p.x() * iz * iz;
         Jp.row(1) << 0, cam.fy * iz, -cam.fy * p.y() * iz * iz;
         Eigen::Vector3d r(pu - o.u, cam.fy * p.y() * iz + cam.cy - o.v, 0);
@@ -115,8 +115,8 @@ bool refine_point(const PinholeCamera& cam, const std::vector<Eigen::Isometry3d>
           Jp.row(2) << cam.fx * iz, 0, (cam.bf - cam.fx * p.x()) * iz * iz;
           r(2) = pu - cam.bf * iz - o.ur;
         }
-        const Eigen::MatrixXd J = w * Jp.topRows(rows) * tcw[i].linear();
-        const Eigen::VectorXd e = w * r.head(rows);
+        const Eigen::Matrix<double, Eigen::Dynamic, 3, 0, 3, 3> J = w * Jp.topRows(rows) * tcw[i].linear();
+        const Eigen::Matrix<double, Eigen::Dynamic, 1, 0, 3, 1> e = w * r.head(rows);
         const double delta = std::sqrt(threshold(o)), norm = e.norm();
         const double rho = stage == 0 && norm > delta ? delta / norm : 1.0;  // Huber's IRLS weight
         H += rho * J.transpose() * J;

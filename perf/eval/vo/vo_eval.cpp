@@ -32,7 +32,8 @@ RunRecord record_of(const RealRunResult& r, const char* variant, std::uint64_t s
 void log_run(const RealSequence& s, const RunRecord& r, const RealRunResult& x) {
   std::fprintf(stderr,
                "  %s seed %llu %s M=%lld: tracked %d/%d (losses %d) mps %d kfs %d (made %d) culled %lld deleted %lld "
-               "excluded matched %lld rule violations %lld (windows %llu, refused %d) kept %.1f%% (of evaluated, map %.1f%%) floor kfs %llu promoted %llu "
+               "excluded matched %lld rule violations %lld (windows %llu, refused %d) "
+               "kept %.1f%% (of evaluated, map %.1f%%) floor kfs %llu promoted %llu "
                "short %llu, ate %.4f m, "
                "local BA %.2f s (%d, cpu %.2f s, %lld obs), total %.1f s\n",
                s.name.c_str(), static_cast<unsigned long long>(r.seed), r.variant.c_str(),
