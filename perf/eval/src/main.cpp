@@ -92,6 +92,9 @@ const std::vector<cli::Flag> kFlags = {
     {"--defer-fixed", nullptr, "with --defer: excluded points enter local BA as constant landmarks seen\n"
                                "by its keyframes (their observations constrain the poses) instead of\n"
                                "not at all"},
+    {"--defer-refine", nullptr, "with --defer: each excluded point's re-triangulation is refined with the\n"
+                                "poses held (robust, as local BA refines a point) and its outlier\n"
+                                "observations are erased"},
     {"--tracked-flags", nullptr, "the real VO sends the new keyframe's tracked flags (the points it\n"
                                  "matched in that frame), which no selector culls"},
     {"--window-sizes", nullptr, "instead of the comparison: the original run of the first seed on each\n"
@@ -138,6 +141,7 @@ struct Args {
   keepless::core::Params policy;  // scope, coverage_floor, cost_model, maturity_keyframes, track_terms; the rest is set per variant
   bool tracked_flags = false;     // --tracked-flags (the real VO)
   bool defer_fixed = false;       // --defer-fixed (the real VO)
+  bool defer_refine = false;      // --defer-refine (the real VO)
 };
 
 [[noreturn]] void fail(const std::string& msg) {
@@ -248,6 +252,7 @@ Args parse(int argc, char** argv) {
     else if (f == "--tracked-flags") a.tracked_flags = true;
     else if (f == "--defer") a.policy.defer_keyframes = static_cast<std::uint32_t>(parse_int(f, val(), 1, 1000));
     else if (f == "--defer-fixed") a.defer_fixed = true;
+    else if (f == "--defer-refine") a.defer_refine = true;
     else if (f == "--cost") {
       const std::string v = val();
       if (!keepless::core::parse_cost_model(v.c_str(), &a.policy.cost_model))
@@ -477,6 +482,7 @@ int main(int argc, char** argv) {
   if (a.tracked_flags) summary.settings += ", tracked flags";
   if (a.policy.defer_keyframes > 0) summary.settings += ", defer " + std::to_string(a.policy.defer_keyframes);
   if (a.defer_fixed) summary.settings += ", excluded points fixed in BA";
+  if (a.defer_refine) summary.settings += ", excluded points refined";
   if (a.policy.cost_model == keepless::core::CostModel::kTrack) {
     summary.settings += ", track terms " + std::to_string(a.policy.track_terms);
   }
@@ -579,6 +585,7 @@ int main(int argc, char** argv) {
     vo.policy = a.policy;
     vo.tracked_flags = a.tracked_flags;
     vo.defer_fixed = a.defer_fixed;
+    vo.defer_refine = a.defer_refine;
     vo.out = a.out;
     std::string err;
     for (const auto& in : a.vo)

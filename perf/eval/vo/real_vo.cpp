@@ -168,7 +168,9 @@ class Vo {
     std::unique_ptr<core::Sparsifier> sparsifier;
   };
   void replay(const std::vector<int>& keyframes, std::unique_ptr<Replay>* state);
-  void select_points(int kf, const std::vector<int>& local);
+  // The points the selector culls at keyframe kf (none when its window is refused).
+  std::vector<core::PointId> select_points(int kf, const std::vector<int>& local);
+  void remove_culls(const std::vector<core::PointId>& culls);
   // fix_first: hold local.front() too (the two-view start's gauge).
   void local_ba(const std::vector<int>& local, bool fix_first);
   bool deferring() const { return opt_.params.defer_keyframes > 0 && opt_.selector != Selector::kOriginal; }
@@ -362,7 +364,9 @@ bool Vo::track(TrackedFrame& cur) {
   const int inliers = optimize(cur);
   if (inliers < (relocalised || recent ? kMinTrackedAfterRelocalisation : kMinTrackedInliers)) return false;
   for (int p : cur.mp) {
-    if (p >= 0) ++map_.points[static_cast<std::size_t>(p)].found;
+    if (p < 0) continue;
+    ++map_.points[static_cast<std::size_t>(p)].found;
+    if (map_.points[static_cast<std::size_t>(p)].excluded) ++result_.excluded_matches;
   }
   reference_kf_ = reference;
   if (need_keyframe(cur, inliers)) insert_keyframe(cur);
@@ -639,7 +643,7 @@ void Vo::replay(const std::vector<int>& keyframes, std::unique_ptr<Replay>* stat
   if (r.sparsifier->update(*r.window) == core::Status::kCapacityExceeded) ++result_.window_sizes.refused;
 }
 
-void Vo::select_points(int kf, const std::vector<int>& local) {
+std::vector<core::PointId> Vo::select_points(int kf, const std::vector<int>& local) {
   const Clock::time_point start = Clock::now();
   std::vector<int> ordered = local;
   std::sort(ordered.begin(), ordered.end());
@@ -691,13 +695,13 @@ void Vo::select_points(int kf, const std::vector<int>& local) {
             opencv::Status::kOk) {
       ++result_.window_rejections;
       result_.selector_seconds += seconds_since(start);
-      return;
+      return {};
     }
   }
   if (sparsifier_.run(window_) != core::Status::kOk) {
     ++result_.window_rejections;
     result_.selector_seconds += seconds_since(start);
-    return;
+    return {};
   }
   result_.selector.add(sparsifier_.summary());
   // The authors' integration: only the new keyframe's points are decided;
@@ -708,7 +712,7 @@ void Vo::select_points(int kf, const std::vector<int>& local) {
   if (maturity > 0 && ordered.size() <= maturity) {  // every point is young yet
     kept_fraction_sum_ += 1.0;
     result_.selector_seconds += seconds_since(start);
-    return;
+    return {};
   }
   const KeyFrame& f = map_.kfs[static_cast<std::size_t>(maturity > 0 ? ordered[ordered.size() - 1 - maturity] : kf)];
   std::vector<Candidate> candidates;
@@ -785,20 +789,38 @@ void Vo::select_points(int kf, const std::vector<int>& local) {
     fraction_budget_.record(budget_view.data(), static_cast<std::uint32_t>(budget_view.size()));
     result_.points_evaluated = static_cast<std::int64_t>(fraction_budget_.evaluated());
   }
-  if (deferring()) {
-    // Out of local BA now, out of the map when the rule says (core::DeferredCulls).
-    std::vector<core::PointId> excluded, deleted;
-    opencv::defer_culls(culls, deferred_, &excluded, &deleted);
-    for (core::PointId id : excluded) map_.points[static_cast<std::size_t>(id)].excluded = true;
-    for (core::PointId id : deleted) {
-      if (!map_.points[static_cast<std::size_t>(id)].bad) map_.set_bad(static_cast<int>(id));
-    }
-    result_.points_deleted_deferred += static_cast<std::int64_t>(deleted.size());
-  } else {
-    for (core::PointId id : culls) map_.set_bad(static_cast<int>(id));
-  }
   result_.points_culled_by_selector += static_cast<std::int64_t>(culls.size());
   result_.selector_seconds += seconds_since(start);
+  return culls;
+}
+
+// Immediate culling deletes the culls; deferred culling excludes them and
+// deletes what core::DeferredCulls' rule says at this keyframe (also when
+// the window was refused and nothing was culled, so no deletion is late).
+void Vo::remove_culls(const std::vector<core::PointId>& culls) {
+  if (!deferring()) {
+    for (core::PointId id : culls) map_.set_bad(static_cast<int>(id));
+    return;
+  }
+  // Out of local BA now, out of the map when the rule says (core::DeferredCulls).
+  std::vector<core::PointId> excluded, deleted;
+  opencv::defer_culls(culls, deferred_, &excluded, &deleted);
+  const std::uint64_t now = deferred_.tick();
+  for (core::PointId id : excluded) {
+    map_.points[static_cast<std::size_t>(id)].excluded = true;
+    map_.points[static_cast<std::size_t>(id)].matched_tick = now;
+  }
+  for (core::PointId id : deleted) {
+    MapPoint& m = map_.points[static_cast<std::size_t>(id)];
+    // Not before T unmatched keyframes (a refused cull, never excluded, goes at once).
+    if (m.excluded && !m.bad && now - m.matched_tick < opt_.params.defer_keyframes) ++result_.defer_rule_violations;
+    if (!m.bad) map_.set_bad(static_cast<int>(id));
+  }
+  // Nor after: no excluded point the map still holds has gone T unmatched keyframes.
+  for (const MapPoint& m : map_.points) {
+    if (m.excluded && !m.bad && now - m.matched_tick >= opt_.params.defer_keyframes) ++result_.defer_rule_violations;
+  }
+  result_.points_deleted_deferred += static_cast<std::int64_t>(deleted.size());
 }
 
 void Vo::local_ba(const std::vector<int>& local, bool fix_first) {
@@ -878,33 +900,57 @@ void Vo::note_matches(int kf) {
     tracked.push_back(f.tracked[i]);
   }
   (void)opencv::note_keyframe(deferred_, ids, &tracked);  // the lengths agree
+  for (std::size_t j = 0; j < ids.size(); ++j) {
+    MapPoint& m = map_.points[ids[j]];
+    if (m.excluded && tracked[j] != 0) m.matched_tick = deferred_.tick();
+  }
 }
 
 // Excluded points left out of the local BA keep a refined structure: each
 // one the local keyframes observe is re-triangulated from all its
 // observations with the adjusted poses (N-view DLT); a solution behind a
-// camera or not finite leaves it where it was.
+// camera or not finite leaves it where it was. With defer_refine the
+// solution is then refined as local BA would refine it with the poses held
+// (refine_point), and the observations it finds outliers are erased.
 void Vo::retriangulate_excluded(const std::vector<int>& local) {
+  std::vector<Eigen::Isometry3d> tcw;
+  std::vector<BaObservation> obs;
+  std::vector<int> observer;
+  std::vector<bool> outlier;
   for (int p : map_.points_of(local)) {
     MapPoint& m = map_.points[static_cast<std::size_t>(p)];
     if (!m.excluded || m.bad) continue;
     Eigen::MatrixXd A(2 * m.obs.size(), 4);
     Eigen::Index rows = 0;
+    tcw.clear();
+    obs.clear();
+    observer.clear();
     for (const auto& [k, i] : m.obs) {
       const KeyFrame& f = map_.kfs[static_cast<std::size_t>(k)];
       if (f.bad) continue;
       const Eigen::Matrix<double, 3, 4> P = K_ * f.Tcw.matrix().topRows<3>();
-      const cv::Point2f& x = f.f.keys[static_cast<std::size_t>(i)].pt;
-      A.row(rows++) = x.x * P.row(2) - P.row(0);
-      A.row(rows++) = x.y * P.row(2) - P.row(1);
+      const cv::KeyPoint& kp = f.f.keys[static_cast<std::size_t>(i)];
+      A.row(rows++) = kp.pt.x * P.row(2) - P.row(0);
+      A.row(rows++) = kp.pt.y * P.row(2) - P.row(1);
+      tcw.push_back(f.Tcw);
+      obs.push_back({0, 0, kp.pt.x, kp.pt.y, f.f.ur[static_cast<std::size_t>(i)], kp.octave});
+      observer.push_back(k);
     }
     Eigen::Vector3d X;
     if (rows < 4 || !dlt_point(A.topRows(rows), &X)) continue;
     bool in_front = true;
-    for (const auto& [k, i] : m.obs) {
-      if (!map_.kfs[static_cast<std::size_t>(k)].bad) in_front = in_front && (map_.kfs[static_cast<std::size_t>(k)].Tcw * X).z() > 0;
-    }
+    for (const Eigen::Isometry3d& T : tcw) in_front = in_front && (T * X).z() > 0;
     if (!in_front) continue;
+    if (opt_.defer_refine) {
+      if (!refine_point(cam_, tcw, obs, &X, &outlier)) continue;
+      for (std::size_t o = 0; o < outlier.size() && !m.bad; ++o) {
+        if (outlier[o]) map_.erase_observation(p, observer[o]);
+      }
+      if (m.bad) {
+        (void)deferred_.forget(static_cast<core::PointId>(p));  // the map deleted it, not the rule
+        continue;
+      }
+    }
     m.X = X;
     map_.update_point(p);
   }
@@ -941,7 +987,7 @@ void Vo::local_mapping(int kf) {
   const std::vector<int> local = local_keyframes(kf, opt_.max_local_keyframes);
   if (opt_.measure_windows) measure_windows(kf);
   if (deferring()) note_matches(kf);
-  if (opt_.selector != Selector::kOriginal) select_points(kf, local);
+  if (opt_.selector != Selector::kOriginal) remove_culls(select_points(kf, local));
   local_ba(local, false);
   if (deferring()) retriangulate_excluded(local);
   keyframe_culling(kf);

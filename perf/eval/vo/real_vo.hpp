@@ -36,6 +36,10 @@ struct RealVoOptions {
   // Deferred culling (params.defer_keyframes > 0): excluded points enter local
   // BA as constant landmarks seen by the local keyframes, instead of not at all.
   bool defer_fixed = false;
+  // Deferred culling: after the DLT, each excluded point's structure is
+  // refined with the poses held (robust, as local BA would) and its outlier
+  // observations are erased, instead of the DLT alone.
+  bool defer_refine = false;
   int max_local_keyframes = 20;      // local BA / keepless window: the new keyframe and its best covisibles
   bool measure_windows = false;  // fill RealRunResult::window_sizes (window_sizes.hpp)
   // With measure_windows: replay the K = 20 windows at these capacities
@@ -60,6 +64,10 @@ struct RealRunResult {
   std::int64_t observations = 0;  // of the alive points at the end
   std::int64_t points_culled_by_selector = 0;
   std::int64_t points_deleted_deferred = 0;  // params.defer_keyframes: excluded points the rule deleted
+  // Excluded points deleted before, or still held after, T keyframes in a row
+  // that did not match them, by the VO's own record (0: the rule held).
+  std::int64_t defer_rule_violations = 0;
+  std::int64_t excluded_matches = 0;  // inlier matches of excluded points in tracked frames, summed over frames
   int local_bas = 0;
   int window_rejections = 0;  // windows the adapter or Sparsifier refused (nothing culled there)
   SelectorCounts selector;  // windows the selector decided, its Sparsifier's floor counts over them

@@ -91,6 +91,54 @@ double chi2(const PinholeCamera& cam, const Eigen::Isometry3d& Tcw, const Eigen:
   return e * pyramid().inv_sigma2[static_cast<std::size_t>(o.level)];
 }
 
+bool refine_point(const PinholeCamera& cam, const std::vector<Eigen::Isometry3d>& tcw,
+                  const std::vector<BaObservation>& obs, Eigen::Vector3d* X, std::vector<bool>* outlier) {
+  outlier->assign(obs.size(), false);
+  Eigen::Vector3d x = *X;
+  for (int stage = 0; stage < 2; ++stage) {
+    for (int it = 0; it < 5; ++it) {
+      Eigen::Matrix3d H = Eigen::Matrix3d::Zero();
+      Eigen::Vector3d g = Eigen::Vector3d::Zero();
+      for (std::size_t i = 0; i < obs.size(); ++i) {
+        if ((*outlier)[i]) continue;
+        const BaObservation& o = obs[i];
+        const Eigen::Vector3d p = tcw[i] * x;
+        if (!(p.z() > 0)) return false;
+        const double iz = 1.0 / p.z(), w = 1.0 / pyramid().scale[static_cast<std::size_t>(o.level)];
+        const double pu = cam.fx * p.x() * iz + cam.cx;
+        Eigen::Matrix3d Jp = Eigen::Matrix3d::Zero();  // d(residual)/d(camera point), rows u, v, u_r
+        Jp.row(0) << cam.fx * iz, 0, -cam.fx * p.x() * iz * iz;
+        Jp.row(1) << 0, cam.fy * iz, -cam.fy * p.y() * iz * iz;
+        Eigen::Vector3d r(pu - o.u, cam.fy * p.y() * iz + cam.cy - o.v, 0);
+        const int rows = o.ur >= 0 ? 3 : 2;
+        if (rows == 3) {
+          Jp.row(2) << cam.fx * iz, 0, (cam.bf - cam.fx * p.x()) * iz * iz;
+          r(2) = pu - cam.bf * iz - o.ur;
+        }
+        const Eigen::Matrix<double, Eigen::Dynamic, 3, 0, 3, 3> J = w * Jp.topRows(rows) * tcw[i].linear();
+        const Eigen::Matrix<double, Eigen::Dynamic, 1, 0, 3, 1> e = w * r.head(rows);
+        const double delta = std::sqrt(threshold(o)), norm = e.norm();
+        const double rho = stage == 0 && norm > delta ? delta / norm : 1.0;  // Huber's IRLS weight
+        H += rho * J.transpose() * J;
+        g += rho * J.transpose() * e;
+      }
+      const Eigen::Vector3d dx = H.ldlt().solve(-g);
+      if (!dx.allFinite()) return false;
+      x += dx;
+      if (dx.norm() < 1e-9 * (1.0 + x.norm())) break;
+    }
+    int inliers = 0;
+    for (std::size_t i = 0; i < obs.size(); ++i) {
+      (*outlier)[i] = chi2(cam, tcw[i], x, obs[i]) > threshold(obs[i]);
+      inliers += (*outlier)[i] ? 0 : 1;
+    }
+    if (inliers < 2) return false;
+  }
+  if (!x.allFinite()) return false;
+  *X = x;
+  return true;
+}
+
 int optimize_pose(const PinholeCamera& cam, const std::vector<Eigen::Vector3d>& points,
                   const std::vector<BaObservation>& obs, Eigen::Isometry3d* Tcw, std::vector<bool>* outlier) {
   outlier->resize(obs.size(), false);

@@ -47,6 +47,15 @@ struct LocalBaProblem {
 // whether it is an outlier after the solve.
 std::vector<bool> solve_local_ba(const PinholeCamera& cam, LocalBaProblem* problem);
 
+// Structure-only BA of one point, the observing poses held (tcw[i] is
+// obs[i]'s camera; obs[i].pose is not read): Gauss-Newton with Huber at the
+// chi-square 95 % thresholds, outliers classified, then again without the
+// robust kernel on the inliers, as local BA treats a point. `outlier` gets
+// one flag per observation. False (X unchanged) if fewer than two inliers
+// remain or the point falls behind a camera.
+bool refine_point(const PinholeCamera& cam, const std::vector<Eigen::Isometry3d>& tcw,
+                  const std::vector<BaObservation>& obs, Eigen::Vector3d* X, std::vector<bool>* outlier);
+
 // chi2 of one observation (weighted squared error); +inf behind the camera.
 double chi2(const PinholeCamera& cam, const Eigen::Isometry3d& Tcw, const Eigen::Vector3d& X,
             const BaObservation& o);

@@ -32,13 +32,15 @@ RunRecord record_of(const RealRunResult& r, const char* variant, std::uint64_t s
 void log_run(const RealSequence& s, const RunRecord& r, const RealRunResult& x) {
   std::fprintf(stderr,
                "  %s seed %llu %s M=%lld: tracked %d/%d (losses %d) mps %d kfs %d (made %d) culled %lld deleted %lld "
-               "(windows %llu, refused %d) kept %.1f%% (of evaluated, map %.1f%%) floor kfs %llu promoted %llu "
+               "excluded matched %lld rule violations %lld (windows %llu, refused %d) "
+               "kept %.1f%% (of evaluated, map %.1f%%) floor kfs %llu promoted %llu "
                "short %llu, ate %.4f m, "
                "local BA %.2f s (%d, cpu %.2f s, %lld obs), total %.1f s\n",
                s.name.c_str(), static_cast<unsigned long long>(r.seed), r.variant.c_str(),
                static_cast<long long>(r.M), x.frames_tracked, x.frames, x.tracking_losses, x.map_points, x.keyframes,
                x.keyframes_created, static_cast<long long>(x.points_culled_by_selector),
-               static_cast<long long>(x.points_deleted_deferred),
+               static_cast<long long>(x.points_deleted_deferred), static_cast<long long>(x.excluded_matches),
+               static_cast<long long>(x.defer_rule_violations),
                static_cast<unsigned long long>(x.selector.windows), x.window_rejections, 100.0 * x.mean_kept_fraction,
                x.points_evaluated > 0
                    ? 100.0 * (1.0 - static_cast<double>(x.points_culled_by_selector) / static_cast<double>(x.points_evaluated))
@@ -84,6 +86,7 @@ bool evaluate_real_vo(const VoInput& in, const VoEvalOptions& o, std::vector<Com
     vo.params.defer_keyframes = o.policy.defer_keyframes;
     vo.tracked_flags = o.tracked_flags;
     vo.defer_fixed = o.defer_fixed;
+    vo.defer_refine = o.defer_refine;
     vo.seed = o.seeds[si];
     vo.selector = Selector::kOriginal;
     const RealRunResult original = run_real_vo(seq, vo);

@@ -32,6 +32,7 @@ struct VoEvalOptions {
   core::Params policy;  // and maturity_keyframes, defer_keyframes
   bool tracked_flags = false;  // RealVoOptions::tracked_flags
   bool defer_fixed = false;    // RealVoOptions::defer_fixed
+  bool defer_refine = false;   // RealVoOptions::defer_refine
   std::string out;  // non-empty: NAME_trajectory.svg and NAME_keypoints.svg there
 };
 

@@ -29,6 +29,9 @@ struct MapPoint {
   // Deferred culling: culled, kept for tracking but out of local BA's point
   // blocks (re-triangulated after each local BA) until deleted.
   bool excluded = false;
+  // The deferral clock's tick at its exclusion or last match since, as the VO
+  // records it: the rule's deletions are checked against it.
+  std::uint64_t matched_tick = 0;
 };
 
 struct KeyFrame {
