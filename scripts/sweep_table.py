@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """The budget sweep's variants side by side, from scripts/eval_sweep.sh's output.
 
-    scripts/sweep_table.py OUT [--variants paper,maturity,track,defer]
+    scripts/sweep_table.py OUT [--variants paper,maturity,track,defer] [--condensed]
 
 OUT holds one directory per variant (OUT/VARIANT/runs.csv, as eval_sweep.sh
 --variants writes them). Prints, per sequence, one Markdown table: per kept
@@ -115,17 +115,47 @@ def sequence_table(name, cells, originals, order):
     return "\n".join(lines)
 
 
+def condensed_table(name, cells, originals, variants):
+    orig = list(originals.values())
+    ate0, obs0 = stat(orig, "ate_m")[0], stat(orig, "observations")[0]
+    lines = [f"#### {name}", "",
+             f"Original: ATE {ate0:.3g} m, {obs0:,.0f} local-BA observations, {len(orig)} seeds. Each cell: ATE over "
+             "the original's (failed seeds), local-BA observations as a share of the original's; bold: no seed failed.",
+             "", "| culling | F | " + " | ".join(m for _, m in METHODS) + " |", "|---|---:|" + "---|" * len(METHODS)]
+    for variant in variants:
+        title = f"`{FLAGS[variant]}`" if FLAGS[variant] else "immediate (paper)"
+        for fraction in sorted({f for (f, _) in cells}):
+            row = []
+            for method, label in METHODS:
+                key = (fraction, label if variant == "paper" else f"{label}, {FLAGS[variant]}")
+                rows = cells.get(key)
+                if not rows:
+                    row.append("–")
+                    continue
+                ratio, fails = stat(rows, "ate_m")[0] / ate0, sum(failed(r) for r in rows)
+                text = f"{ratio:.2f}" if ratio < 10 else f"{ratio:.0f}"
+                text = f"**{text}**" if fails == 0 else text
+                row.append(f"{text} ({fails}/{len(rows)}), {100 * stat(rows, 'observations')[0] / obs0:.0f} %")
+            if any(c != "–" for c in row):
+                lines.append(f"| {title} | {fraction:.1f} | " + " | ".join(row) + " |")
+    lines.append("")
+    return "\n".join(lines)
+
+
 def main(argv):
     if len(argv) < 2 or argv[1] in ("-h", "--help"):
         print(__doc__)
         return 0 if len(argv) >= 2 else 2
     out = argv[1]
     variants = ["paper", "maturity", "track", "defer"]
-    if len(argv) >= 4 and argv[2] == "--variants":
-        variants = argv[3].split(",")
+    if "--variants" in argv:
+        variants = argv[argv.index("--variants") + 1].split(",")
     table, originals, order = load(out, variants)
     for name in sorted(table):
-        print(sequence_table(name, table[name], originals[name], order))
+        if "--condensed" in argv:
+            print(condensed_table(name, table[name], originals[name], variants))
+        else:
+            print(sequence_table(name, table[name], originals[name], order))
     return 0
 
 
