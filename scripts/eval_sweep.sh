@@ -81,11 +81,12 @@ variant_flags() {
 joblist="$out/jobs.txt"
 : > "$joblist"
 IFS=, read -r -a variant_list <<< "$variants"
+# One variant writes into OUT itself, several each into OUT/VARIANT.
+variant_dir() { if ((${#variant_list[@]} > 1)); then echo "$out/$1"; else echo "$out"; fi; }
 for variant in "${variant_list[@]}"; do
   vf=$(variant_flags "$variant")
   IFS='|' read -r _ eval_flags maps_flags <<< "$vf"
-  vdir=$out
-  ((${#variant_list[@]} > 1)) && vdir=$out/$variant
+  vdir=$(variant_dir "$variant")
   mkdir -p "$vdir/runs"
   for entry in "${inputs[@]}"; do
     name=${entry%%|*}
@@ -135,8 +136,7 @@ tr '\n' '\0' < "$joblist" | xargs -0 -P "$jobs" -I{} bash -c 'run_job "$1"' _ {}
 
 failed=0
 for variant in "${variant_list[@]}"; do
-  vdir=$out
-  ((${#variant_list[@]} > 1)) && vdir=$out/$variant
+  vdir=$(variant_dir "$variant")
   reports=()
   for d in "$vdir"/runs/*/; do [ -f "$d/runs.csv" ] && reports+=(--report "$d"); done
   if ((${#reports[@]})); then
