@@ -40,6 +40,13 @@ struct RealVoOptions {
   // refined with the poses held (robust, as local BA would) and its outlier
   // observations are erased, instead of the DLT alone.
   bool defer_refine = false;
+  // Which points every selector decides at a keyframe: false, the new
+  // keyframe's (the authors' integration; with params.maturity_keyframes the
+  // keyframe that just matured); true, every evaluated point of the local
+  // window (with params.scope kWindow), so a point kept before can be culled
+  // later and a kept fraction is F of the points new to each window plus
+  // those kept before among all of the window's.
+  bool decide_window = false;
   int max_local_keyframes = 20;      // local BA / keepless window: the new keyframe and its best covisibles
   bool measure_windows = false;  // fill RealRunResult::window_sizes (window_sizes.hpp)
   // With measure_windows: replay the K = 20 windows at these capacities
@@ -63,6 +70,7 @@ struct RealRunResult {
   int keyframes_created = 0;
   std::int64_t observations = 0;  // of the alive points at the end
   std::int64_t points_culled_by_selector = 0;
+  std::int64_t points_culled_elsewhere = 0;  // of those, points the decided keyframe does not observe (decide_window)
   std::int64_t points_deleted_deferred = 0;  // params.defer_keyframes: excluded points the rule deleted
   // Excluded points deleted before, or still held after, T keyframes in a row
   // that did not match them, by the VO's own record (0: the rule held).
