@@ -882,6 +882,14 @@ void Vo::local_ba(const std::vector<int>& local, bool fix_first) {
     }
   }
   result_.local_ba_observations += static_cast<std::int64_t>(problem.observations.size());
+  // Which points the BA holds: their map track lengths and triangulation angles.
+  for (int p : points) {
+    if (map_.points[static_cast<std::size_t>(p)].excluded) continue;
+    const core::PointQuality q = point_quality(map_, p, local.front(), cam_);
+    ++result_.ba_points;
+    result_.ba_point_track_sum += q.track_length;
+    result_.ba_point_angle_sum += std::max(0.0f, q.triangulation_angle);
+  }
   const double cpu0 = thread_cpu_seconds();
   const std::vector<bool> outlier = solve_local_ba(cam_, &problem);
   result_.local_ba_cpu_seconds += thread_cpu_seconds() - cpu0;

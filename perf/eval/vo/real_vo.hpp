@@ -82,6 +82,10 @@ struct RealRunResult {
   double local_ba_seconds = 0, selector_seconds = 0, total_seconds = 0;
   std::int64_t local_ba_observations = 0;  // residuals over every local BA
   double local_ba_cpu_seconds = 0;          // the local BAs' thread CPU time
+  // The local BAs' point blocks (excluded points aside), summed over every
+  // local BA, with their map track lengths and triangulation angles (degrees).
+  std::int64_t ba_points = 0;
+  double ba_point_track_sum = 0, ba_point_angle_sum = 0;
   // RMS over every frame from the first tracked one, an untracked frame at
   // the last tracked pose; SE(3) for RGB-D, Sim(3) monocular.
   double ate_m = 0, ate_r_deg = 0;

@@ -35,7 +35,8 @@ void log_run(const RealSequence& s, const RunRecord& r, const RealRunResult& x) 
                "excluded matched %lld rule violations %lld culled outside the keyframe %lld (windows %llu, refused %d) "
                "kept %.1f%% (of evaluated, map %.1f%%) floor kfs %llu promoted %llu "
                "short %llu, ate %.4f m, "
-               "local BA %.2f s (%d, cpu %.2f s, %lld obs), total %.1f s\n",
+               "local BA %.2f s (%d, cpu %.2f s, %lld obs), total %.1f s, "
+               "BA points %lld (mean track %.2f, angle %.2f deg)\n",
                s.name.c_str(), static_cast<unsigned long long>(r.seed), r.variant.c_str(),
                static_cast<long long>(r.M), x.frames_tracked, x.frames, x.tracking_losses, x.map_points, x.keyframes,
                x.keyframes_created, static_cast<long long>(x.points_culled_by_selector),
@@ -49,7 +50,9 @@ void log_run(const RealSequence& s, const RunRecord& r, const RealRunResult& x) 
                static_cast<unsigned long long>(x.selector.floor_promoted),
                static_cast<unsigned long long>(x.selector.floor_short), x.ate_m,
                x.local_ba_seconds, x.local_bas, x.local_ba_cpu_seconds,
-               static_cast<long long>(x.local_ba_observations), x.total_seconds);
+               static_cast<long long>(x.local_ba_observations), x.total_seconds,
+               static_cast<long long>(x.ba_points), x.ba_points > 0 ? x.ba_point_track_sum / double(x.ba_points) : 0.0,
+               x.ba_points > 0 ? x.ba_point_angle_sum / double(x.ba_points) : 0.0);
 }
 
 }  // namespace
