@@ -200,3 +200,68 @@ TEST(RealVoQuick, DeferredCullingTracksExcludedPointsAndDeletesThemByTheRule) {
     EXPECT_EQ(c.violations, 0);
   }
 }
+
+// --decide window: every selector decides every evaluated point of the local
+// window, not only the new keyframe's, at the same exact kept fraction. On a
+// monocular KITTI slice with deferred culling, each selector then culls
+// points the decided keyframe does not observe (none without the option),
+// and the budget still holds: the selector's points stay F of those it
+// evaluated (the "map" share the VO logs, within its 0.1 % print).
+TEST(RealVoQuick, DecidingTheWindowCullsOlderPointsAtTheSameKeptFraction) {
+  const std::string bin = KEEPLESS_EVAL_BIN;
+  const std::string data = std::string(KEEPLESS_EVAL_DATA) + "/kitti06_first51_niconielsen";
+  ASSERT_TRUE(std::filesystem::exists(bin)) << bin << " is missing: build target keepless_eval";
+  if (!std::filesystem::exists(data + "/image_l/000020.png")) {
+    GTEST_SKIP() << "no KITTI 06 data at " << data << " (set KEEPLESS_EVAL_DATA_DIR)";
+  }
+  struct Line {
+    std::string selector;
+    long long culled = -1, elsewhere = -1;
+    double map_share = NAN;
+  };
+  // One entry per selector line (ours and the baselines) of one seed.
+  const auto run = [&](const std::string& extra, std::vector<Line>* out) {
+    const std::string cmd = "'" + bin + "' --images '" + data + "/image_l' --calib '" + data + "/calib.txt' --poses '" +
+                            data + "/poses.txt' --frames 0:20 --seeds 1 --kept-fraction 0.2 --no-ablation --defer 2 " +
+                            "--defer-refine " + extra + " 2>&1";
+    std::unique_ptr<FILE, int (*)(FILE*)> pipe(popen(cmd.c_str(), "r"), pclose);
+    ASSERT_NE(pipe, nullptr);
+    std::string all;
+    char buf[4096];
+    out->clear();
+    while (std::fgets(buf, sizeof buf, pipe.get()) != nullptr) {
+      all += buf;
+      const std::string line(buf);
+      const std::size_t m = line.find(" M=");
+      if (m == std::string::npos || line.find(" original M=") != std::string::npos) continue;
+      Line l;
+      l.selector = line.substr(line.rfind(' ', m - 1) + 1, m - line.rfind(' ', m - 1) - 1);
+      const auto after = [&](const char* tag) {
+        const std::size_t at = line.find(tag);
+        EXPECT_NE(at, std::string::npos) << tag << " in " << line;
+        return at == std::string::npos ? std::string() : line.substr(at + std::string(tag).size());
+      };
+      l.culled = std::atoll(after("culled ").c_str());
+      l.elsewhere = std::atoll(after("culled outside the keyframe ").c_str());
+      l.map_share = std::atof(after("map ").c_str());
+      out->push_back(l);
+    }
+    const int status = pclose(pipe.release());
+    ASSERT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << all;
+    ASSERT_EQ(out->size(), 4u) << "expected ours, random, longest_track and anms lines:\n" << all;
+  };
+  std::vector<Line> lines;
+  run("", &lines);
+  for (const Line& l : lines) {
+    SCOPED_TRACE(l.selector);
+    EXPECT_GT(l.culled, 0);
+    EXPECT_EQ(l.elsewhere, 0);
+  }
+  run("--decide window", &lines);
+  for (const Line& l : lines) {
+    SCOPED_TRACE(l.selector);
+    EXPECT_GT(l.elsewhere, 0);
+    EXPECT_LE(l.elsewhere, l.culled);
+    EXPECT_NEAR(l.map_share, 20.0, 0.1);
+  }
+}

@@ -95,6 +95,10 @@ const std::vector<cli::Flag> kFlags = {
     {"--defer-refine", nullptr, "with --defer: each excluded point's re-triangulation is refined with the\n"
                                 "poses held (robust, as local BA refines a point) and its outlier\n"
                                 "observations are erased"},
+    {"--decide", "newest|window", "which points every selector of the real VO decides at a keyframe:\n"
+                                  "newest, the new keyframe's (the authors' integration; default), or\n"
+                                  "window, every point of the local window, so a point kept before\n"
+                                  "can be culled later (keepless with --scope window)"},
     {"--tracked-flags", nullptr, "the real VO sends the new keyframe's tracked flags (the points it\n"
                                  "matched in that frame), which no selector culls"},
     {"--window-sizes", nullptr, "instead of the comparison: the original run of the first seed on each\n"
@@ -142,6 +146,7 @@ struct Args {
   bool tracked_flags = false;     // --tracked-flags (the real VO)
   bool defer_fixed = false;       // --defer-fixed (the real VO)
   bool defer_refine = false;      // --defer-refine (the real VO)
+  bool decide_window = false;     // --decide window (the real VO)
 };
 
 [[noreturn]] void fail(const std::string& msg) {
@@ -253,6 +258,11 @@ Args parse(int argc, char** argv) {
     else if (f == "--defer") a.policy.defer_keyframes = static_cast<std::uint32_t>(parse_int(f, val(), 1, 1000));
     else if (f == "--defer-fixed") a.defer_fixed = true;
     else if (f == "--defer-refine") a.defer_refine = true;
+    else if (f == "--decide") {
+      const std::string v = val();
+      if (v != "newest" && v != "window") fail("--decide: expected newest or window, got '" + v + "'");
+      a.decide_window = v == "window";
+    }
     else if (f == "--cost") {
       const std::string v = val();
       if (!keepless::core::parse_cost_model(v.c_str(), &a.policy.cost_model))
@@ -483,6 +493,7 @@ int main(int argc, char** argv) {
   if (a.policy.defer_keyframes > 0) summary.settings += ", defer " + std::to_string(a.policy.defer_keyframes);
   if (a.defer_fixed) summary.settings += ", excluded points fixed in BA";
   if (a.defer_refine) summary.settings += ", excluded points refined";
+  if (a.decide_window) summary.settings += ", the window's points decided";
   if (a.policy.cost_model == keepless::core::CostModel::kTrack) {
     summary.settings += ", track terms " + std::to_string(a.policy.track_terms);
   }
@@ -586,6 +597,7 @@ int main(int argc, char** argv) {
     vo.tracked_flags = a.tracked_flags;
     vo.defer_fixed = a.defer_fixed;
     vo.defer_refine = a.defer_refine;
+    vo.decide_window = a.decide_window;
     vo.out = a.out;
     std::string err;
     for (const auto& in : a.vo)

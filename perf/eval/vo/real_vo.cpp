@@ -726,18 +726,31 @@ std::vector<core::PointId> Vo::select_points(int kf, const std::vector<int>& loc
     evaluated.insert(evaluated.end(), keepless_culls.begin(), keepless_culls.end());
     std::sort(evaluated.begin(), evaluated.end());
   }
+  // The candidates: the evaluated points of the decided keyframe, or with
+  // decide_window those of every window keyframe, each once, described by
+  // its keypoint in the newest keyframe that observes it.
+  std::vector<int> deciding = {static_cast<int>(&f - map_.kfs.data())};
+  if (opt_.decide_window) deciding.assign(ordered.rbegin(), ordered.rend());
+  std::vector<char> listed(opt_.decide_window ? map_.points.size() : 0, 0);
   std::size_t cull = 0;
   std::vector<core::PointId> own_culls;
-  for (std::size_t i = 0; i < f.mp.size(); ++i) {
-    const int p = f.mp[i];
-    if (p < 0 || map_.points[static_cast<std::size_t>(p)].bad) continue;
-    const auto id = static_cast<core::PointId>(p);
-    if (!std::binary_search(evaluated.begin(), evaluated.end(), id)) continue;
-    candidates.push_back({id, f.f.keys[i].pt.x, f.f.keys[i].pt.y, f.f.keys[i].response,
-                          static_cast<int>(map_.points[static_cast<std::size_t>(p)].obs.size())});
-    if (std::binary_search(keepless_culls.begin(), keepless_culls.end(), id)) {
-      ++cull;
-      own_culls.push_back(id);
+  for (int k : deciding) {
+    const KeyFrame& d = map_.kfs[static_cast<std::size_t>(k)];
+    for (std::size_t i = 0; i < d.mp.size(); ++i) {
+      const int p = d.mp[i];
+      if (p < 0 || map_.points[static_cast<std::size_t>(p)].bad) continue;
+      const auto id = static_cast<core::PointId>(p);
+      if (!std::binary_search(evaluated.begin(), evaluated.end(), id)) continue;
+      if (opt_.decide_window) {
+        if (listed[static_cast<std::size_t>(p)]) continue;
+        listed[static_cast<std::size_t>(p)] = 1;
+      }
+      candidates.push_back({id, d.f.keys[i].pt.x, d.f.keys[i].pt.y, d.f.keys[i].response,
+                            static_cast<int>(map_.points[static_cast<std::size_t>(p)].obs.size())});
+      if (std::binary_search(keepless_culls.begin(), keepless_culls.end(), id)) {
+        ++cull;
+        own_culls.push_back(id);
+      }
     }
   }
   // With a kept fraction every selector keeps the count core::FractionBudget
@@ -790,6 +803,9 @@ std::vector<core::PointId> Vo::select_points(int kf, const std::vector<int>& loc
     result_.points_evaluated = static_cast<std::int64_t>(fraction_budget_.evaluated());
   }
   result_.points_culled_by_selector += static_cast<std::int64_t>(culls.size());
+  for (core::PointId id : culls) {
+    if (std::find(f.mp.begin(), f.mp.end(), static_cast<int>(id)) == f.mp.end()) ++result_.points_culled_elsewhere;
+  }
   result_.selector_seconds += seconds_since(start);
   return culls;
 }
@@ -866,6 +882,14 @@ void Vo::local_ba(const std::vector<int>& local, bool fix_first) {
     }
   }
   result_.local_ba_observations += static_cast<std::int64_t>(problem.observations.size());
+  // Which points the BA holds: their map track lengths and triangulation angles.
+  for (int p : points) {
+    if (map_.points[static_cast<std::size_t>(p)].excluded) continue;
+    const core::PointQuality q = point_quality(map_, p, local.front(), cam_);
+    ++result_.ba_points;
+    result_.ba_point_track_sum += q.track_length;
+    result_.ba_point_angle_sum += std::max(0.0f, q.triangulation_angle);
+  }
   const double cpu0 = thread_cpu_seconds();
   const std::vector<bool> outlier = solve_local_ba(cam_, &problem);
   result_.local_ba_cpu_seconds += thread_cpu_seconds() - cpu0;

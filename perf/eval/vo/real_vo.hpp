@@ -40,6 +40,13 @@ struct RealVoOptions {
   // refined with the poses held (robust, as local BA would) and its outlier
   // observations are erased, instead of the DLT alone.
   bool defer_refine = false;
+  // Which points every selector decides at a keyframe: false, the new
+  // keyframe's (the authors' integration; with params.maturity_keyframes the
+  // keyframe that just matured); true, every evaluated point of the local
+  // window (with params.scope kWindow), so a point kept before can be culled
+  // later and a kept fraction is F of the points new to each window plus
+  // those kept before among all of the window's.
+  bool decide_window = false;
   int max_local_keyframes = 20;      // local BA / keepless window: the new keyframe and its best covisibles
   bool measure_windows = false;  // fill RealRunResult::window_sizes (window_sizes.hpp)
   // With measure_windows: replay the K = 20 windows at these capacities
@@ -63,6 +70,7 @@ struct RealRunResult {
   int keyframes_created = 0;
   std::int64_t observations = 0;  // of the alive points at the end
   std::int64_t points_culled_by_selector = 0;
+  std::int64_t points_culled_elsewhere = 0;  // of those, points the decided keyframe does not observe (decide_window)
   std::int64_t points_deleted_deferred = 0;  // params.defer_keyframes: excluded points the rule deleted
   // Excluded points deleted before, or still held after, T keyframes in a row
   // that did not match them, by the VO's own record (0: the rule held).
@@ -74,6 +82,10 @@ struct RealRunResult {
   double local_ba_seconds = 0, selector_seconds = 0, total_seconds = 0;
   std::int64_t local_ba_observations = 0;  // residuals over every local BA
   double local_ba_cpu_seconds = 0;          // the local BAs' thread CPU time
+  // The local BAs' point blocks (excluded points aside), summed over every
+  // local BA, with their map track lengths and triangulation angles (degrees).
+  std::int64_t ba_points = 0;
+  double ba_point_track_sum = 0, ba_point_angle_sum = 0;
   // RMS over every frame from the first tracked one, an untracked frame at
   // the last tracked pose; SE(3) for RGB-D, Sim(3) monocular.
   double ate_m = 0, ate_r_deg = 0;

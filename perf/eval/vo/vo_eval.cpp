@@ -32,15 +32,16 @@ RunRecord record_of(const RealRunResult& r, const char* variant, std::uint64_t s
 void log_run(const RealSequence& s, const RunRecord& r, const RealRunResult& x) {
   std::fprintf(stderr,
                "  %s seed %llu %s M=%lld: tracked %d/%d (losses %d) mps %d kfs %d (made %d) culled %lld deleted %lld "
-               "excluded matched %lld rule violations %lld (windows %llu, refused %d) "
+               "excluded matched %lld rule violations %lld culled outside the keyframe %lld (windows %llu, refused %d) "
                "kept %.1f%% (of evaluated, map %.1f%%) floor kfs %llu promoted %llu "
                "short %llu, ate %.4f m, "
-               "local BA %.2f s (%d, cpu %.2f s, %lld obs), total %.1f s\n",
+               "local BA %.2f s (%d, cpu %.2f s, %lld obs), total %.1f s, "
+               "BA points %lld (mean track %.2f, angle %.2f deg)\n",
                s.name.c_str(), static_cast<unsigned long long>(r.seed), r.variant.c_str(),
                static_cast<long long>(r.M), x.frames_tracked, x.frames, x.tracking_losses, x.map_points, x.keyframes,
                x.keyframes_created, static_cast<long long>(x.points_culled_by_selector),
                static_cast<long long>(x.points_deleted_deferred), static_cast<long long>(x.excluded_matches),
-               static_cast<long long>(x.defer_rule_violations),
+               static_cast<long long>(x.defer_rule_violations), static_cast<long long>(x.points_culled_elsewhere),
                static_cast<unsigned long long>(x.selector.windows), x.window_rejections, 100.0 * x.mean_kept_fraction,
                x.points_evaluated > 0
                    ? 100.0 * (1.0 - static_cast<double>(x.points_culled_by_selector) / static_cast<double>(x.points_evaluated))
@@ -49,7 +50,9 @@ void log_run(const RealSequence& s, const RunRecord& r, const RealRunResult& x) 
                static_cast<unsigned long long>(x.selector.floor_promoted),
                static_cast<unsigned long long>(x.selector.floor_short), x.ate_m,
                x.local_ba_seconds, x.local_bas, x.local_ba_cpu_seconds,
-               static_cast<long long>(x.local_ba_observations), x.total_seconds);
+               static_cast<long long>(x.local_ba_observations), x.total_seconds,
+               static_cast<long long>(x.ba_points), x.ba_points > 0 ? x.ba_point_track_sum / double(x.ba_points) : 0.0,
+               x.ba_points > 0 ? x.ba_point_angle_sum / double(x.ba_points) : 0.0);
 }
 
 }  // namespace
@@ -87,6 +90,7 @@ bool evaluate_real_vo(const VoInput& in, const VoEvalOptions& o, std::vector<Com
     vo.tracked_flags = o.tracked_flags;
     vo.defer_fixed = o.defer_fixed;
     vo.defer_refine = o.defer_refine;
+    vo.decide_window = o.decide_window;
     vo.seed = o.seeds[si];
     vo.selector = Selector::kOriginal;
     const RealRunResult original = run_real_vo(seq, vo);
@@ -98,14 +102,15 @@ bool evaluate_real_vo(const VoInput& in, const VoEvalOptions& o, std::vector<Com
       Comparison& c = (*out)[first + p];
       c.original.push_back(record_of(original, "original", vo.seed, 0));
       if (p == 0) log_run(seq, c.original.back(), original);
-      // A kept fraction is a keep budget on the new keyframe's points (the
-      // ones the VO culls): exact per window, no M.
+      // A kept fraction is a keep budget on the points the VO decides (the
+      // new keyframe's, or with decide_window the window's): exact per
+      // window, no M. Deciding the window is keepless's scope window.
       if (std::isfinite(c.target_fraction)) {
         vo.params.budget = core::KeepBudget{core::BudgetKind::kFraction, 0, c.target_fraction};
-        vo.params.scope = core::Scope::kNewest;
+        vo.params.scope = o.decide_window ? core::Scope::kWindow : core::Scope::kNewest;
       } else {
         vo.params.budget = core::KeepBudget{};
-        vo.params.scope = o.policy.scope;
+        vo.params.scope = o.decide_window ? core::Scope::kWindow : o.policy.scope;
         vo.params.pair_capacity = c.M;
       }
       const std::pair<Selector, std::vector<RunRecord>*> runs[] = {

@@ -28,11 +28,13 @@ struct VoEvalOptions {
   bool baselines = true;
   // --scope, --floor, --cost: only scope, coverage_floor and cost_model are
   // read. A kept fraction runs keepless with that keep budget over the new
-  // keyframe's points (scope newest: the points the VO culls).
+  // keyframe's points (scope newest: the points the VO culls), or with
+  // decide_window over the window's (scope window).
   core::Params policy;  // and maturity_keyframes, defer_keyframes
   bool tracked_flags = false;  // RealVoOptions::tracked_flags
   bool defer_fixed = false;    // RealVoOptions::defer_fixed
   bool defer_refine = false;   // RealVoOptions::defer_refine
+  bool decide_window = false;  // RealVoOptions::decide_window (keepless with scope window)
   std::string out;  // non-empty: NAME_trajectory.svg and NAME_keypoints.svg there
 };
 
