@@ -59,7 +59,7 @@ struct KeepThresholds::Impl {
     hi.resize(n);
     listed.resize(m);
     units.resize(m);
-    pos.resize(m + 2);  // select() reads up to two past a point's last position
+    pos.resize(m + 2);  // select_of_three() reads up to two past a point's last position
     by_pair.resize(m);
     scratch.resize(m + 1);
     bins.resize(kBins + 1);
@@ -142,8 +142,8 @@ struct KeepThresholds::Impl {
   // for n <= kSmall each position's rank among them is counted, without
   // branches (keys position * 32 + index are distinct, and int32 compares
   // vectorise on any x86-64 or NEON); nth_element on a copy otherwise.
-  // The same for n <= 3, where most points are (two or three views: n = 1
-  // or 3), without a call or branches on n or t (they mispredicted often,
+  // select() for n <= 3, where most points are (two or three views: n = 1
+  // or 3), inlined and without branches on n or t (they mispredicted often,
   // n varying from point to point): the minimum, median or maximum of
   // s[0..2], the entries past n taken as +inf (an OR with an all-ones mask).
   // s[1] and s[2] are always readable: pos has two words of padding.
@@ -249,7 +249,7 @@ struct KeepThresholds::Impl {
       const std::uint32_t t = thr[k];
       const std::int32_t n = at[k + 1] - at[k];
       const std::uint32_t* s = pos.data() + at[k];
-      if (t > static_cast<std::uint32_t>(n)) {
+      if (t > static_cast<std::uint32_t>(n)) {  // no M keeps it (or not a point: t = kNever)
         thr[k] = kNever;
       } else {
         thr[k] = (n <= 3 ? select_of_three(s, n, t) : select(s, n, t)) + 1;
