@@ -25,20 +25,21 @@ struct KeepThresholds::Impl {
   static constexpr std::int64_t kNeeded = 64;
   std::int64_t need[kNeeded] = {};             // needed(c, theta) for c < kNeeded
 
+  // By rank (position in `order`), not by node: the decision reads them in
+  // point order, which is rank order, so it walks these arrays in order.
   std::vector<Point> point;            // [max_nodes] by node
-  std::vector<std::uint32_t> thr;      // [max_nodes] M* by node
-  std::vector<std::int64_t> flow;      // [max_nodes] by node, after evaluate_at
+  std::vector<std::uint32_t> thr;      // [max_nodes] M* by rank
+  std::vector<std::int64_t> flow;      // [max_nodes] by rank, after evaluate_at
   std::vector<std::int32_t> way_cost;  // [max_nodes] a pair's sink arc's cost (0: none)
   std::vector<std::int32_t> at;        // [max_nodes + 1] a point's units (by rank)
   std::vector<std::int32_t> first;     // [max_nodes + 1] a pair's units (by node); its cells
   std::vector<std::uint32_t> lo, hi;   // [max_nodes] a pair's unit costs
   std::vector<Listed> listed;          // [max_arcs]
   std::vector<Unit> units;             // [max_arcs] grouped by point rank
-  std::vector<std::uint32_t> pos;      // [max_arcs] each unit's position in its pair, from 0
+  std::vector<std::uint32_t> pos;      // [max_arcs + 2] each unit's position in its pair, from 0
   std::vector<std::int32_t> by_pair;   // [max_arcs] units by pair (rank order); or (pair, cost) cells
-  std::vector<std::uint32_t> scratch;  // [max_arcs] one point's positions, for nth_element
+  std::vector<std::uint32_t> scratch;  // [max_arcs + 1] one point's positions, for nth_element
   std::vector<std::uint32_t> bins;     // [kBins + 1]
-  std::vector<solver::NodeId> node_of; // [max_nodes] a rank's node
   std::int32_t points = 0;
   std::int32_t nodes = 0;
   const solver::Arc* arc = nullptr;
@@ -58,11 +59,10 @@ struct KeepThresholds::Impl {
     hi.resize(n);
     listed.resize(m);
     units.resize(m);
-    pos.resize(m);
+    pos.resize(m + 2);  // select_of_three() reads up to two past a point's last position
     by_pair.resize(m);
-    scratch.resize(m);
+    scratch.resize(m + 1);
     bins.resize(kBins + 1);
-    node_of.resize(n);
   }
 
   // The smallest flow f in [1, capacity] that decide() keeps, in the same
@@ -142,9 +142,21 @@ struct KeepThresholds::Impl {
   // for n <= kSmall each position's rank among them is counted, without
   // branches (keys position * 32 + index are distinct, and int32 compares
   // vectorise on any x86-64 or NEON); nth_element on a copy otherwise.
+  // select() for n <= 3, where most points are (two or three views: n = 1
+  // or 3), inlined and without branches on n or t (they mispredicted often,
+  // n varying from point to point): the minimum, median or maximum of
+  // s[0..2], the entries past n taken as +inf (an OR with an all-ones mask).
+  // s[1] and s[2] are always readable: pos has two words of padding.
+  static std::uint32_t select_of_three(const std::uint32_t* s, std::int32_t n, std::uint32_t t) {
+    const std::uint32_t a = s[0];
+    const std::uint32_t b = s[1] | (0u - static_cast<std::uint32_t>(n < 2));
+    const std::uint32_t c = s[2] | (0u - static_cast<std::uint32_t>(n < 3));
+    const std::uint32_t low = std::min(a, b), high = std::max(a, b);
+    const std::uint32_t median = std::max(low, std::min(high, c));
+    return t == 1 ? std::min(low, c) : t == 2 ? median : std::max(high, c);
+  }
+
   std::uint32_t select(const std::uint32_t* s, std::int32_t n, std::int64_t t) {
-    if (n == 1) return s[0];
-    if (n == 3 && t == 2) return std::max(std::min(s[0], s[1]), std::min(std::max(s[0], s[1]), s[2]));
     if (n <= kSmall) {
       std::int32_t key[kSmall];
       std::uint32_t any = 0;
@@ -174,23 +186,32 @@ struct KeepThresholds::Impl {
     const std::int32_t arcs = solver.arc_count();
     arc = solver.arc_data();
     std::fill(point.begin(), point.begin() + nodes, Point{});
-    std::fill(thr.begin(), thr.begin() + nodes, kNever);
     std::fill(way_cost.begin(), way_cost.begin() + nodes, 0);
     std::fill(first.begin(), first.begin() + nodes + 1, 0);
     std::fill(lo.begin(), lo.begin() + nodes, ~0u);
     std::fill(hi.begin(), hi.begin() + nodes, 0u);
     points = count;
     std::fill(at.begin(), at.begin() + count + 1, 0);
+    // thr[k] holds the flow t the point needs (decide()) until its threshold
+    // replaces it: read here with its source arc, not looked up again.
+    for (std::int64_t c = 0; c < kNeeded; ++c) need[c] = needed(c, theta);
     for (std::int32_t k = 0; k < count; ++k) {
       const solver::Arc& e = arc[order[k]];
-      node_of[k] = e.capacity != 0 ? e.head : -1;
-      if (e.capacity == 0) continue;
+      if (e.capacity == 0) {
+        thr[k] = kNever;
+        continue;
+      }
       point[e.head] = Point{k, e.cost};
+      const std::int64_t capacity = e.capacity;
+      thr[k] = static_cast<std::uint32_t>(capacity < kNeeded ? need[capacity] : needed(capacity, theta));
     }
     // One pass over the arcs, without branches on an arc's kind (an
     // incrementally edited network scatters the kinds over the ids, as in
     // PairwiseStart): a pair's sink arc is its way out, a point's pair arc
-    // becomes a unit; per pair its unit count and cost range.
+    // becomes a unit; per pair its unit count and cost range. `unit` is an
+    // integer used in arithmetic, not in conditionals: with `unit ? x : y`
+    // the compiler branched on the rank's sign, which mispredicted about one
+    // arc in three.
     std::int32_t listed_count = 0;
     for (solver::ArcId a = 0; a < arcs; ++a) {
       const solver::Arc e = arc[a];
@@ -198,13 +219,14 @@ struct KeepThresholds::Impl {
       const bool way_out = live && e.head == sink;
       if (way_out) way_cost[e.tail] = e.cost;  // one per pair: predictable
       const Point p = point[e.tail];
-      const bool unit = live && !way_out && p.rank >= 0;
+      const std::int32_t unit = static_cast<std::int32_t>(live & !way_out) &
+                                static_cast<std::int32_t>(~static_cast<std::uint32_t>(p.rank) >> 31);
       const std::uint32_t cost = static_cast<std::uint32_t>(p.cost) + static_cast<std::uint32_t>(e.cost);
       listed[listed_count] = Listed{cost, p.rank, e.head};
-      listed_count += unit ? 1 : 0;
-      const solver::NodeId q = unit ? e.head : sink;  // the sink collects what is not a unit
-      at[unit ? p.rank + 1 : 0] += unit ? 1 : 0;
-      first[q + 1] += unit ? 1 : 0;
+      listed_count += unit;
+      const solver::NodeId q = sink + (e.head - sink) * unit;  // the sink collects what is not a unit
+      at[(p.rank + 1) * unit] += unit;
+      first[q + 1] += unit;
       lo[q] = std::min(lo[q], cost);
       hi[q] = std::max(hi[q], cost);
     }
@@ -222,37 +244,39 @@ struct KeepThresholds::Impl {
       for (std::int32_t u = 0; u < listed_count; ++u) ++first[units[u].pair + 1];
       positions_by_pair(listed_count);
     }
-    // Each point's threshold: the t-th smallest of its positions, plus one
-    // (t from a table for the usual capacities, n(n-1)/2 of a few views).
-    for (std::int64_t c = 0; c < kNeeded; ++c) need[c] = needed(c, theta);
+    // Each point's threshold: the t-th smallest of its positions, plus one.
     for (std::int32_t k = 0; k < count; ++k) {
-      const solver::NodeId node = node_of[k];
-      if (node < 0) continue;
-      const std::int64_t capacity = arc[order[k]].capacity;
-      const std::int64_t t = capacity < kNeeded ? need[capacity] : needed(capacity, theta);
+      const std::uint32_t t = thr[k];
       const std::int32_t n = at[k + 1] - at[k];
-      if (t > n) continue;  // kNever
-      thr[node] = select(pos.data() + at[k], n, t) + 1;
+      const std::uint32_t* s = pos.data() + at[k];
+      if (t > static_cast<std::uint32_t>(n)) {  // no M keeps it (or not a point: t = kNever)
+        thr[k] = kNever;
+      } else {
+        thr[k] = (n <= 3 ? select_of_three(s, n, t) : select(s, n, t)) + 1;
+      }
     }
   }
 
+  // One pass over the units (grouped by rank) counting those carried, then
+  // each point's flow as a difference of the running count: no loop per
+  // point, whose varying lengths mispredicted, and no branch on the cut.
   void evaluate_at(std::int64_t m) {
-    max_flow = 0;
-    total_cost = 0;
-    for (std::int32_t k = 0; k < points; ++k) {
-      const solver::NodeId node = node_of[k];
-      if (node < 0) continue;
-      std::int64_t f = 0;
-      for (std::int32_t u = at[k]; u < at[k + 1]; ++u) {  // no branch on the (unpredictable) cut
-        const bool carried = static_cast<std::int64_t>(pos[u]) < m;
-        const Unit& unit = units[u];
-        const std::int64_t cost = static_cast<std::int64_t>(unit.cost) + way_cost[unit.pair];
-        f += carried ? 1 : 0;
-        total_cost += carried ? cost : 0;
-      }
-      flow[node] = f;
-      max_flow += f;
+    std::uint32_t* carried_before = scratch.data();  // [u]: units carried before unit u
+    const std::int32_t unit_count = at[points];
+    std::uint32_t carried_count = 0;
+    std::int64_t cost_sum = 0;
+    for (std::int32_t u = 0; u < unit_count; ++u) {  // masks, not `carried ? :` (it branched)
+      carried_before[u] = carried_count;
+      const auto carried = static_cast<std::uint32_t>(static_cast<std::int64_t>(pos[u]) < m);
+      const Unit& unit = units[u];
+      const std::int64_t cost = static_cast<std::int64_t>(unit.cost) + way_cost[unit.pair];
+      carried_count += carried;
+      cost_sum += cost & -static_cast<std::int64_t>(carried);
     }
+    carried_before[unit_count] = carried_count;
+    for (std::int32_t k = 0; k < points; ++k) flow[k] = carried_before[at[k + 1]] - carried_before[at[k]];
+    max_flow = carried_count;
+    total_cost = cost_sum;
   }
 };
 
@@ -263,11 +287,11 @@ void KeepThresholds::compute(const solver::MinCostFlow& solver, solver::NodeId s
                              const solver::ArcId* order, std::int32_t count, double theta) {
   impl_->compute(solver, sink, order, count, theta);
 }
-std::uint32_t KeepThresholds::threshold(solver::NodeId node) const { return impl_->thr[node]; }
+std::uint32_t KeepThresholds::threshold(std::int32_t k) const { return impl_->thr[k]; }
 const std::uint32_t* KeepThresholds::threshold_data() const { return impl_->thr.data(); }
 const std::int64_t* KeepThresholds::flow_data() const { return impl_->flow.data(); }
 void KeepThresholds::evaluate_at(std::int64_t m) { impl_->evaluate_at(m); }
-std::int64_t KeepThresholds::flow_at(solver::NodeId node) const { return impl_->flow[node]; }
+std::int64_t KeepThresholds::flow_at(std::int32_t k) const { return impl_->flow[k]; }
 std::int64_t KeepThresholds::max_flow() const { return impl_->max_flow; }
 std::int64_t KeepThresholds::total_cost() const { return impl_->total_cost; }
 
@@ -280,7 +304,7 @@ std::size_t KeepThresholds::memory_bytes() const {
          (s.lo.capacity() + s.hi.capacity() + s.pos.capacity()) * sizeof(std::uint32_t) +
          s.listed.capacity() * sizeof(Impl::Listed) + s.units.capacity() * sizeof(Impl::Unit) +
          s.by_pair.capacity() * sizeof(std::int32_t) + s.scratch.capacity() * sizeof(std::uint32_t) +
-         s.bins.capacity() * sizeof(std::uint32_t) + s.node_of.capacity() * sizeof(solver::NodeId);
+         s.bins.capacity() * sizeof(std::uint32_t);
 }
 
 FractionBudget::FractionBudget(std::uint32_t max_points)

@@ -82,7 +82,7 @@ struct Sparsifier::Impl {
   std::vector<std::uint32_t> curve;         // [max_points + 4]
   std::vector<std::uint32_t> cursor;        // [max_points + 4]
   std::vector<std::uint32_t> ranked;        // [max_points]
-  std::vector<solver::NodeId> head_of;      // [max_points] a decision's point node
+  std::vector<std::int32_t> rank_of;        // [max_points] a decision's rank in canonical_order
   std::vector<std::uint32_t> views_of;      // [max_points] a decision's n
   std::uint32_t curve_top = 0;              // the curve's last bucket: the largest finite M*
   std::uint32_t max_points = 0;
@@ -114,7 +114,7 @@ struct Sparsifier::Impl {
       curve.resize(std::size_t{c.max_points} + 4);
       cursor.resize(std::size_t{c.max_points} + 4);
       ranked.resize(c.max_points);
-      head_of.resize(c.max_points);
+      rank_of.resize(c.max_points);
       views_of.resize(c.max_points);
     }
     if (p.budget.kind == BudgetKind::kFraction) fraction = std::make_unique<FractionBudget>(c.max_points);
@@ -211,12 +211,14 @@ struct Sparsifier::Impl {
   template <typename Net>
   void decide_budget(const Window& window, const Net& net) {
     Summary& sum = summary;
-    const solver::Arc* arc = solver.arc_data();
     thresholds->compute(solver, net.sink(), net.canonical_order(),
                         static_cast<std::int32_t>(net.evaluated_count()), params.theta);
     count = net.point_count();
     std::uint32_t top = 0;  // the largest finite M*
-    const std::uint32_t* threshold_by_node = thresholds->threshold_data();
+    // The evaluated points in point order are canonical_order's: the k-th
+    // has rank k there (KeepThresholds' arrays are by rank).
+    const std::uint32_t* threshold_by_rank = thresholds->threshold_data();
+    std::int32_t rank = 0;
     for_points(net, [&](std::uint32_t i, PointId id, std::uint32_t views, solver::ArcId a) {
       PointDecision& d = decisions[i];
       d.point = id;
@@ -232,8 +234,8 @@ struct Sparsifier::Impl {
       const std::int64_t n = views;
       d.capacity = n * (n - 1) / 2;
       d.verdict = Verdict::kCull;
-      head_of[i] = arc[a].head;
-      threshold_of[i] = threshold_by_node[head_of[i]];
+      rank_of[i] = rank;
+      threshold_of[i] = threshold_by_rank[rank++];
       if (threshold_of[i] != KeepThresholds::kNever) top = std::max(top, threshold_of[i]);
       ++sum.culled;
     });
@@ -286,10 +288,10 @@ struct Sparsifier::Impl {
     // M = kNever's bucket reports as max_points + 1, as before the buckets were bounded.
     sum.budget_m = kept_top == never ? static_cast<std::int64_t>(max_points) + 1 : kept_top;
     thresholds->evaluate_at(sum.budget_m);
-    const std::int64_t* flow_by_node = thresholds->flow_data();
+    const std::int64_t* flow_by_rank = thresholds->flow_data();
     for (std::uint32_t i = 0; i < count; ++i) {
       if (decisions[i].verdict == Verdict::kSkip) continue;
-      decisions[i].flow = flow_by_node[head_of[i]];
+      decisions[i].flow = flow_by_rank[rank_of[i]];
     }
     sum.max_flow = thresholds->max_flow();
     sum.total_cost = thresholds->total_cost();
@@ -652,7 +654,7 @@ std::size_t Sparsifier::memory_bytes() const {
          (s.fraction ? s.fraction->memory_bytes() : 0) +
          (s.threshold_of.capacity() + s.curve.capacity() + s.cursor.capacity() +
           s.ranked.capacity() + s.views_of.capacity()) * sizeof(std::uint32_t) +
-         s.head_of.capacity() * sizeof(solver::NodeId) +
+         s.rank_of.capacity() * sizeof(std::int32_t) +
          s.decisions.capacity() * sizeof(PointDecision) +
          s.in_scope.capacity() +
          (s.slots_at.capacity() + s.slots.capacity() + s.covered.capacity() +

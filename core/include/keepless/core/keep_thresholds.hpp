@@ -35,16 +35,18 @@ class KeepThresholds {
   void compute(const solver::MinCostFlow& solver, solver::NodeId sink, const solver::ArcId* order,
                std::int32_t count, double theta);
 
-  // M*(p) of the point node `node` (the head of a source arc in `order`).
-  std::uint32_t threshold(solver::NodeId node) const;
-  // threshold() of every node, by node id (a decision reads every point's).
-  const std::uint32_t* threshold_data() const;
+  // M*(p) of the point whose source arc is order[k] (kNever for an arc of
+  // capacity 0). By rank, not by node id: a decision reads every point's in
+  // point order, which is this order, so it walks the array in order.
+  std::uint32_t threshold(std::int32_t k) const;
+  const std::uint32_t* threshold_data() const;  // threshold() of ranks 0 .. count - 1
 
-  // The optimum at pair capacity `m` (m >= 0): flow_at(node) of each point,
-  // and the maximum flow and total cost, as a solve at M = m gives them.
+  // The optimum at pair capacity `m` (m >= 0): flow_at(k) of each point (by
+  // rank, as threshold()), and the maximum flow and total cost, as a solve
+  // at M = m gives them.
   void evaluate_at(std::int64_t m);
-  std::int64_t flow_at(solver::NodeId node) const;
-  const std::int64_t* flow_data() const;  // flow_at() of every node, by node id
+  std::int64_t flow_at(std::int32_t k) const;
+  const std::int64_t* flow_data() const;  // flow_at() of ranks 0 .. count - 1
   std::int64_t max_flow() const;
   std::int64_t total_cost() const;
 
