@@ -14,7 +14,10 @@ local-BA observations and CPU seconds, map points and keyframes; then the
 smallest F from which each method never failed, per F the method with the
 lowest mean ATE among those with no failure, and the accuracy-cost frontier:
 the runs that no other beats on both ATE and local-BA observations. A failed run (lost tracking or a
-diverged BA) counts in every mean: its ATE is over all frames.
+diverged BA) counts in every mean: its ATE is over all frames. --condensed prints
+one cell per method (ATE over the original's, failed seeds, local-BA share) per
+variant and F: a table per real sequence, and the synthetic back end's
+trajectories together in one.
 """
 import csv
 import os
@@ -139,21 +142,18 @@ def sequence_table(name, cells, originals, order):
     return "\n".join(lines)
 
 
-def condensed_table(name, cells, originals, variants, flags):
+def condensed_rows(cells, originals, variants, flags):
+    """Per variant and F with a run: its title and one cell per method (ATE ratio, failed seeds, BA share)."""
     orig = list(originals.values())
     ate0, obs0 = stat(orig, "ate_m")[0], stat(orig, "observations")[0]
-    lines = [f"#### {name}", "",
-             f"Original: ATE {ate0:.3g} m, {obs0:,.0f} local-BA observations, {len(orig)} seeds. Each cell: ATE over "
-             "the original's (failed seeds), local-BA observations as a share of the original's; bold: no seed failed.",
-             "", "| culling | F | " + " | ".join(m for _, m in METHODS) + " |", "|---|---:|" + "---|" * len(METHODS)]
+    out = []
     for variant in variants:
         given = flags[variant][0]
         title = f"`{given}`" if given else "immediate (paper)"
         for fraction in sorted({f for (f, _) in cells}):
             row = []
             for method, label in METHODS:
-                key = (fraction, f"{label}, {given}" if given else label)
-                rows = cells.get(key)
+                rows = cells.get((fraction, f"{label}, {given}" if given else label))
                 if not rows:
                     row.append("–")
                     continue
@@ -162,7 +162,35 @@ def condensed_table(name, cells, originals, variants, flags):
                 text = f"**{text}**" if fails == 0 else text
                 row.append(f"{text} ({fails}/{len(rows)}), {100 * stat(rows, 'observations')[0] / obs0:.0f} %")
             if any(c != "–" for c in row):
-                lines.append(f"| {title} | {fraction:.1f} | " + " | ".join(row) + " |")
+                out.append(f"{title} | {fraction:.1f} | " + " | ".join(row))
+    return out
+
+
+CELL = ("Each cell: ATE over the original's (failed seeds), local-BA observations as a share of the original's; "
+        "bold: no seed failed.")
+
+
+def condensed_table(name, cells, originals, variants, flags):
+    orig = list(originals.values())
+    ate0, obs0 = stat(orig, "ate_m")[0], stat(orig, "observations")[0]
+    lines = [f"#### {name}", "",
+             f"Original: ATE {ate0:.3g} m, {obs0:,.0f} local-BA observations, {len(orig)} seeds. {CELL}",
+             "", "| culling | F | " + " | ".join(m for _, m in METHODS) + " |", "|---|---:|" + "---|" * len(METHODS)]
+    lines += [f"| {row} |" for row in condensed_rows(cells, originals, variants, flags)]
+    lines.append("")
+    return "\n".join(lines)
+
+
+def synthetic_table(names, table, originals, titles, variants, flags):
+    """The synthetic back end's trajectories in one table, a row per trajectory, variant and F."""
+    lines = ["#### Synthetic back end", "", f"{CELL} The original's ATE per trajectory, mean over seeds.", "",
+             "| trajectory (group) | original ATE (m) | culling | F | " + " | ".join(m for _, m in METHODS) + " |",
+             "|---|---:|---|---:|" + "---|" * len(METHODS)]
+    for name in names:
+        ate0 = stat(list(originals[name].values()), "ate_m")[0]
+        heading = titles[name].replace("synthetic, ", "")
+        lines += [f"| {heading} | {ate0:.3g} | {row} |"
+                  for row in condensed_rows(table[name], originals[name], variants, flags)]
     lines.append("")
     return "\n".join(lines)
 
@@ -177,11 +205,14 @@ def main(argv):
         variants = argv[argv.index("--variants") + 1].split(",")
     flags = {variant: variant_flags(out, variant) for variant in variants}
     table, originals, titles, order = load(out, variants, flags)
+    synthetic = [name for name in sorted(table) if "(synthetic" in titles[name]]
     for name in sorted(table):
-        if "--condensed" in argv:
-            print(condensed_table(titles[name], table[name], originals[name], variants, flags))
-        else:
+        if "--condensed" not in argv:
             print(sequence_table(titles[name], table[name], originals[name], order))
+        elif name not in synthetic:
+            print(condensed_table(titles[name], table[name], originals[name], variants, flags))
+    if "--condensed" in argv and synthetic:
+        print(synthetic_table(synthetic, table, originals, titles, variants, flags))
     return 0
 
 

@@ -58,5 +58,6 @@ grep -qx "eval: --floor 30 --no-baselines" "$out/floor/flags.txt" || fail "floor
 condensed=$("$root/scripts/sweep_table.py" "$out" --condensed)
 grep -q "^| \`--floor 30\` | 0.4 | " <<< "$condensed" || fail "sweep_table: no --floor 30 row"
 grep -q "^| \`--floor 30\` | .* | – | – | – |$" <<< "$condensed" || fail "sweep_table: floor has baseline cells"
-grep -q "^#### fr1_xyz (synthetic, tum)" <<< "$condensed" || fail "sweep_table: no synthetic fr1_xyz table"
+grep -q "^| fr1_xyz (tum) | [0-9.e-]* | \`--floor 30\` | 0.4 | " <<< "$condensed" ||
+  fail "sweep_table: no synthetic fr1_xyz row for floor"
 echo "eval_sweep_test: ok"
