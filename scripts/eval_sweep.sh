@@ -1,8 +1,11 @@
 #!/usr/bin/env bash
 # The budget sweep: every method at every kept fraction on the real sequences
-# (7-Scenes RGB-D 600 frames, KITTI 00 200, KITTI 06 51) and, with keepless_maps_bench,
-# the COLMAP fixture. One keepless_eval process per (sequence, seed) with every
-# fraction (the original runs once per seed), N at a time (-j), each into
+# (7-Scenes RGB-D 600 frames, KITTI 00 200, KITTI 06 51), on the synthetic
+# back end's trajectory groups (synthetic_tum, synthetic_euroc, synthetic_kitti:
+# keepless_eval --data-root's trajectories; --only synthetic selects all three)
+# at their own fractions and, with keepless_maps_bench, the COLMAP fixture. One
+# keepless_eval process per (input, seed) with every fraction (the original runs
+# once per seed), N at a time (-j), each into
 # OUT/runs/NAME_seedS; then `keepless_eval --report` merges them
 # into OUT/tables.md (with a "Budget sweep" table and the failures per
 # sequence), OUT/runs.csv and OUT/sweep_NAME.svg (ATE against local-BA
@@ -14,11 +17,18 @@
 # OUT/VARIANT. paper: the paper's network (default); maturity: tracking-safe
 # culling, --maturity 2 --scope newest (every selector decides the keyframe
 # that just became 2 old); track: --cost track, keepless only (the baselines
-# are paper's); defer: deferred culling, --defer 2.
+# are paper's); defer: deferred culling, --defer 2; authors, information: the
+# authors' and the information cost model, floor: a coverage floor of 30 points
+# per keyframe (ORB-SLAM2's minimum inliers), keepless only. Each variant's
+# flags go to OUT/[VARIANT/]flags.txt (scripts/sweep_table.py reads them).
+# track and defer do not run on the synthetic back end (it sends no point
+# quality and has no deferred culling).
 #
 #   scripts/eval_sweep.sh [--data-root DIR] [--fractions 0.1,0.2,0.3,0.4,0.6] [--seeds 5] [-j 2]
-#                         [--out DIR] [--only 7scenes,kitti00,kitti06,colmap] [--bin DIR]
-#                         [--variants paper,maturity,track,defer] [--eval-flags "FLAGS"] [--resume]
+#                         [--out DIR] [--only 7scenes,kitti00,kitti06,synthetic,colmap] [--bin DIR]
+#                         [--synthetic-fractions 0.2,0.4]
+#                         [--variants paper,maturity,track,defer,authors,information,floor]
+#                         [--eval-flags "FLAGS"] [--resume]
 #
 # --resume keeps OUT's finished jobs (a run directory with its runs.csv, the
 # COLMAP rows with their JSON line) and runs the rest.
@@ -27,6 +37,7 @@ cd "$(dirname "$0")/.."
 
 data=../shared/data
 fractions=0.1,0.2,0.3,0.4,0.6
+synthetic_fractions=0.2,0.4
 seeds=5
 jobs=2
 out=sweep_out
@@ -39,6 +50,7 @@ while (($#)); do
   case "$1" in
     --data-root) data=$2; shift 2 ;;
     --fractions) fractions=$2; shift 2 ;;
+    --synthetic-fractions) synthetic_fractions=$2; shift 2 ;;
     --seeds) seeds=$2; shift 2 ;;
     -j) jobs=$2; shift 2 ;;
     --out) out=$2; shift 2 ;;
@@ -47,7 +59,7 @@ while (($#)); do
     --variants) variants=$2; shift 2 ;;
     --eval-flags) extra=$2; shift 2 ;;
     --resume) resume=1; shift ;;
-    -h|--help) sed -n 2,24p "$0"; exit 0 ;;
+    -h|--help) sed -n 2,34p "$0"; exit 0 ;;
     *) echo "eval_sweep: unknown option $1" >&2; exit 2 ;;
   esac
 done
@@ -59,22 +71,40 @@ mkdir -p "$out"
 out=$(cd "$out" && pwd)
 bin=$(cd "$bin" && pwd)
 
-# name|keepless_eval input flags
+# name|keepless_eval input flags. The synthetic groups are --data-root's
+# trajectories given one by one: --data-root would add its image tracks, named
+# like the real KITTI 06 (the report would merge the two), and a BAL problem.
+synthetic() {  # FORMAT FILE...: the synthetic back end on each trajectory, no ablation
+  local format=$1
+  shift
+  printf -- '--no-ablation'
+  for t; do printf -- ' --trajectory %s --format %s' "$t" "$format"; done
+}
+euroc=$data/orbslam3_euroc_left_cam_gt
 inputs=(
   "7scenes|--rgbd $data/7scenes_redkitchen_first600"
   "kitti00|--images $data/kitti00_first200_vamr/image_0 --calib $data/kitti00_first200_vamr/K.txt --poses $data/kitti00_first200_vamr/poses.txt"
   "kitti06|--images $data/kitti06_first51_niconielsen/image_l --calib $data/kitti06_first51_niconielsen/calib.txt --poses $data/kitti06_first51_niconielsen/poses.txt"
+  "synthetic_tum|$(synthetic tum "$data/evo/freiburg1_xyz-groundtruth.txt")"
+  "synthetic_euroc|$(synthetic euroc "$euroc/MH01_GT.txt" "$euroc/MH03_GT.txt" "$euroc/V102_GT.txt" "$euroc/V201_GT.txt")"
+  "synthetic_kitti|$(synthetic kitti "$data/evo/KITTI_00_gt.txt" "$data/kitti_odom_eval/gt_poses/06.txt" "$data/kitti_odom_eval/gt_poses/09.txt")"
 )
-selected() { [[ ",$only," == *",$1,"* ]]; }
+# An input is selected by its name or, for synthetic_GROUP, by "synthetic".
+selected() { [[ ",$only," == *",$1,"* || ($1 == synthetic_* && ",$only," == *",synthetic,"*) ]]; }
 
-# variant|keepless_eval flags|keepless_maps_bench flags ("-": no COLMAP run, the bench has no such option)
+# variant|keepless_eval flags|keepless_maps_bench flags ("-": no COLMAP run, the bench has no such
+# option)|inputs it skips. --no-baselines: keepless only, the baselines are paper's.
 variant_flags() {
   case "$1" in
-    paper) echo "||" ;;
-    maturity) echo "|--maturity 2 --scope newest|-" ;;
-    track) echo "|--cost track --no-baselines|--cost track" ;;
-    defer) echo "|--defer 2|-" ;;
-    *) echo "eval_sweep: unknown variant $1 (paper, maturity, track, defer)" >&2; return 1 ;;
+    paper) echo "|||" ;;
+    maturity) echo "|--maturity 2 --scope newest|-|" ;;
+    track) echo "|--cost track --no-baselines|--cost track|synthetic" ;;
+    defer) echo "|--defer 2|-|synthetic" ;;
+    authors) echo "|--cost authors --no-baselines|--cost authors|" ;;
+    information) echo "|--cost information --no-baselines|--cost information|" ;;
+    floor) echo "|--floor 30 --no-baselines|-|" ;;
+    *) echo "eval_sweep: unknown variant $1 (paper, maturity, track, defer, authors, information, floor)" >&2
+       return 1 ;;
   esac
 }
 
@@ -85,22 +115,27 @@ IFS=, read -r -a variant_list <<< "$variants"
 variant_dir() { if ((${#variant_list[@]} > 1)); then echo "$out/$1"; else echo "$out"; fi; }
 for variant in "${variant_list[@]}"; do
   vf=$(variant_flags "$variant")
-  IFS='|' read -r _ eval_flags maps_flags <<< "$vf"
+  IFS='|' read -r _ eval_flags maps_flags skips <<< "$vf"
   vdir=$(variant_dir "$variant")
   mkdir -p "$vdir/runs"
+  # The variant's flags beside its runs: the one record of what it is.
+  printf 'eval: %s\ncolmap: %s\n' "$eval_flags" "$maps_flags" > "$vdir/flags.txt"
   for entry in "${inputs[@]}"; do
     name=${entry%%|*}
     selected "$name" || continue
+    [[ $name == synthetic_* && ",$skips," == *",synthetic,"* ]] && continue
+    f=$fractions
+    [[ $name == synthetic_* ]] && f=$synthetic_fractions
     for ((seed = 1; seed <= seeds; ++seed)); do
-      echo "$variant|$vdir|$name|$seed|${entry#*|} $eval_flags $extra" >> "$joblist"
+      echo "$variant|$vdir|$name|$seed|$f|${entry#*|} $eval_flags $extra" >> "$joblist"
     done
   done
-  if selected colmap && [ "$maps_flags" != - ]; then echo "$variant|$vdir|colmap|all|$maps_flags" >> "$joblist"; fi
+  if selected colmap && [ "$maps_flags" != - ]; then echo "$variant|$vdir|colmap|all|$fractions|$maps_flags" >> "$joblist"; fi
 done
 
 # Each job's wall and CPU seconds (its processes' user + system) go to jobs.tsv.
 run_job() {
-  IFS='|' read -r variant vdir name seed flags <<< "$1"
+  IFS='|' read -r variant vdir name seed fractions flags <<< "$1"
   local start end dir rc=0 cpu
   start=$(date +%s)
   if [ "$name" = colmap ]; then
@@ -126,7 +161,7 @@ run_job() {
   echo "eval_sweep: $variant $name seed $seed done in $((end - start)) s, ${cpu} s CPU (exit $rc)" >&2
 }
 export -f run_job
-export out data bin seeds fractions resume
+export out data bin seeds resume
 
 if [ "$resume" = 0 ] || [ ! -f "$out/jobs.tsv" ]; then
   printf 'variant\tinput\tseed\twall_s\tcpu_s\texit\n' > "$out/jobs.tsv"

@@ -1,17 +1,23 @@
 #!/usr/bin/env python3
 """The budget sweep's variants side by side, from scripts/eval_sweep.sh's output.
 
-    scripts/sweep_table.py OUT [--variants paper,maturity,track,defer] [--condensed]
+    scripts/sweep_table.py OUT [--variants paper,maturity,track,defer,...] [--condensed]
 
-OUT holds one directory per variant (OUT/VARIANT/runs.csv, as eval_sweep.sh
---variants writes them). Prints, per sequence, one Markdown table: per kept
+OUT holds one directory per variant (OUT/VARIANT/runs.csv and flags.txt, as
+eval_sweep.sh --variants writes them; by default every such directory, paper
+first, then by name). A variant's rows are labelled with its keepless_eval
+flags from flags.txt; with --no-baselines among them only its keepless rows
+count (the baselines are paper's). Prints, per sequence, one Markdown table: per kept
 fraction F and per method of each variant, failed seeds, frames tracked,
 ATE (mean ± sd over seeds, failed runs included), ATE over the original's,
 local-BA observations and CPU seconds, map points and keyframes; then the
 smallest F from which each method never failed, per F the method with the
 lowest mean ATE among those with no failure, and the accuracy-cost frontier:
 the runs that no other beats on both ATE and local-BA observations. A failed run (lost tracking or a
-diverged BA) counts in every mean: its ATE is over all frames.
+diverged BA) counts in every mean: its ATE is over all frames. --condensed prints
+one cell per method (ATE over the original's, failed seeds, local-BA share) per
+variant and F: a table per real sequence, and the synthetic back end's
+trajectories together in one.
 """
 import csv
 import os
@@ -20,33 +26,54 @@ import sys
 from collections import defaultdict
 
 METHODS = [("ours", "keepless"), ("random", "random"), ("longest_track", "longest track"), ("anms", "ANMS")]
-FLAGS = {"paper": "", "maturity": "--maturity 2 --scope newest", "track": "--cost track", "defer": "--defer 2"}
 
 
-def load(out, variants):
+def default_variants(out):
+    found = sorted(d for d in os.listdir(out) if os.path.exists(os.path.join(out, d, "flags.txt")))
+    return sorted(found, key=lambda v: v != "paper")
+
+
+def variant_flags(out, variant):
+    """The variant's keepless_eval flags (eval_sweep.sh's `eval:` line of flags.txt), keepless only or not."""
+    path = os.path.join(out, variant, "flags.txt")
+    if not os.path.exists(path):
+        sys.exit(f"sweep_table: {path} is missing (scripts/eval_sweep.sh writes it)")
+    flags = []
+    with open(path) as f:
+        for line in f:
+            key, _, value = line.partition(":")
+            if key == "eval":
+                flags = value.split()
+    return " ".join(w for w in flags if w != "--no-baselines"), "--no-baselines" in flags
+
+
+def load(out, variants, flags):
     # (sequence) -> (F, label) -> [rows]; original rows are shared by every variant (same seeds).
     table = defaultdict(lambda: defaultdict(list))
     originals = defaultdict(dict)
+    titles = {}  # sequence -> its heading (the synthetic back end's trajectories say so)
     order = {}  # label -> (method, variant) rank: keepless's variants first, then each baseline's
     for variant in variants:
         path = os.path.join(out, variant, "runs.csv")
         if not os.path.exists(path):
             sys.exit(f"sweep_table: {path} is missing")
+        text, keepless_only = flags[variant]
         with open(path) as f:
             for row in csv.DictReader(f):
                 name, method, fraction = row["name"], row["variant"], float(row["target_fraction"])
+                titles[name] = f"{name} (synthetic, {row['group']})" if row["kind"] == "trajectory" else name
                 if method == "original":
                     originals[name][int(row["seed"])] = row
                     continue
+                if method != "ours" and keepless_only:
+                    continue
                 label = dict(METHODS).get(method, method)
-                if variant != "paper":
-                    if method != "ours" and variant == "track":
-                        continue  # track runs keepless only
-                    label = f"{label}, {FLAGS[variant]}"
+                if text:
+                    label = f"{label}, {text}"
                 table[name][(fraction, label)].append(row)
                 order[label] = ([m for m, _ in METHODS].index(method) if method in dict(METHODS) else len(METHODS),
                                 variants.index(variant))
-    return table, originals, order
+    return table, originals, titles, order
 
 
 def stat(rows, key):
@@ -115,20 +142,18 @@ def sequence_table(name, cells, originals, order):
     return "\n".join(lines)
 
 
-def condensed_table(name, cells, originals, variants):
+def condensed_rows(cells, originals, variants, flags):
+    """Per variant and F with a run: its title and one cell per method (ATE ratio, failed seeds, BA share)."""
     orig = list(originals.values())
     ate0, obs0 = stat(orig, "ate_m")[0], stat(orig, "observations")[0]
-    lines = [f"#### {name}", "",
-             f"Original: ATE {ate0:.3g} m, {obs0:,.0f} local-BA observations, {len(orig)} seeds. Each cell: ATE over "
-             "the original's (failed seeds), local-BA observations as a share of the original's; bold: no seed failed.",
-             "", "| culling | F | " + " | ".join(m for _, m in METHODS) + " |", "|---|---:|" + "---|" * len(METHODS)]
+    out = []
     for variant in variants:
-        title = f"`{FLAGS[variant]}`" if FLAGS[variant] else "immediate (paper)"
+        given = flags[variant][0]
+        title = f"`{given}`" if given else "immediate (paper)"
         for fraction in sorted({f for (f, _) in cells}):
             row = []
             for method, label in METHODS:
-                key = (fraction, label if variant == "paper" else f"{label}, {FLAGS[variant]}")
-                rows = cells.get(key)
+                rows = cells.get((fraction, f"{label}, {given}" if given else label))
                 if not rows:
                     row.append("–")
                     continue
@@ -137,7 +162,35 @@ def condensed_table(name, cells, originals, variants):
                 text = f"**{text}**" if fails == 0 else text
                 row.append(f"{text} ({fails}/{len(rows)}), {100 * stat(rows, 'observations')[0] / obs0:.0f} %")
             if any(c != "–" for c in row):
-                lines.append(f"| {title} | {fraction:.1f} | " + " | ".join(row) + " |")
+                out.append(f"{title} | {fraction:.1f} | " + " | ".join(row))
+    return out
+
+
+CELL = ("Each cell: ATE over the original's (failed seeds), local-BA observations as a share of the original's; "
+        "bold: no seed failed.")
+
+
+def condensed_table(name, cells, originals, variants, flags):
+    orig = list(originals.values())
+    ate0, obs0 = stat(orig, "ate_m")[0], stat(orig, "observations")[0]
+    lines = [f"#### {name}", "",
+             f"Original: ATE {ate0:.3g} m, {obs0:,.0f} local-BA observations, {len(orig)} seeds. {CELL}",
+             "", "| culling | F | " + " | ".join(m for _, m in METHODS) + " |", "|---|---:|" + "---|" * len(METHODS)]
+    lines += [f"| {row} |" for row in condensed_rows(cells, originals, variants, flags)]
+    lines.append("")
+    return "\n".join(lines)
+
+
+def synthetic_table(names, table, originals, titles, variants, flags):
+    """The synthetic back end's trajectories in one table, a row per trajectory, variant and F."""
+    lines = ["#### Synthetic back end", "", f"{CELL} The original's ATE per trajectory, mean over seeds.", "",
+             "| trajectory (group) | original ATE (m) | culling | F | " + " | ".join(m for _, m in METHODS) + " |",
+             "|---|---:|---|---:|" + "---|" * len(METHODS)]
+    for name in names:
+        ate0 = stat(list(originals[name].values()), "ate_m")[0]
+        heading = titles[name].replace("synthetic, ", "")
+        lines += [f"| {heading} | {ate0:.3g} | {row} |"
+                  for row in condensed_rows(table[name], originals[name], variants, flags)]
     lines.append("")
     return "\n".join(lines)
 
@@ -147,15 +200,19 @@ def main(argv):
         print(__doc__)
         return 0 if len(argv) >= 2 else 2
     out = argv[1]
-    variants = ["paper", "maturity", "track", "defer"]
+    variants = default_variants(out)
     if "--variants" in argv:
         variants = argv[argv.index("--variants") + 1].split(",")
-    table, originals, order = load(out, variants)
+    flags = {variant: variant_flags(out, variant) for variant in variants}
+    table, originals, titles, order = load(out, variants, flags)
+    synthetic = [name for name in sorted(table) if "(synthetic" in titles[name]]
     for name in sorted(table):
-        if "--condensed" in argv:
-            print(condensed_table(name, table[name], originals[name], variants))
-        else:
-            print(sequence_table(name, table[name], originals[name], order))
+        if "--condensed" not in argv:
+            print(sequence_table(titles[name], table[name], originals[name], order))
+        elif name not in synthetic:
+            print(condensed_table(titles[name], table[name], originals[name], variants, flags))
+    if "--condensed" in argv and synthetic:
+        print(synthetic_table(synthetic, table, originals, titles, variants, flags))
     return 0
 
 

@@ -1,39 +1,63 @@
 #!/usr/bin/env bash
-# scripts/eval_sweep.sh end to end on a small slice (KITTI 06 frames 0-15, two
-# fractions, one seed, two variants): every job exits 0, each variant has its
-# Budget sweep table with every method at both fractions, runs.csv rows for
-# them, the SVG, and jobs.tsv's CPU column. Exits 77 (skipped), naming the
-# path, without the data.
+# scripts/eval_sweep.sh end to end on a small slice (KITTI 06 frames 0-15 at two
+# fractions, the synthetic TUM group at 12 keyframes and one fraction, one
+# seed, every variant but maturity and defer): every job exits 0, each variant has its Budget sweep
+# table with every method it runs at its fractions, runs.csv rows for them, the
+# SVG, its flags.txt, and jobs.tsv's CPU column; track skips the synthetic
+# back end; scripts/sweep_table.py labels each variant's rows with its flags.
+# Exits 77 (skipped), naming the path, without the data.
 #   tests/eval/eval_sweep_test.sh BIN_DIR DATA_DIR
 set -euo pipefail
 root=$(cd "$(dirname "$0")/../.." && pwd)
 bin=$1
 data=$2
-seq=$data/kitti06_first51_niconielsen
-if [ ! -f "$seq/calib.txt" ]; then
-  echo "eval_sweep_test: skipped: no KITTI 06 sequence at $seq" >&2
-  exit 77
-fi
+for need in kitti06_first51_niconielsen/calib.txt evo/freiburg1_xyz-groundtruth.txt; do
+  if [ ! -f "$data/$need" ]; then
+    echo "eval_sweep_test: skipped: no $data/$need" >&2
+    exit 77
+  fi
+done
 out=$(mktemp -d)
 trap 'rm -rf "$out"' EXIT
-"$root/scripts/eval_sweep.sh" --bin "$bin" --data-root "$data" --only kitti06 --seeds 1 --fractions 0.2,0.4 \
-  --variants paper,track --eval-flags "--frames 0:15" -j 2 --out "$out"
+"$root/scripts/eval_sweep.sh" --bin "$bin" --data-root "$data" --only kitti06,synthetic_tum --seeds 1 \
+  --fractions 0.2,0.4 --synthetic-fractions 0.4 --variants paper,track,authors,information,floor \
+  --eval-flags "--frames 0:15 --max-keyframes 12 --keypoints 300" -j 2 --out "$out"
 
 fail() { echo "eval_sweep_test: $*" >&2; exit 1; }
-[ "$(awk -F'\t' 'NR > 1' "$out/jobs.tsv" | wc -l)" = 2 ] || fail "jobs.tsv should list 2 jobs"
+# Every variant on both inputs but track, on KITTI 06 only.
+[ "$(awk -F'\t' 'NR > 1' "$out/jobs.tsv" | wc -l)" = 9 ] || fail "jobs.tsv should list 9 jobs"
 awk -F'\t' 'NR > 1 && ($6 != 0 || $5 !~ /^[0-9]+$/) { exit 1 }' "$out/jobs.tsv" || fail "a job failed or has no CPU figure"
-for variant in paper track; do
+for variant in paper track authors information floor; do
   tables=$out/$variant/tables.md
   grep -q "^#### Budget sweep: kitti06_first51_niconielsen" "$tables" || fail "$variant: no Budget sweep table"
   ls "$out/$variant"/sweep_*.svg > /dev/null || fail "$variant: no sweep SVG"
   for f in 0.20 0.40; do
     grep -q "^| $f | ours |" "$tables" || fail "$variant: no row for ours at F = $f"
   done
+  [ -f "$out/$variant/flags.txt" ] || fail "$variant: no flags.txt"
 done
-# The paper variant runs every baseline; track runs keepless only.
+# The synthetic group runs at its own fraction only.
+for variant in paper authors information floor; do
+  fractions=$(awk -F, 'NR > 1 && $2 == "fr1_xyz" { print $9 }' "$out/$variant/runs.csv" | sort -u | tr '\n' ' ')
+  [ "$fractions" = "0.400 " ] || fail "$variant: fr1_xyz at F = '$fractions', want 0.400 only"
+done
+if grep -q ",fr1_xyz," "$out/track/runs.csv"; then fail "track: ran the synthetic back end"; fi
+# The paper variant runs every baseline; the others here run keepless only.
 for method in random "longest track" "ANMS (SSC)"; do
   grep -q "^| 0.20 | $method |" "$out/paper/tables.md" || fail "paper: no $method row"
-  if grep -q "^| 0.20 | $method |" "$out/track/tables.md"; then fail "track: has a $method row"; fi
+  for variant in track authors information floor; do
+    if grep -q "^| 0.20 | $method |" "$out/$variant/tables.md"; then fail "$variant: has a $method row"; fi
+  done
 done
-grep -q "cost track" "$out/track/meta.txt" || fail "track: meta.txt does not say cost track"
+for cost in track authors information; do
+  grep -q "cost $cost" "$out/$cost/meta.txt" || fail "$cost: meta.txt does not say cost $cost"
+done
+grep -q "coverage floor 30" "$out/floor/meta.txt" || fail "floor: meta.txt does not say coverage floor 30"
+grep -qx "eval: --floor 30 --no-baselines" "$out/floor/flags.txt" || fail "floor: flags.txt does not hold its flags"
+# sweep_table.py labels the rows from flags.txt: floor's keepless rows, no baseline of its own.
+condensed=$("$root/scripts/sweep_table.py" "$out" --condensed)
+grep -q "^| \`--floor 30\` | 0.4 | " <<< "$condensed" || fail "sweep_table: no --floor 30 row"
+grep -q "^| \`--floor 30\` | .* | – | – | – |$" <<< "$condensed" || fail "sweep_table: floor has baseline cells"
+grep -q "^| fr1_xyz (tum) | [0-9.e-]* | \`--floor 30\` | 0.4 | " <<< "$condensed" ||
+  fail "sweep_table: no synthetic fr1_xyz row for floor"
 echo "eval_sweep_test: ok"
