@@ -138,10 +138,6 @@ struct KeepThresholds::Impl {
     }
   }
 
-  // The t-th smallest (t >= 1) of n positions. Points have few pairs, so
-  // for n <= kSmall each position's rank among them is counted, without
-  // branches (keys position * 32 + index are distinct, and int32 compares
-  // vectorise on any x86-64 or NEON); nth_element on a copy otherwise.
   // select() for n <= 3, where most points are (two or three views: n = 1
   // or 3), inlined and without branches on n or t (they mispredicted often,
   // n varying from point to point): the minimum, median or maximum of
@@ -156,6 +152,10 @@ struct KeepThresholds::Impl {
     return t == 1 ? std::min(low, c) : t == 2 ? median : std::max(high, c);
   }
 
+  // The t-th smallest (t >= 1) of n positions. Points have few pairs, so
+  // for n <= kSmall each position's rank among them is counted, without
+  // branches (keys position * 32 + index are distinct, and int32 compares
+  // vectorise on any x86-64 or NEON); nth_element on a copy otherwise.
   std::uint32_t select(const std::uint32_t* s, std::int32_t n, std::int64_t t) {
     if (n <= kSmall) {
       std::int32_t key[kSmall];
