@@ -47,6 +47,11 @@ def variant_flags(out, variant):
     return " ".join(w for w in flags if w != "--no-baselines"), "--no-baselines" in flags
 
 
+def method_label(label, flags_text):
+    """A method's row label: its name, then the variant's flags when it has any."""
+    return f"{label}, {flags_text}" if flags_text else label
+
+
 def load(out, variants, flags):
     # (sequence) -> (F, label) -> [rows]; original rows are shared by every variant (same seeds).
     table = defaultdict(lambda: defaultdict(list))
@@ -67,9 +72,7 @@ def load(out, variants, flags):
                     continue
                 if method != "ours" and keepless_only:
                     continue
-                label = dict(METHODS).get(method, method)
-                if text:
-                    label = f"{label}, {text}"
+                label = method_label(dict(METHODS).get(method, method), text)
                 table[name][(fraction, label)].append(row)
                 order[label] = ([m for m, _ in METHODS].index(method) if method in dict(METHODS) else len(METHODS),
                                 variants.index(variant))
@@ -153,7 +156,7 @@ def condensed_rows(cells, originals, variants, flags):
         for fraction in sorted({f for (f, _) in cells}):
             row = []
             for method, label in METHODS:
-                rows = cells.get((fraction, f"{label}, {given}" if given else label))
+                rows = cells.get((fraction, method_label(label, given)))
                 if not rows:
                     row.append("–")
                     continue

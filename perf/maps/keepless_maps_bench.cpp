@@ -2,9 +2,11 @@
 // reconstruction, checked by COLMAP's own bundle adjuster.
 //
 //   keepless_maps_bench [--data DIR] [--colmap BIN] [--M 30,100,200 | --keep-fraction 0.1,0.3] [--K 20]
-//                       [--seeds 5] [--work DIR] [--cost paper|authors|information|track]
+//                       [--seeds 5] [--work DIR] [--cost paper|authors|information|track] [--theta 0.5]
+//                       [--model DIR --poses FILE]
 //
-// On the shared fixture (DIR/colmap_kitti06_first51, 51 KITTI 06 images):
+// On the shared fixture (DIR/colmap_kitti06_first51, 51 KITTI 06 images; or
+// --model, a COLMAP model of KITTI frames, with their --poses):
 // the full model is re-solved by `colmap bundle_adjuster` (fixed intrinsics,
 // SOURCES.md's flags); then, per M (or per keep fraction F: keepless with
 // that keep budget per window, M unused, reported as 0), keepless replay and whole (each with the
@@ -63,7 +65,10 @@ struct Options {
   std::uint32_t K = 20;
   int seeds = 5;
   std::string work;
+  std::string model;  // --model: a COLMAP model instead of the fixture (with --poses)
+  std::string poses;
   core::CostModel cost = core::CostModel::kPaper;  // keepless's rows (as keepless_sparsify --cost)
+  double theta = core::Params{}.theta;             // keepless's keep threshold (as keepless_sparsify --theta)
 };
 
 struct Ba {
@@ -125,18 +130,46 @@ std::vector<std::array<double, 3>> read_kitti_centres(const std::string& path) {
   return c;
 }
 
-// RMS ATE: the model's centres aligned to the KITTI frames named by its
-// images ("000012.png" = frame 12) by the best similarity (Umeyama), as the
-// fixture's own sim3_to_kitti_gt.txt was made.
-double ate(const io::ColmapModel& model, const std::vector<std::array<double, 3>>& gt) {
-  std::vector<std::array<double, 3>> est, ref;
+// The model's camera centres and the KITTI frames its images name
+// ("000012.png" = frame 12), pair by pair.
+void centres_and_truth(const io::ColmapModel& model, const std::vector<std::array<double, 3>>& gt,
+                       std::vector<std::array<double, 3>>* est, std::vector<std::array<double, 3>>* ref) {
   for (const io::ColmapImage& im : model.images) {
     const std::size_t frame = std::strtoul(im.name.c_str(), nullptr, 10);
     if (frame >= gt.size()) die("no KITTI pose for " + im.name);
-    io::colmap_camera_centre(im, est.emplace_back().data());
-    ref.push_back(gt[frame]);
+    io::colmap_camera_centre(im, est->emplace_back().data());
+    ref->push_back(gt[frame]);
   }
+}
+
+// RMS ATE: the model's centres aligned to the KITTI frames by the best
+// similarity (Umeyama), as the fixture's own sim3_to_kitti_gt.txt was made.
+double ate(const io::ColmapModel& model, const std::vector<std::array<double, 3>>& gt) {
+  std::vector<std::array<double, 3>> est, ref;
+  centres_and_truth(model, gt, &est, &ref);
   return io::aligned_deviation(ref, est).rms;
+}
+
+// That similarity itself, for a --model without a sim3 file: it puts the
+// model in metres (the network's baseline cost, the deviations).
+io::Similarity similarity_to_truth(const io::ColmapModel& model, const std::vector<std::array<double, 3>>& gt) {
+  std::vector<std::array<double, 3>> est, ref;
+  centres_and_truth(model, gt, &est, &ref);
+  if (est.size() < 3) die("a --model needs at least 3 images with KITTI poses");
+  const Eigen::Index n = static_cast<Eigen::Index>(est.size());
+  Eigen::Matrix3Xd e(3, n), r(3, n);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    e.col(i) = Eigen::Vector3d(est[i].data());
+    r.col(i) = Eigen::Vector3d(ref[i].data());
+  }
+  const Eigen::Matrix4d T = Eigen::umeyama(e, r, true);
+  io::Similarity s;
+  s.scale = T.block<3, 1>(0, 0).norm();
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) s.rotation[3 * i + j] = T(i, j) / s.scale;
+    s.translation[i] = T(i, 3);
+  }
+  return s;
 }
 
 // Deviation of `model`'s centres from the full solution's, in metres: the
@@ -194,6 +227,7 @@ struct Bench {
     params.pair_capacity = std::max<std::int64_t>(M, 1);
     if (std::isfinite(fraction)) params.budget = {core::BudgetKind::kFraction, 0, fraction};
     params.cost_model = opt.cost;
+    params.theta = opt.theta;
     params.image_width = static_cast<std::int32_t>(original.cameras.front().width);
     params.image_height = static_cast<std::int32_t>(original.cameras.front().height);
     sp::ModeResult r;
@@ -214,6 +248,7 @@ struct Bench {
     core::Params params;
     params.budget = {core::BudgetKind::kPoints, count, 0.0};
     params.cost_model = opt.cost;
+    params.theta = opt.theta;
     params.image_width = static_cast<std::int32_t>(original.cameras.front().width);
     params.image_height = static_cast<std::int32_t>(original.cameras.front().height);
     sp::ModeResult r;
@@ -257,6 +292,10 @@ int main(int argc, char** argv) {
   namespace cli = keepless::cli;
   constexpr const char* kTool = "keepless_maps_bench";
   const std::vector<cli::Flag> flags = {
+      {"--model", "DIR", "a COLMAP model (cameras, images, points3D) instead of the fixture; its\n"
+                         "images named by KITTI frame (000012.png = frame 12); needs --poses"},
+      {"--poses", "FILE", "with --model: the KITTI poses of its frames (the similarity to them is\n"
+                          "fitted, as the fixture's sim3_to_kitti_gt.txt was)"},
       {"--data", "DIR", "the data folder holding colmap_kitti06_first51 and\n"
                         "kitti06_first51_niconielsen (default ../shared/data)"},
       {"--colmap", "BIN", "the colmap executable (default colmap, on PATH)"},
@@ -267,10 +306,11 @@ int main(int argc, char** argv) {
       {"--seeds", "N", "seeds of the random baseline (default 5)"},
       {"--work", "DIR", "where the models and BA runs go (default: a new /tmp/keepless_maps_bench_*)"},
       {"--cost", "paper|authors|information|track", "keepless's cost model (default paper)"},
+      {"--theta", "T", "keepless's keep threshold theta_f in [0, 1] (default 0.5)"},
   };
   const std::string help =
       cli::usage("usage: keepless_maps_bench [options]", flags,
-                 "Sparsifies the 51-image KITTI 06 COLMAP fixture at each M (replay, whole,\n"
+                 "Sparsifies the 51-image KITTI 06 COLMAP fixture (or --model) at each M (replay, whole,\n"
                  "and baselines at replay's count), re-solves every model with `colmap\n"
                  "bundle_adjuster` and prints accuracy per row; the last line is a JSON summary.");
   for (int i = 1; i < argc; ++i) {
@@ -288,6 +328,8 @@ int main(int argc, char** argv) {
       return n;
     };
     if (f == "--data") opt.data = value;
+    else if (f == "--model") opt.model = value;
+    else if (f == "--poses") opt.poses = value;
     else if (f == "--colmap") opt.colmap = value;
     else if (f == "--M") {
       opt.Ms = parse_list(value);
@@ -308,7 +350,11 @@ int main(int argc, char** argv) {
     } else if (f == "--K") opt.K = static_cast<std::uint32_t>(count(1, 100000));
     else if (f == "--seeds") opt.seeds = static_cast<int>(count(1, 1000));
     else if (f == "--work") opt.work = value;
-    else if (f == "--cost") {
+    else if (f == "--theta") {
+      if (!core::parse_finite_double(value, &opt.theta) || !(opt.theta >= 0 && opt.theta <= 1)) {
+        return cli::usage_error(kTool, std::string("bad value for --theta: '") + value + "' (a number in [0, 1])");
+      }
+    } else if (f == "--cost") {
       if (!core::parse_cost_model(value, &opt.cost)) {
         return cli::usage_error(kTool, std::string("bad value for --cost: '") + value + "' (paper, authors, information or track)");
       }
@@ -319,15 +365,24 @@ int main(int argc, char** argv) {
     if (::mkdtemp(tmpl) == nullptr) die("mkdtemp failed");
     opt.work = tmpl;
   }
+  if (opt.model.empty() != opt.poses.empty()) {
+    return cli::usage_error(kTool, "--model and --poses go together");
+  }
   const std::string fixture = opt.data + "/colmap_kitti06_first51";
+  const std::string model = opt.model.empty() ? fixture + "/sparse" : opt.model;
   std::string error;
   io::ColmapFormat format;
-  if (!io::read_colmap_model(fixture + "/sparse", &b.original, &format, &error)) die(error);
-  if (!io::read_similarity(fixture + "/sim3_to_kitti_gt.txt", &b.sim, &error)) die(error);
-  b.gt = read_kitti_centres(opt.data + "/kitti06_first51_niconielsen/poses.txt");
+  if (!io::read_colmap_model(model, &b.original, &format, &error)) die(error);
+  if (opt.model.empty()) {
+    if (!io::read_similarity(fixture + "/sim3_to_kitti_gt.txt", &b.sim, &error)) die(error);
+    b.gt = read_kitti_centres(opt.data + "/kitti06_first51_niconielsen/poses.txt");
+  } else {
+    b.gt = read_kitti_centres(opt.poses);
+    b.sim = similarity_to_truth(b.original, b.gt);
+  }
 
   std::printf("work dir %s\n", opt.work.c_str());
-  const Ba full = bundle_adjust(opt, fixture + "/sparse", opt.work + "/full_ba");
+  const Ba full = bundle_adjust(opt, model, opt.work + "/full_ba");
   b.full = full.model;
   const io::AlignedDeviation moved = deviation(b.full, b.sim, b.original);
   std::printf("full model: %zu points, BA %.2f s (%s), ATE %.4f m (mapper's model %.4f m; BA moved centres by max %.4f m)\n",
@@ -355,19 +410,21 @@ int main(int argc, char** argv) {
     const auto& p = b.original.points;
     return p[x].track.size() != p[y].track.size() ? p[x].track.size() > p[y].track.size() : p[x].id < p[y].id;
   });
-  // COLMAP's point_filtering: the count each --min_track_len leaves.
+  // COLMAP's point_filtering: the count each --min_track_len leaves, from 2
+  // until it keeps under 2 % of the points (a longer sequence has longer tracks).
   std::map<int, std::uint64_t> filter_count;
-  for (int t = 2; t <= 16; ++t) {
+  for (int t = 2; t <= 64; ++t) {
     const std::string out = opt.work + "/filter" + std::to_string(t);
     ::mkdir(out.c_str(), 0777);
     const std::string cmd = "QT_QPA_PLATFORM=offscreen " + quote(opt.colmap) + " point_filtering --input_path " +
-                            quote(fixture + "/sparse") + " --output_path " + quote(out) + " --min_track_len " +
+                            quote(model) + " --output_path " + quote(out) + " --min_track_len " +
                             std::to_string(t) + " > " + quote(out + ".log") + " 2>&1";
     io::ColmapModel m;
     if (std::system(cmd.c_str()) != 0 || !io::read_colmap_model(out, &m, &format, &error)) {
       die("point_filtering failed (" + out + ".log)");
     }
     filter_count[t] = m.points.size();
+    if (m.points.size() * 50 < b.original.points.size()) break;
   }
 
   std::printf("%-22s %5s %7s %7s %8s %-5s %10s %10s %8s\n", "method", "M", "points", "min_obs", "BA_s", "conv",
@@ -460,7 +517,7 @@ int main(int argc, char** argv) {
   json += "],\"full_ba_s\":" + std::to_string(full.seconds) + ",\"K\":" + std::to_string(opt.K) +
           ",\"seeds\":" + std::to_string(opt.seeds) + ",\"not_converged\":" + std::to_string(not_converged) +
           ",\"floor\":" + std::to_string(sp::kDefaultFloor) +
-          ",\"cost\":\"" + core::to_string(opt.cost) + "\"}";
+          ",\"cost\":\"" + core::to_string(opt.cost) + "\",\"theta\":" + std::to_string(opt.theta) + "}";
   std::printf("%s\n", json.c_str());
   return 0;
 }

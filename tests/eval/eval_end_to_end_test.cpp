@@ -329,12 +329,32 @@ TEST(KeeplessEval, ANonDefaultPolicyGivesTheContract) {
     EXPECT_TRUE(std::isfinite(num(in, k))) << k;
 }
 
+// --theta reaches keepless: at theta = 1 no flow is above the threshold, so
+// keepless keeps fewer of the map's points than at the default 0.5.
+TEST(KeeplessEval, ThetaReachesKeepless) {
+  require_binary();
+  const std::string tum = data("evo/freiburg1_xyz-groundtruth.txt");
+  SKIP_WITHOUT(tum);
+  const auto kept = [&](const std::string& theta) {
+    const RunOutput r = run("--quick --no-ablation --no-baselines --seeds 1 --M 100 --max-keyframes 12 " + theta +
+                            " --trajectory " + tum + " --format tum");
+    EXPECT_EQ(r.status, 0);
+    Json j;
+    EXPECT_TRUE(Parser(r.last_line).parse(&j));
+    return num(j.at("runs").items.at(0), "mp_percent");
+  };
+  const double by_default = kept(""), at_one = kept("--theta 1");
+  EXPECT_LT(at_one, by_default);
+  EXPECT_EQ(kept("--theta 0.5"), by_default);
+}
+
 TEST(KeeplessEval, RejectsBadFlagsWithStatus2) {
   require_binary();
   EXPECT_EQ(run("--no-such-flag").status, 2);
   EXPECT_EQ(run("--scope oldest --bal /nonexistent").status, 2);
   EXPECT_EQ(run("--cost cheap --bal /nonexistent").status, 2);
   EXPECT_EQ(run("--floor -1 --bal /nonexistent").status, 2);
+  EXPECT_EQ(run("--theta 1.5 --bal /nonexistent").status, 2);
   EXPECT_EQ(run("--M abc --bal /nonexistent").status, 2);
   EXPECT_EQ(run("--kept-fraction 1.5 --bal /nonexistent").status, 2);
   EXPECT_EQ(run("--M 100 --kept-fraction 0.3 --bal /nonexistent").status, 2);

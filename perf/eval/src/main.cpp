@@ -75,6 +75,7 @@ const std::vector<cli::Flag> kFlags = {
     {"--ablation-all", nullptr, "every ablation variant"},
     {"--scope", "window|newest", "keepless's decision scope (core::Params scope)"},
     {"--floor", "L", "keepless's coverage floor (core::Params coverage_floor)"},
+    {"--theta", "T", "keepless's keep threshold theta_f in [0, 1] (core::Params theta; default 0.5)"},
     {"--cost", "paper|authors|information|track", "keepless's cost model; with --kept-fraction the real VO\n"
                                                   "decides the new keyframe's points; track: the real VO\n"
                                                   "sends each point's map observations, age, reprojection\n"
@@ -142,7 +143,7 @@ struct Args {
   int max_keyframes = -1, keypoints = -1, window = -1, ba_iterations = -1, image_frames = -1;
   bool window_sizes = false;
   bool noise_free = false, baselines = true, ablation = true, ablation_all = false;
-  keepless::core::Params policy;  // scope, coverage_floor, cost_model, maturity_keyframes, track_terms; the rest is set per variant
+  keepless::core::Params policy;  // scope, coverage_floor, theta, cost_model, maturity_keyframes, track_terms; the rest is set per variant
   bool tracked_flags = false;     // --tracked-flags (the real VO)
   bool defer_fixed = false;       // --defer-fixed (the real VO)
   bool defer_refine = false;      // --defer-refine (the real VO)
@@ -253,6 +254,7 @@ Args parse(int argc, char** argv) {
       const std::string v = val();
       if (!keepless::core::parse_scope(v.c_str(), &a.policy.scope)) fail("--scope: expected window or newest, got '" + v + "'");
     } else if (f == "--floor") a.policy.coverage_floor = static_cast<std::uint32_t>(parse_int(f, val(), 0, 100000));
+    else if (f == "--theta") a.policy.theta = parse_double(f, val(), 0, 1);
     else if (f == "--maturity") a.policy.maturity_keyframes = static_cast<std::uint32_t>(parse_int(f, val(), 0, 1000));
     else if (f == "--tracked-flags") a.tracked_flags = true;
     else if (f == "--defer") a.policy.defer_keyframes = static_cast<std::uint32_t>(parse_int(f, val(), 1, 1000));
@@ -369,6 +371,7 @@ ke::VariantSpec variant(const keepless::core::Params& policy, const std::string&
   v.selector = sel;
   v.params.scope = policy.scope;
   v.params.coverage_floor = policy.coverage_floor;
+  v.params.theta = policy.theta;
   v.params.cost_model = policy.cost_model;
   v.params.track_terms = policy.track_terms;
   v.params.maturity_keyframes = policy.maturity_keyframes;
@@ -488,6 +491,7 @@ int main(int argc, char** argv) {
   summary.coverage_floor = a.policy.coverage_floor;
   summary.settings += "; keepless scope " + summary.scope + ", coverage floor " +
                       std::to_string(summary.coverage_floor) + ", cost " + summary.cost_model;
+  if (a.policy.theta != keepless::core::Params{}.theta) summary.settings += ", theta " + std::to_string(a.policy.theta);
   if (a.policy.maturity_keyframes > 0) summary.settings += ", maturity " + std::to_string(a.policy.maturity_keyframes);
   if (a.tracked_flags) summary.settings += ", tracked flags";
   if (a.policy.defer_keyframes > 0) summary.settings += ", defer " + std::to_string(a.policy.defer_keyframes);
