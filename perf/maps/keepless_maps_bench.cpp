@@ -94,6 +94,24 @@ struct Row {
 
 std::string quote(const std::string& s) { return "'" + s + "'"; }
 
+// `s` inside a JSON string: quotes, backslashes and control bytes escaped.
+std::string json_escaped(const std::string& s) {
+  std::string out;
+  for (const char c : s) {
+    if (c == '"' || c == '\\') {
+      out += '\\';
+      out += c;
+    } else if (static_cast<unsigned char>(c) < 0x20) {
+      char u[8];
+      std::snprintf(u, sizeof u, "\\u%04x", c);
+      out += u;
+    } else {
+      out += c;
+    }
+  }
+  return out;
+}
+
 // Runs `colmap bundle_adjuster` on `in` into `out` (fixed intrinsics).
 Ba bundle_adjust(const Options& opt, const std::string& in, const std::string& out) {
   ::mkdir(out.c_str(), 0777);
@@ -517,7 +535,8 @@ int main(int argc, char** argv) {
   json += "],\"full_ba_s\":" + std::to_string(full.seconds) + ",\"K\":" + std::to_string(opt.K) +
           ",\"seeds\":" + std::to_string(opt.seeds) + ",\"not_converged\":" + std::to_string(not_converged) +
           ",\"floor\":" + std::to_string(sp::kDefaultFloor) +
-          ",\"cost\":\"" + core::to_string(opt.cost) + "\",\"theta\":" + std::to_string(opt.theta) + "}";
+          ",\"cost\":\"" + core::to_string(opt.cost) + "\",\"theta\":" + std::to_string(opt.theta) +
+          ",\"model\":\"" + json_escaped(model) + "\"}";
   std::printf("%s\n", json.c_str());
   return 0;
 }
