@@ -3,7 +3,7 @@
 //
 //   keepless_maps_bench [--data DIR] [--colmap BIN] [--M 30,100,200 | --keep-fraction 0.1,0.3] [--K 20]
 //                       [--seeds 5] [--work DIR] [--cost paper|authors|information|track] [--theta 0.5]
-//                       [--model DIR --poses FILE]
+//                       [--model DIR --poses FILE] [--ba-iterations 100]
 //
 // On the shared fixture (DIR/colmap_kitti06_first51, 51 KITTI 06 images; or
 // --model, a COLMAP model of KITTI frames, with their --poses):
@@ -28,11 +28,13 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <array>
 #include <cinttypes>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <fstream>
 #include <map>
 #include <numeric>
@@ -69,6 +71,7 @@ struct Options {
   std::string poses;
   core::CostModel cost = core::CostModel::kPaper;  // keepless's rows (as keepless_sparsify --cost)
   double theta = core::Params{}.theta;             // keepless's keep threshold (as keepless_sparsify --theta)
+  std::uint64_t ba_iterations = 100;               // bundle_adjuster's limit (COLMAP's default)
 };
 
 struct Ba {
@@ -119,7 +122,8 @@ Ba bundle_adjust(const Options& opt, const std::string& in, const std::string& o
   const std::string cmd = "QT_QPA_PLATFORM=offscreen " + quote(opt.colmap) + " bundle_adjuster --input_path " +
                           quote(in) + " --output_path " + quote(out) +
                           " --BundleAdjustment.refine_focal_length 0 --BundleAdjustment.refine_principal_point 0"
-                          " --BundleAdjustment.refine_extra_params 0 > " + quote(log) + " 2>&1";
+                          " --BundleAdjustment.refine_extra_params 0 --BundleAdjustment.max_num_iterations " +
+                          std::to_string(opt.ba_iterations) + " > " + quote(log) + " 2>&1";
   Ba ba;
   const std::uint64_t t0 = keepless::platform::monotonic_ns();
   const int rc = std::system(cmd.c_str());
@@ -174,13 +178,7 @@ io::Similarity similarity_to_truth(const io::ColmapModel& model, const std::vect
   std::vector<std::array<double, 3>> est, ref;
   centres_and_truth(model, gt, &est, &ref);
   if (est.size() < 3) die("a --model needs at least 3 images with KITTI poses");
-  const Eigen::Index n = static_cast<Eigen::Index>(est.size());
-  Eigen::Matrix3Xd e(3, n), r(3, n);
-  for (Eigen::Index i = 0; i < n; ++i) {
-    e.col(i) = Eigen::Vector3d(est[i].data());
-    r.col(i) = Eigen::Vector3d(ref[i].data());
-  }
-  const Eigen::Matrix4d T = Eigen::umeyama(e, r, true);
+  const Eigen::Matrix4d T = io::umeyama_similarity(ref, est);
   io::Similarity s;
   s.scale = T.block<3, 1>(0, 0).norm();
   for (int i = 0; i < 3; ++i) {
@@ -325,6 +323,8 @@ int main(int argc, char** argv) {
       {"--work", "DIR", "where the models and BA runs go (default: a new /tmp/keepless_maps_bench_*)"},
       {"--cost", "paper|authors|information|track", "keepless's cost model (default paper)"},
       {"--theta", "T", "keepless's keep threshold theta_f in [0, 1] (default 0.5)"},
+      {"--ba-iterations", "N", "bundle_adjuster's iteration limit for every model (default 100,\n"
+                               "COLMAP's; raise it where the full model does not converge)"},
   };
   const std::string help =
       cli::usage("usage: keepless_maps_bench [options]", flags,
@@ -368,6 +368,7 @@ int main(int argc, char** argv) {
     } else if (f == "--K") opt.K = static_cast<std::uint32_t>(count(1, 100000));
     else if (f == "--seeds") opt.seeds = static_cast<int>(count(1, 1000));
     else if (f == "--work") opt.work = value;
+    else if (f == "--ba-iterations") opt.ba_iterations = count(1, 100000);
     else if (f == "--theta") {
       if (!core::parse_finite_double(value, &opt.theta) || !(opt.theta >= 0 && opt.theta <= 1)) {
         return cli::usage_error(kTool, std::string("bad value for --theta: '") + value + "' (a number in [0, 1])");
@@ -382,6 +383,8 @@ int main(int argc, char** argv) {
     char tmpl[] = "/tmp/keepless_maps_bench_XXXXXX";
     if (::mkdtemp(tmpl) == nullptr) die("mkdtemp failed");
     opt.work = tmpl;
+  } else if (::mkdir(opt.work.c_str(), 0777) != 0 && errno != EEXIST) {
+    die("cannot create --work " + opt.work + ": " + std::strerror(errno));
   }
   if (opt.model.empty() != opt.poses.empty()) {
     return cli::usage_error(kTool, "--model and --poses go together");
@@ -536,7 +539,7 @@ int main(int argc, char** argv) {
           ",\"seeds\":" + std::to_string(opt.seeds) + ",\"not_converged\":" + std::to_string(not_converged) +
           ",\"floor\":" + std::to_string(sp::kDefaultFloor) +
           ",\"cost\":\"" + core::to_string(opt.cost) + "\",\"theta\":" + std::to_string(opt.theta) +
-          ",\"model\":\"" + json_escaped(model) + "\"}";
+          ",\"ba_iterations\":" + std::to_string(opt.ba_iterations) + ",\"model\":\"" + json_escaped(model) + "\"}";
   std::printf("%s\n", json.c_str());
   return 0;
 }
