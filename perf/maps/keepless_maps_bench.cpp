@@ -3,7 +3,7 @@
 //
 //   keepless_maps_bench [--data DIR] [--colmap BIN] [--M 30,100,200 | --keep-fraction 0.1,0.3] [--K 20]
 //                       [--seeds 5] [--work DIR] [--cost paper|authors|information|track] [--theta 0.5]
-//                       [--model DIR --poses FILE] [--ba-iterations 100]
+//                       [--model DIR --poses FILE] [--ba-iterations 100] [--exact-floor 30]
 //
 // On the shared fixture (DIR/colmap_kitti06_first51, 51 KITTI 06 images; or
 // --model, a COLMAP model of KITTI frames, with their --poses):
@@ -72,6 +72,7 @@ struct Options {
   core::CostModel cost = core::CostModel::kPaper;  // keepless's rows (as keepless_sparsify --cost)
   double theta = core::Params{}.theta;             // keepless's keep threshold (as keepless_sparsify --theta)
   std::uint64_t ba_iterations = 100;               // bundle_adjuster's limit (COLMAP's default)
+  std::uint32_t exact_floor = sp::kDefaultFloor;   // observations per image the exact rows keep at least
 };
 
 struct Ba {
@@ -269,7 +270,7 @@ struct Bench {
     params.image_height = static_cast<std::int32_t>(original.cameras.front().height);
     sp::ModeResult r;
     if (sp::decide(kfs.file, sp::Mode::kWhole, params, opt.K, &r) != core::Status::kOk) die("decide failed");
-    const sp::ExactCount e = sp::keep_exactly(images, sp::kDefaultFloor, count, r.thresholds, &r.decisions);
+    const sp::ExactCount e = sp::keep_exactly(images, opt.exact_floor, count, r.thresholds, &r.decisions);
     std::printf("exact whole: %llu kept (%llu by the order, %u by the floor)%s\n",
                 static_cast<unsigned long long>(e.kept), static_cast<unsigned long long>(e.from_order), e.restored,
                 e.floor_fits ? "" : ": the floor alone keeps more");
@@ -325,6 +326,8 @@ int main(int argc, char** argv) {
       {"--theta", "T", "keepless's keep threshold theta_f in [0, 1] (default 0.5)"},
       {"--ba-iterations", "N", "bundle_adjuster's iteration limit for every model (default 100,\n"
                                "COLMAP's; raise it where the full model does not converge)"},
+      {"--exact-floor", "L", "observations every image keeps in the keepless_exact rows, taken from\n"
+                             "within the count (default 30, COLMAP's minimum inliers to register)"},
   };
   const std::string help =
       cli::usage("usage: keepless_maps_bench [options]", flags,
@@ -369,6 +372,7 @@ int main(int argc, char** argv) {
     else if (f == "--seeds") opt.seeds = static_cast<int>(count(1, 1000));
     else if (f == "--work") opt.work = value;
     else if (f == "--ba-iterations") opt.ba_iterations = count(1, 100000);
+    else if (f == "--exact-floor") opt.exact_floor = static_cast<std::uint32_t>(count(0, 1000000));
     else if (f == "--theta") {
       if (!core::parse_finite_double(value, &opt.theta) || !(opt.theta >= 0 && opt.theta <= 1)) {
         return cli::usage_error(kTool, std::string("bad value for --theta: '") + value + "' (a number in [0, 1])");
@@ -537,7 +541,7 @@ int main(int argc, char** argv) {
   }
   json += "],\"full_ba_s\":" + std::to_string(full.seconds) + ",\"K\":" + std::to_string(opt.K) +
           ",\"seeds\":" + std::to_string(opt.seeds) + ",\"not_converged\":" + std::to_string(not_converged) +
-          ",\"floor\":" + std::to_string(sp::kDefaultFloor) +
+          ",\"floor\":" + std::to_string(sp::kDefaultFloor) + ",\"exact_floor\":" + std::to_string(opt.exact_floor) +
           ",\"cost\":\"" + core::to_string(opt.cost) + "\",\"theta\":" + std::to_string(opt.theta) +
           ",\"ba_iterations\":" + std::to_string(opt.ba_iterations) + ",\"model\":\"" + json_escaped(model) + "\"}";
   std::printf("%s\n", json.c_str());
