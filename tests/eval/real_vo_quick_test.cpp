@@ -265,3 +265,51 @@ TEST(RealVoQuick, DecidingTheWindowCullsOlderPointsAtTheSameKeptFraction) {
     EXPECT_NEAR(l.map_share, 20.0, 0.1);
   }
 }
+
+// --no-keyframe-culling: the real VO keeps every keyframe it makes. On a
+// monocular KITTI 00 slice where deleting culled points makes a keyframe
+// redundant (90 % of its points seen by three others), some selector's VO
+// culls a keyframe by default; with the option no line ends with fewer
+// keyframes than it made.
+TEST(RealVoQuick, NoKeyframeCullingKeepsEveryKeyframeMade) {
+  const std::string bin = KEEPLESS_EVAL_BIN;
+  const std::string data = std::string(KEEPLESS_EVAL_DATA) + "/kitti00_first200_vamr";
+  ASSERT_TRUE(std::filesystem::exists(bin)) << bin << " is missing: build target keepless_eval";
+  if (!std::filesystem::exists(data + "/image_0/000060.png")) {
+    GTEST_SKIP() << "no KITTI 00 data at " << data << " (set KEEPLESS_EVAL_DATA_DIR)";
+  }
+  // Per run line (original and the four selectors): keyframes alive at the end, and made.
+  const auto run = [&](const std::string& extra, std::vector<std::pair<int, int>>* out) {
+    const std::string cmd = "'" + bin + "' --images '" + data + "/image_0' --calib '" + data + "/K.txt' --poses '" +
+                            data + "/poses.txt' --frames 0:60 --seeds 1 --kept-fraction 0.2 --no-ablation --defer 2 " +
+                            "--defer-refine --decide window " + extra + " 2>&1";
+    std::unique_ptr<FILE, int (*)(FILE*)> pipe(popen(cmd.c_str(), "r"), pclose);
+    ASSERT_NE(pipe, nullptr);
+    std::string all;
+    char buf[4096];
+    out->clear();
+    while (std::fgets(buf, sizeof buf, pipe.get()) != nullptr) {
+      all += buf;
+      const std::string line(buf);
+      if (line.find(" M=") == std::string::npos) continue;
+      const std::size_t at = line.find(" kfs ");
+      ASSERT_NE(at, std::string::npos) << line;
+      int alive = -1, made = -1;
+      ASSERT_EQ(std::sscanf(line.c_str() + at, " kfs %d (made %d)", &alive, &made), 2) << line;
+      out->emplace_back(alive, made);
+    }
+    const int status = pclose(pipe.release());
+    ASSERT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << all;
+    ASSERT_EQ(out->size(), 5u) << "expected original, ours, random, longest_track and anms lines:\n" << all;
+  };
+  std::vector<std::pair<int, int>> lines;
+  run("", &lines);
+  int culled = 0;
+  for (const auto& [alive, made] : lines) culled += made - alive;
+  EXPECT_GT(culled, 0);
+  run("--no-keyframe-culling", &lines);
+  for (const auto& [alive, made] : lines) {
+    EXPECT_GT(made, 0);
+    EXPECT_EQ(alive, made);
+  }
+}

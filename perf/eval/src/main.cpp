@@ -102,6 +102,8 @@ const std::vector<cli::Flag> kFlags = {
                                   "can be culled later (keepless with --scope window)"},
     {"--tracked-flags", nullptr, "the real VO sends the new keyframe's tracked flags (the points it\n"
                                  "matched in that frame), which no selector culls"},
+    {"--no-keyframe-culling", nullptr, "the real VO keeps every keyframe (ORB-SLAM's culling of a keyframe\n"
+                                       "whose points 90 % are seen by three others is off), every run alike"},
     {"--window-sizes", nullptr, "instead of the comparison: the original run of the first seed on each\n"
                                 "--trajectory, --images and --rgbd input, and the largest window it\n"
                                 "gives (keyframes, points, observations, pair arcs, unmapped keypoints)\n"
@@ -148,6 +150,7 @@ struct Args {
   bool defer_fixed = false;       // --defer-fixed (the real VO)
   bool defer_refine = false;      // --defer-refine (the real VO)
   bool decide_window = false;     // --decide window (the real VO)
+  bool keyframe_culling = true;   // --no-keyframe-culling (the real VO)
 };
 
 [[noreturn]] void fail(const std::string& msg) {
@@ -260,6 +263,7 @@ Args parse(int argc, char** argv) {
     else if (f == "--defer") a.policy.defer_keyframes = static_cast<std::uint32_t>(parse_int(f, val(), 1, 1000));
     else if (f == "--defer-fixed") a.defer_fixed = true;
     else if (f == "--defer-refine") a.defer_refine = true;
+    else if (f == "--no-keyframe-culling") a.keyframe_culling = false;
     else if (f == "--decide") {
       const std::string v = val();
       if (v != "newest" && v != "window") fail("--decide: expected newest or window, got '" + v + "'");
@@ -498,6 +502,7 @@ int main(int argc, char** argv) {
   if (a.defer_fixed) summary.settings += ", excluded points fixed in BA";
   if (a.defer_refine) summary.settings += ", excluded points refined";
   if (a.decide_window) summary.settings += ", the window's points decided";
+  if (!a.keyframe_culling) summary.settings += ", no keyframe culling";
   if (a.policy.cost_model == keepless::core::CostModel::kTrack) {
     summary.settings += ", track terms " + std::to_string(a.policy.track_terms);
   }
@@ -602,6 +607,7 @@ int main(int argc, char** argv) {
     vo.defer_fixed = a.defer_fixed;
     vo.defer_refine = a.defer_refine;
     vo.decide_window = a.decide_window;
+    vo.keyframe_culling = a.keyframe_culling;
     vo.out = a.out;
     std::string err;
     for (const auto& in : a.vo)

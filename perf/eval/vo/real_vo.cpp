@@ -1014,7 +1014,7 @@ void Vo::local_mapping(int kf) {
   if (opt_.selector != Selector::kOriginal) remove_culls(select_points(kf, local));
   local_ba(local, false);
   if (deferring()) retriangulate_excluded(local);
-  keyframe_culling(kf);
+  if (opt_.keyframe_culling) keyframe_culling(kf);
 }
 
 void Vo::initialize_rgbd(TrackedFrame& cur) {

@@ -47,6 +47,9 @@ struct RealVoOptions {
   // later and a kept fraction is F of the points new to each window plus
   // those kept before among all of the window's.
   bool decide_window = false;
+  // Keyframe culling (ORB-SLAM's: a keyframe 90 % of whose points three others
+  // see is deleted) off: culled points make keyframes look redundant.
+  bool keyframe_culling = true;
   int max_local_keyframes = 20;      // local BA / keepless window: the new keyframe and its best covisibles
   bool measure_windows = false;  // fill RealRunResult::window_sizes (window_sizes.hpp)
   // With measure_windows: replay the K = 20 windows at these capacities

@@ -91,6 +91,7 @@ bool evaluate_real_vo(const VoInput& in, const VoEvalOptions& o, std::vector<Com
     vo.defer_fixed = o.defer_fixed;
     vo.defer_refine = o.defer_refine;
     vo.decide_window = o.decide_window;
+    vo.keyframe_culling = o.keyframe_culling;
     vo.seed = o.seeds[si];
     vo.selector = Selector::kOriginal;
     const RealRunResult original = run_real_vo(seq, vo);
