@@ -102,8 +102,8 @@ const std::vector<cli::Flag> kFlags = {
                                   "can be culled later (keepless with --scope window)"},
     {"--tracked-flags", nullptr, "the real VO sends the new keyframe's tracked flags (the points it\n"
                                  "matched in that frame), which no selector culls"},
-    {"--no-keyframe-culling", nullptr, "the real VO keeps every keyframe (ORB-SLAM's culling of a keyframe\n"
-                                       "whose points 90 % are seen by three others is off), every run alike"},
+    {"--no-keyframe-culling", nullptr, "the real VO keeps every keyframe it makes (ORB-SLAM's culling of a\n"
+                                       "keyframe 90 % of whose points three others see is off), every run alike"},
     {"--window-sizes", nullptr, "instead of the comparison: the original run of the first seed on each\n"
                                 "--trajectory, --images and --rgbd input, and the largest window it\n"
                                 "gives (keyframes, points, observations, pair arcs, unmapped keypoints)\n"
