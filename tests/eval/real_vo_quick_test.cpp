@@ -137,6 +137,28 @@ TEST(RealVoQuick, FramesAreSelectedByNumberWhereverTheSequenceStarts) {
   fs::remove_all(dir);
 }
 
+// keepless_eval's output for `args` (run through the shell): all of it, the
+// run lines (" M=" in them: the original's and each selector's), the exit code.
+struct EvalOutput {
+  std::string all;
+  std::vector<std::string> runs;
+  int status = -1;
+};
+EvalOutput run_eval(const std::string& args) {
+  EvalOutput o;
+  const std::string cmd = "'" + std::string(KEEPLESS_EVAL_BIN) + "' " + args + " 2>&1";
+  std::unique_ptr<FILE, int (*)(FILE*)> pipe(popen(cmd.c_str(), "r"), pclose);
+  if (pipe == nullptr) return o;
+  char buf[4096];
+  while (std::fgets(buf, sizeof buf, pipe.get()) != nullptr) {
+    o.all += buf;
+    if (std::string(buf).find(" M=") != std::string::npos) o.runs.emplace_back(buf);
+  }
+  const int status = pclose(pipe.release());
+  o.status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return o;
+}
+
 }  // namespace
 
 // Deferred culling in the real VO (--defer T), on a monocular KITTI slice:
@@ -158,17 +180,10 @@ TEST(RealVoQuick, DeferredCullingTracksExcludedPointsAndDeletesThemByTheRule) {
   };
   // The "ours" line's counts.
   const auto run = [&](const std::string& extra, Counts* out) {
-    const std::string cmd = "'" + bin + "' --images '" + data + "/image_l' --calib '" + data + "/calib.txt' --poses '" +
-                            data + "/poses.txt' --frames 0:20 --seeds 1 --kept-fraction 0.2 --no-baselines " + extra +
-                            " 2>&1";
-    std::unique_ptr<FILE, int (*)(FILE*)> pipe(popen(cmd.c_str(), "r"), pclose);
-    ASSERT_NE(pipe, nullptr);
-    std::string all;
-    char buf[4096];
+    const EvalOutput o = run_eval("--images '" + data + "/image_l' --calib '" + data + "/calib.txt' --poses '" + data +
+                                  "/poses.txt' --frames 0:20 --seeds 1 --kept-fraction 0.2 --no-baselines " + extra);
     *out = Counts{};
-    while (std::fgets(buf, sizeof buf, pipe.get()) != nullptr) {
-      all += buf;
-      const std::string line(buf);
+    for (const std::string& line : o.runs) {
       if (line.find(" ours M=") == std::string::npos) continue;
       const auto count = [&](const char* tag, long long* v) {
         const std::size_t at = line.find(tag);
@@ -180,9 +195,8 @@ TEST(RealVoQuick, DeferredCullingTracksExcludedPointsAndDeletesThemByTheRule) {
       count("excluded matched ", &out->matched);
       count("rule violations ", &out->violations);
     }
-    const int status = pclose(pipe.release());
-    ASSERT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << all;
-    ASSERT_GE(out->culled, 0) << "no 'ours' line:\n" << all;
+    ASSERT_EQ(o.status, 0) << o.all;
+    ASSERT_GE(out->culled, 0) << "no 'ours' line:\n" << o.all;
   };
   Counts c;
   run("", &c);
@@ -221,19 +235,13 @@ TEST(RealVoQuick, DecidingTheWindowCullsOlderPointsAtTheSameKeptFraction) {
   };
   // One entry per selector line (ours and the baselines) of one seed.
   const auto run = [&](const std::string& extra, std::vector<Line>* out) {
-    const std::string cmd = "'" + bin + "' --images '" + data + "/image_l' --calib '" + data + "/calib.txt' --poses '" +
-                            data + "/poses.txt' --frames 0:20 --seeds 1 --kept-fraction 0.2 --no-ablation --defer 2 " +
-                            "--defer-refine " + extra + " 2>&1";
-    std::unique_ptr<FILE, int (*)(FILE*)> pipe(popen(cmd.c_str(), "r"), pclose);
-    ASSERT_NE(pipe, nullptr);
-    std::string all;
-    char buf[4096];
+    const EvalOutput o = run_eval("--images '" + data + "/image_l' --calib '" + data + "/calib.txt' --poses '" + data +
+                                  "/poses.txt' --frames 0:20 --seeds 1 --kept-fraction 0.2 --no-ablation --defer 2 "
+                                  "--defer-refine " + extra);
     out->clear();
-    while (std::fgets(buf, sizeof buf, pipe.get()) != nullptr) {
-      all += buf;
-      const std::string line(buf);
+    for (const std::string& line : o.runs) {
+      if (line.find(" original M=") != std::string::npos) continue;
       const std::size_t m = line.find(" M=");
-      if (m == std::string::npos || line.find(" original M=") != std::string::npos) continue;
       Line l;
       l.selector = line.substr(line.rfind(' ', m - 1) + 1, m - line.rfind(' ', m - 1) - 1);
       const auto after = [&](const char* tag) {
@@ -246,9 +254,8 @@ TEST(RealVoQuick, DecidingTheWindowCullsOlderPointsAtTheSameKeptFraction) {
       l.map_share = std::atof(after("map ").c_str());
       out->push_back(l);
     }
-    const int status = pclose(pipe.release());
-    ASSERT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << all;
-    ASSERT_EQ(out->size(), 4u) << "expected ours, random, longest_track and anms lines:\n" << all;
+    ASSERT_EQ(o.status, 0) << o.all;
+    ASSERT_EQ(out->size(), 4u) << "expected ours, random, longest_track and anms lines:\n" << o.all;
   };
   std::vector<Line> lines;
   run("", &lines);
@@ -280,27 +287,19 @@ TEST(RealVoQuick, NoKeyframeCullingKeepsEveryKeyframeMade) {
   }
   // Per run line (original and the four selectors): keyframes alive at the end, and made.
   const auto run = [&](const std::string& extra, std::vector<std::pair<int, int>>* out) {
-    const std::string cmd = "'" + bin + "' --images '" + data + "/image_0' --calib '" + data + "/K.txt' --poses '" +
-                            data + "/poses.txt' --frames 0:60 --seeds 1 --kept-fraction 0.2 --no-ablation --defer 2 " +
-                            "--defer-refine --decide window " + extra + " 2>&1";
-    std::unique_ptr<FILE, int (*)(FILE*)> pipe(popen(cmd.c_str(), "r"), pclose);
-    ASSERT_NE(pipe, nullptr);
-    std::string all;
-    char buf[4096];
+    const EvalOutput o = run_eval("--images '" + data + "/image_0' --calib '" + data + "/K.txt' --poses '" + data +
+                                  "/poses.txt' --frames 0:60 --seeds 1 --kept-fraction 0.2 --no-ablation --defer 2 "
+                                  "--defer-refine --decide window " + extra);
     out->clear();
-    while (std::fgets(buf, sizeof buf, pipe.get()) != nullptr) {
-      all += buf;
-      const std::string line(buf);
-      if (line.find(" M=") == std::string::npos) continue;
+    for (const std::string& line : o.runs) {
       const std::size_t at = line.find(" kfs ");
       ASSERT_NE(at, std::string::npos) << line;
       int alive = -1, made = -1;
       ASSERT_EQ(std::sscanf(line.c_str() + at, " kfs %d (made %d)", &alive, &made), 2) << line;
       out->emplace_back(alive, made);
     }
-    const int status = pclose(pipe.release());
-    ASSERT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << all;
-    ASSERT_EQ(out->size(), 5u) << "expected original, ours, random, longest_track and anms lines:\n" << all;
+    ASSERT_EQ(o.status, 0) << o.all;
+    ASSERT_EQ(out->size(), 5u) << "expected original, ours, random, longest_track and anms lines:\n" << o.all;
   };
   std::vector<std::pair<int, int>> lines;
   run("", &lines);
