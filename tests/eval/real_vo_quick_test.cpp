@@ -35,6 +35,32 @@ double number_after(const std::string& json, const std::string& key, bool* prese
   return end == s ? NAN : v;
 }
 
+// keepless_eval's output for `args` (run through the shell): all of it, its
+// last non-empty line (the JSON summary), the run lines (" M=" in them: the
+// original's and each selector's), the exit code.
+struct EvalOutput {
+  std::string all, last;
+  std::vector<std::string> runs;
+  int status = -1;
+};
+EvalOutput run_eval(const std::string& args) {
+  EvalOutput o;
+  const std::string cmd = "'" + std::string(KEEPLESS_EVAL_BIN) + "' " + args + " 2>&1";
+  std::unique_ptr<FILE, int (*)(FILE*)> pipe(popen(cmd.c_str(), "r"), pclose);
+  if (pipe == nullptr) return o;
+  char buf[4096];
+  while (std::fgets(buf, sizeof buf, pipe.get()) != nullptr) {
+    o.all += buf;
+    std::string line(buf);
+    if (line.find(" M=") != std::string::npos) o.runs.push_back(line);
+    while (!line.empty() && (line.back() == '\n' || line.back() == '\r')) line.pop_back();
+    if (!line.empty()) o.last = line;
+  }
+  const int status = pclose(pipe.release());
+  o.status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return o;
+}
+
 TEST(RealVoQuick, SevenScenesSliceIsTrackedAccuratelyAndReportedInFull) {
   const std::string bin = KEEPLESS_EVAL_BIN;
   const std::string data = std::string(KEEPLESS_EVAL_DATA) + "/7scenes_redkitchen_first600";
@@ -45,41 +71,30 @@ TEST(RealVoQuick, SevenScenesSliceIsTrackedAccuratelyAndReportedInFull) {
   }
   const std::string out = ::testing::TempDir() + "/real_vo_quick";
   std::filesystem::remove_all(out);
-  const std::string cmd = "'" + bin + "' --rgbd '" + data + "' --quick --frames 0:59 --out '" + out + "' 2>&1";
-  std::unique_ptr<FILE, int (*)(FILE*)> pipe(popen(cmd.c_str(), "r"), pclose);
-  ASSERT_NE(pipe, nullptr);
-  std::string all, last;
-  char buf[4096];
-  while (std::fgets(buf, sizeof buf, pipe.get()) != nullptr) {
-    all += buf;
-    std::string line(buf);
-    while (!line.empty() && (line.back() == '\n' || line.back() == '\r')) line.pop_back();
-    if (!line.empty()) last = line;
-  }
-  const int status = pclose(pipe.release());
-  ASSERT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << all;
-  ASSERT_EQ(last.rfind("{\"runs\":[{", 0), 0u) << "last line is not the JSON summary:\n" << all;
+  const EvalOutput o = run_eval("--rgbd '" + data + "' --quick --frames 0:59 --out '" + out + "'");
+  ASSERT_EQ(o.status, 0) << o.all;
+  ASSERT_EQ(o.last.rfind("{\"runs\":[{", 0), 0u) << "last line is not the JSON summary:\n" << o.all;
 
   for (const char* key : {"input", "kind", "seeds", "M", "mp_percent", "kf_percent", "ba_time_percent",
                           "ate_original_m", "ate_ours_m", "ate_ours_sd_m", "ate_random_m", "ate_longest_track_m",
                           "ate_anms_m", "better_seeds", "worse_seeds", "sqrt_obs_ratio", "frames_tracked"}) {
     bool present = false;
-    number_after(last, key, &present);
-    EXPECT_TRUE(present) << "JSON key " << key << " missing: " << last;
+    number_after(o.last, key, &present);
+    EXPECT_TRUE(present) << "JSON key " << key << " missing: " << o.last;
   }
-  EXPECT_NE(last.find("\"kind\":\"rgbd\""), std::string::npos);
-  EXPECT_NE(last.find("\"alignment\":\"se3\""), std::string::npos);
+  EXPECT_NE(o.last.find("\"kind\":\"rgbd\""), std::string::npos);
+  EXPECT_NE(o.last.find("\"alignment\":\"se3\""), std::string::npos);
   bool present = false;
-  const double frames = number_after(last, "frames", &present);
+  const double frames = number_after(o.last, "frames", &present);
   ASSERT_EQ(frames, 60.0);
-  EXPECT_GE(number_after(last, "frames_tracked_original", &present), kTrackedFraction * frames);
-  const double ate = number_after(last, "ate_original_m", &present);
+  EXPECT_GE(number_after(o.last, "frames_tracked_original", &present), kTrackedFraction * frames);
+  const double ate = number_after(o.last, "ate_original_m", &present);
   EXPECT_GT(ate, 0.0);
   EXPECT_LT(ate, kAteBoundM);
   // Every variant ran to the end and was scored.
   for (const char* key : {"ate_ours_m", "ate_random_m", "ate_longest_track_m", "ate_anms_m", "frames_tracked",
                           "mp_percent", "ba_time_percent", "sqrt_obs_ratio"}) {
-    const double v = number_after(last, key, &present);
+    const double v = number_after(o.last, key, &present);
     EXPECT_TRUE(std::isfinite(v) && v > 0) << key << " = " << v;
   }
   for (const char* svg : {"_trajectory.svg", "_keypoints.svg"}) {
@@ -111,52 +126,17 @@ TEST(RealVoQuick, FramesAreSelectedByNumberWhereverTheSequenceStarts) {
       fs::create_symlink(data + from + ext, dir + to + ext);
     }
   }
-  const auto run = [&](const std::string& frames, std::string* last) {
-    const std::string cmd = "'" + bin + "' --rgbd '" + dir + "' --quick --seeds 1 --M 100 --no-baselines " +
-                            "--no-ablation --frames " + frames + " 2>&1";
-    std::unique_ptr<FILE, int (*)(FILE*)> pipe(popen(cmd.c_str(), "r"), pclose);
-    std::string all;
-    char buf[4096];
-    while (pipe != nullptr && std::fgets(buf, sizeof buf, pipe.get()) != nullptr) {
-      all += buf;
-      std::string line(buf);
-      while (!line.empty() && line.back() == '\n') line.pop_back();
-      if (!line.empty()) *last = line;
-    }
-    const int status = pclose(pipe.release());
-    return std::make_pair(WIFEXITED(status) ? WEXITSTATUS(status) : -1, all);
+  const auto run = [&](const std::string& frames) {
+    return run_eval("--rgbd '" + dir + "' --quick --seeds 1 --M 100 --no-baselines --no-ablation --frames " + frames);
   };
-  std::string last;
-  const auto [status, all] = run("600:619", &last);
-  ASSERT_EQ(status, 0) << all;
+  const EvalOutput some = run("600:619");
+  ASSERT_EQ(some.status, 0) << some.all;
   bool present = false;
-  EXPECT_EQ(number_after(last, "frames", &present), 20.0) << last;
-  const auto [none, why] = run("0:19", &last);
-  EXPECT_EQ(none, 2) << why;
-  EXPECT_NE(why.find(dir + ": frames 0:19 select none of its frames 600..629"), std::string::npos) << why;
+  EXPECT_EQ(number_after(some.last, "frames", &present), 20.0) << some.last;
+  const EvalOutput none = run("0:19");
+  EXPECT_EQ(none.status, 2) << none.all;
+  EXPECT_NE(none.all.find(dir + ": frames 0:19 select none of its frames 600..629"), std::string::npos) << none.all;
   fs::remove_all(dir);
-}
-
-// keepless_eval's output for `args` (run through the shell): all of it, the
-// run lines (" M=" in them: the original's and each selector's), the exit code.
-struct EvalOutput {
-  std::string all;
-  std::vector<std::string> runs;
-  int status = -1;
-};
-EvalOutput run_eval(const std::string& args) {
-  EvalOutput o;
-  const std::string cmd = "'" + std::string(KEEPLESS_EVAL_BIN) + "' " + args + " 2>&1";
-  std::unique_ptr<FILE, int (*)(FILE*)> pipe(popen(cmd.c_str(), "r"), pclose);
-  if (pipe == nullptr) return o;
-  char buf[4096];
-  while (std::fgets(buf, sizeof buf, pipe.get()) != nullptr) {
-    o.all += buf;
-    if (std::string(buf).find(" M=") != std::string::npos) o.runs.emplace_back(buf);
-  }
-  const int status = pclose(pipe.release());
-  o.status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return o;
 }
 
 }  // namespace
