@@ -20,17 +20,19 @@
 # are paper's); defer: deferred culling, --defer 2; window: deferred culling
 # with refined excluded points, every selector deciding the whole local window
 # (--defer 2 --defer-refine --decide window); keepkf: window with the VO's
-# keyframe culling off (--no-keyframe-culling); authors, information: the
-# authors' and the information cost model, floor: a coverage floor of 30 points
-# per keyframe (ORB-SLAM2's minimum inliers), keepless only. Each variant's
-# flags go to OUT/[VARIANT/]flags.txt (scripts/sweep_table.py reads them).
-# track, defer, window and keepkf do not run on the synthetic back end (it sends no
-# point quality and has no deferred culling).
+# keyframe culling off (--no-keyframe-culling); countkf: window with that
+# culling counting the points a selector deleted (--keyframe-culling
+# count-culled); authors, information: the authors' and the information cost
+# model, floor: a coverage floor of 30 points per keyframe (ORB-SLAM2's minimum
+# inliers), keepless only. Each variant's flags go to OUT/[VARIANT/]flags.txt
+# (scripts/sweep_table.py reads them). track, defer, window, keepkf and countkf
+# do not run on the synthetic back end (it sends no point quality and has no
+# deferred culling).
 #
 #   scripts/eval_sweep.sh [--data-root DIR] [--fractions 0.1,0.2,0.3,0.4,0.6] [--seeds 5] [-j 2]
 #                         [--out DIR] [--only 7scenes,kitti00,kitti06,synthetic,colmap] [--bin DIR]
 #                         [--synthetic-fractions 0.2,0.4]
-#                         [--variants paper,maturity,track,defer,window,keepkf,authors,information,floor]
+#                         [--variants paper,maturity,track,defer,window,keepkf,countkf,authors,information,floor]
 #                         [--eval-flags "FLAGS"] [--resume]
 #
 # --resume keeps OUT's finished jobs (a run directory with its runs.csv, the
@@ -62,7 +64,7 @@ while (($#)); do
     --variants) variants=$2; shift 2 ;;
     --eval-flags) extra=$2; shift 2 ;;
     --resume) resume=1; shift ;;
-    -h|--help) sed -n 2,37p "$0"; exit 0 ;;
+    -h|--help) sed -n 2,39p "$0"; exit 0 ;;
     *) echo "eval_sweep: unknown option $1" >&2; exit 2 ;;
   esac
 done
@@ -105,10 +107,11 @@ variant_flags() {
     defer) echo "|--defer 2|-|synthetic" ;;
     window) echo "|--defer 2 --defer-refine --decide window|-|synthetic" ;;
     keepkf) echo "|--defer 2 --defer-refine --decide window --no-keyframe-culling|-|synthetic" ;;
+    countkf) echo "|--defer 2 --defer-refine --decide window --keyframe-culling count-culled|-|synthetic" ;;
     authors) echo "|--cost authors --no-baselines|--cost authors|" ;;
     information) echo "|--cost information --no-baselines|--cost information|" ;;
     floor) echo "|--floor 30 --no-baselines|-|" ;;
-    *) echo "eval_sweep: unknown variant $1 (paper, maturity, track, defer, window, keepkf, authors, information, floor)" >&2
+    *) echo "eval_sweep: unknown variant $1 (paper, maturity, track, defer, window, keepkf, countkf, authors, information, floor)" >&2
        return 1 ;;
   esac
 }

@@ -355,6 +355,8 @@ TEST(KeeplessEval, RejectsBadFlagsWithStatus2) {
   EXPECT_EQ(run("--cost cheap --bal /nonexistent").status, 2);
   EXPECT_EQ(run("--floor -1 --bal /nonexistent").status, 2);
   EXPECT_EQ(run("--theta 1.5 --bal /nonexistent").status, 2);
+  EXPECT_EQ(run("--decide oldest --bal /nonexistent").status, 2);
+  EXPECT_EQ(run("--keyframe-culling sometimes --bal /nonexistent").status, 2);
   EXPECT_EQ(run("--M abc --bal /nonexistent").status, 2);
   EXPECT_EQ(run("--kept-fraction 1.5 --bal /nonexistent").status, 2);
   EXPECT_EQ(run("--M 100 --kept-fraction 0.3 --bal /nonexistent").status, 2);

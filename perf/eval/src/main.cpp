@@ -102,8 +102,12 @@ const std::vector<cli::Flag> kFlags = {
                                   "can be culled later (keepless with --scope window)"},
     {"--tracked-flags", nullptr, "the real VO sends the new keyframe's tracked flags (the points it\n"
                                  "matched in that frame), which no selector culls"},
-    {"--no-keyframe-culling", nullptr, "the real VO keeps every keyframe it makes (ORB-SLAM's culling of a\n"
-                                       "keyframe 90 % of whose points three others see is off), every run alike"},
+    {"--keyframe-culling", "on|off|count-culled",
+     "the real VO's culling of a keyframe 90 % of whose points three others\n"
+     "see (ORB-SLAM's), every run alike: on (default); off, every keyframe it\n"
+     "makes stays; count-culled, the test also counts each point a selector\n"
+     "deleted, with the observations it had then"},
+    {"--no-keyframe-culling", nullptr, "--keyframe-culling off"},
     {"--window-sizes", nullptr, "instead of the comparison: the original run of the first seed on each\n"
                                 "--trajectory, --images and --rgbd input, and the largest window it\n"
                                 "gives (keyframes, points, observations, pair arcs, unmapped keypoints)\n"
@@ -150,7 +154,7 @@ struct Args {
   bool defer_fixed = false;       // --defer-fixed (the real VO)
   bool defer_refine = false;      // --defer-refine (the real VO)
   bool decide_window = false;     // --decide window (the real VO)
-  bool keyframe_culling = true;   // --no-keyframe-culling (the real VO)
+  ke::vo::KeyframeCulling keyframe_culling{};  // --keyframe-culling (the real VO)
 };
 
 [[noreturn]] void fail(const std::string& msg) {
@@ -263,7 +267,15 @@ Args parse(int argc, char** argv) {
     else if (f == "--defer") a.policy.defer_keyframes = static_cast<std::uint32_t>(parse_int(f, val(), 1, 1000));
     else if (f == "--defer-fixed") a.defer_fixed = true;
     else if (f == "--defer-refine") a.defer_refine = true;
-    else if (f == "--no-keyframe-culling") a.keyframe_culling = false;
+    else if (f == "--no-keyframe-culling") a.keyframe_culling = ke::vo::KeyframeCulling::kOff;
+    else if (f == "--keyframe-culling") {
+      const std::string v = val();
+      using KeyframeCulling = ke::vo::KeyframeCulling;
+      if (v == "on") a.keyframe_culling = KeyframeCulling::kOn;
+      else if (v == "off") a.keyframe_culling = KeyframeCulling::kOff;
+      else if (v == "count-culled") a.keyframe_culling = KeyframeCulling::kCountCulled;
+      else fail("--keyframe-culling: expected on, off or count-culled, got '" + v + "'");
+    }
     else if (f == "--decide") {
       const std::string v = val();
       if (v != "newest" && v != "window") fail("--decide: expected newest or window, got '" + v + "'");
@@ -502,7 +514,10 @@ int main(int argc, char** argv) {
   if (a.defer_fixed) summary.settings += ", excluded points fixed in BA";
   if (a.defer_refine) summary.settings += ", excluded points refined";
   if (a.decide_window) summary.settings += ", the window's points decided";
-  if (!a.keyframe_culling) summary.settings += ", no keyframe culling";
+  if (a.keyframe_culling == ke::vo::KeyframeCulling::kOff) summary.settings += ", no keyframe culling";
+  if (a.keyframe_culling == ke::vo::KeyframeCulling::kCountCulled) {
+    summary.settings += ", keyframe culling counts culled points";
+  }
   if (a.policy.cost_model == keepless::core::CostModel::kTrack) {
     summary.settings += ", track terms " + std::to_string(a.policy.track_terms);
   }

@@ -171,6 +171,7 @@ class Vo {
   // The points the selector culls at keyframe kf (none when its window is refused).
   std::vector<core::PointId> select_points(int kf, const std::vector<int>& local);
   void remove_culls(const std::vector<core::PointId>& culls);
+  void delete_cull(int p);
   // fix_first: hold local.front() too (the two-view start's gauge).
   void local_ba(const std::vector<int>& local, bool fix_first);
   bool deferring() const { return opt_.params.defer_keyframes > 0 && opt_.selector != Selector::kOriginal; }
@@ -815,7 +816,7 @@ std::vector<core::PointId> Vo::select_points(int kf, const std::vector<int>& loc
 // the window was refused and nothing was culled, so no deletion is late).
 void Vo::remove_culls(const std::vector<core::PointId>& culls) {
   if (!deferring()) {
-    for (core::PointId id : culls) map_.set_bad(static_cast<int>(id));
+    for (core::PointId id : culls) delete_cull(static_cast<int>(id));
     return;
   }
   // Out of local BA now, out of the map when the rule says (core::DeferredCulls).
@@ -830,13 +831,21 @@ void Vo::remove_culls(const std::vector<core::PointId>& culls) {
     MapPoint& m = map_.points[static_cast<std::size_t>(id)];
     // Not before T unmatched keyframes (a refused cull, never excluded, goes at once).
     if (m.excluded && !m.bad && now - m.matched_tick < opt_.params.defer_keyframes) ++result_.defer_rule_violations;
-    if (!m.bad) map_.set_bad(static_cast<int>(id));
+    delete_cull(static_cast<int>(id));
   }
   // Nor after: no excluded point the map still holds has gone T unmatched keyframes.
   for (const MapPoint& m : map_.points) {
     if (m.excluded && !m.bad && now - m.matched_tick >= opt_.params.defer_keyframes) ++result_.defer_rule_violations;
   }
   result_.points_deleted_deferred += static_cast<std::int64_t>(deleted.size());
+}
+
+void Vo::delete_cull(int p) {
+  if (opt_.keyframe_culling == KeyframeCulling::kCountCulled) {
+    map_.cull_remembered(p);
+  } else {
+    map_.set_bad(p);
+  }
 }
 
 void Vo::local_ba(const std::vector<int>& local, bool fix_first) {
@@ -981,26 +990,8 @@ void Vo::retriangulate_excluded(const std::vector<int>& local) {
 }
 
 void Vo::keyframe_culling(int kf) {
-  const int th_obs = 3;
   for (const auto& [k, w] : map_.covisibles(kf, 15)) {
-    if (k == 0 || k == kf) continue;
-    const KeyFrame& f = map_.kfs[static_cast<std::size_t>(k)];
-    int points = 0, redundant = 0;
-    for (std::size_t i = 0; i < f.mp.size(); ++i) {
-      const int p = f.mp[i];
-      if (p < 0 || map_.points[static_cast<std::size_t>(p)].bad) continue;
-      if (seq_.rgbd && (f.f.depth[i] <= 0 || f.f.depth[i] > cam_.close_depth)) continue;
-      ++points;
-      if (map_.weighted_observations(p) <= th_obs) continue;
-      const int level = f.f.keys[i].octave;
-      int seen = 0;
-      for (const auto& [k2, j] : map_.points[static_cast<std::size_t>(p)].obs) {
-        if (k2 == k) continue;
-        if (map_.kfs[static_cast<std::size_t>(k2)].f.keys[static_cast<std::size_t>(j)].octave <= level + 1 && ++seen >= th_obs) break;
-      }
-      if (seen >= th_obs) ++redundant;
-    }
-    if (points > 0 && redundant > 0.9 * points) map_.cull_keyframe(k);
+    if (k != 0 && k != kf && map_.redundant(k, seq_.rgbd ? cam_.close_depth : 0)) map_.cull_keyframe(k);
   }
 }
 
@@ -1014,7 +1005,7 @@ void Vo::local_mapping(int kf) {
   if (opt_.selector != Selector::kOriginal) remove_culls(select_points(kf, local));
   local_ba(local, false);
   if (deferring()) retriangulate_excluded(local);
-  if (opt_.keyframe_culling) keyframe_culling(kf);
+  if (opt_.keyframe_culling != KeyframeCulling::kOff) keyframe_culling(kf);
 }
 
 void Vo::initialize_rgbd(TrackedFrame& cur) {

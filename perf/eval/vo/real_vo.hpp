@@ -21,6 +21,7 @@ namespace keepless::eval::vo {
 // fraction (params.budget) every selector keeps the count core::FractionBudget
 // gives on its own map: F of the points new to it plus those it kept before.
 enum class Selector : std::uint8_t { kOriginal, kKeepless, kRandom, kLongestTrack, kAnms };
+enum class KeyframeCulling : std::uint8_t { kOn, kOff, kCountCulled };
 const char* to_string(Selector s);
 
 struct RealVoOptions {
@@ -48,8 +49,10 @@ struct RealVoOptions {
   // those kept before among all of the window's.
   bool decide_window = false;
   // Keyframe culling (ORB-SLAM's: a keyframe 90 % of whose points three others
-  // see is deleted) off: culled points make keyframes look redundant.
-  bool keyframe_culling = true;
+  // see is deleted). kOff: never; culled points make keyframes look redundant.
+  // kCountCulled: the test also counts each point the selector deleted, with
+  // the observations it had then, so culling points does not cull keyframes.
+  KeyframeCulling keyframe_culling = KeyframeCulling::kOn;
   int max_local_keyframes = 20;      // local BA / keepless window: the new keyframe and its best covisibles
   bool measure_windows = false;  // fill RealRunResult::window_sizes (window_sizes.hpp)
   // With measure_windows: replay the K = 20 windows at these capacities

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "keepless/core/config.hpp"
+#include "real_vo.hpp"
 #include "run_record.hpp"
 #include "window_sizes.hpp"
 
@@ -35,7 +36,7 @@ struct VoEvalOptions {
   bool defer_fixed = false;    // RealVoOptions::defer_fixed
   bool defer_refine = false;   // RealVoOptions::defer_refine
   bool decide_window = false;  // RealVoOptions::decide_window (keepless with scope window)
-  bool keyframe_culling = true;  // RealVoOptions::keyframe_culling
+  KeyframeCulling keyframe_culling = KeyframeCulling::kOn;  // RealVoOptions::keyframe_culling
   std::string out;  // non-empty: NAME_trajectory.svg and NAME_keypoints.svg there
 };
 

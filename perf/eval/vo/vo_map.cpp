@@ -48,6 +48,46 @@ void Map::set_bad(int p) {
   m.obs.clear();
 }
 
+void Map::cull_remembered(int p) {
+  MapPoint& m = points[static_cast<std::size_t>(p)];
+  if (m.bad) return;
+  m.culled_obs = m.obs;
+  for (const auto& o : m.obs) kfs[static_cast<std::size_t>(o.first)].culled.emplace_back(o.second, p);
+  set_bad(p);
+}
+
+bool Map::redundant(int kf, double close_depth) const {
+  const int th_obs = 3;
+  const KeyFrame& f = kfs[static_cast<std::size_t>(kf)];
+  int n = 0, redundant = 0;
+  const auto count = [&](std::size_t i, const std::vector<std::pair<int, int>>& obs) {
+    if (close_depth > 0 && (f.f.depth[i] <= 0 || f.f.depth[i] > close_depth)) return;
+    ++n;
+    int weighted = 0;  // weighted_observations, over the keyframes still alive
+    for (const auto& [k2, j] : obs) {
+      const KeyFrame& g = kfs[static_cast<std::size_t>(k2)];
+      if (!g.bad) weighted += g.f.ur[static_cast<std::size_t>(j)] >= 0 ? 2 : 1;
+    }
+    if (weighted <= th_obs) return;
+    const int level = f.f.keys[i].octave;
+    int seen = 0;
+    for (const auto& [k2, j] : obs) {
+      const KeyFrame& g = kfs[static_cast<std::size_t>(k2)];
+      if (k2 == kf || g.bad) continue;
+      if (g.f.keys[static_cast<std::size_t>(j)].octave <= level + 1 && ++seen >= th_obs) break;
+    }
+    if (seen >= th_obs) ++redundant;
+  };
+  for (std::size_t i = 0; i < f.mp.size(); ++i) {
+    const int p = f.mp[i];
+    if (p >= 0 && !points[static_cast<std::size_t>(p)].bad) count(i, points[static_cast<std::size_t>(p)].obs);
+  }
+  for (const auto& [i, p] : f.culled) {  // unless the keypoint has an alive point again
+    if (f.mp[static_cast<std::size_t>(i)] < 0) count(static_cast<std::size_t>(i), points[static_cast<std::size_t>(p)].culled_obs);
+  }
+  return n > 0 && redundant > 0.9 * n;
+}
+
 void Map::replace(int p, int by) {
   if (p == by) return;
   MapPoint& m = points[static_cast<std::size_t>(p)];

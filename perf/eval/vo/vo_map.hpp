@@ -32,6 +32,8 @@ struct MapPoint {
   // The deferral clock's tick at its exclusion or last match since, as the VO
   // records it: the rule's deletions are checked against it.
   std::uint64_t matched_tick = 0;
+  // Deleted by the selector (KeyframeCulling::kCountCulled): its observations then.
+  std::vector<std::pair<int, int>> culled_obs;
 };
 
 struct KeyFrame {
@@ -42,6 +44,9 @@ struct KeyFrame {
   // Per keypoint: the tracker matched its map point in the frame that became
   // this keyframe (before the keyframe's own new points were made).
   std::vector<std::uint8_t> tracked;
+  // (keypoint, point) for each point the selector deleted while this keyframe
+  // observed it (KeyframeCulling::kCountCulled).
+  std::vector<std::pair<int, int>> culled;
   bool bad = false;
   int parent = -1;                                          // set when culled
   Eigen::Isometry3d T_cp = Eigen::Isometry3d::Identity();  // pose relative to the parent then
@@ -58,6 +63,8 @@ class Map {
   // ORB-SLAM2's EraseObservation: a point left with <= 2 observations dies.
   void erase_observation(int p, int kf);
   void set_bad(int p);
+  // set_bad, remembering p's observations in culled_obs and its keyframes' culled.
+  void cull_remembered(int p);
   void replace(int p, int by);  // p's observations move to `by`
   int resolve(int p) const;     // follows replacements; -1 if bad
   // ORB-SLAM2's Observations(): an RGB-D observation counts twice.
@@ -66,6 +73,12 @@ class Map {
   // Keyframes sharing >= min_weight points with kf, by weight then index.
   std::vector<std::pair<int, int>> covisibles(int kf, int min_weight) const;
   void cull_keyframe(int kf);  // parent = best covisible; observations erased
+  // ORB-SLAM2's KeyFrameCulling test: more than 90 % of kf's points are seen
+  // by at least three other keyframes at the same or a finer scale. Its points
+  // are the alive ones and those deleted by cull_remembered, with the
+  // observations they had then. close_depth > 0 (RGB-D): only keypoints with
+  // a depth up to it count.
+  bool redundant(int kf, double close_depth) const;
   // The alive points the keyframes observe, each once, in order of first sight.
   std::vector<int> points_of(const std::vector<int>& keyframes) const;
   int alive_points() const;
