@@ -126,8 +126,10 @@ for variant in "${variant_list[@]}"; do
   IFS='|' read -r _ eval_flags maps_flags skips <<< "$vf"
   vdir=$(variant_dir "$variant")
   mkdir -p "$vdir/runs"
-  # The variant's flags beside its runs: the one record of what it is.
-  printf 'eval: %s\ncolmap: %s\n' "$eval_flags" "$maps_flags" > "$vdir/flags.txt"
+  # The variant's flags beside its runs (--eval-flags too): the one record of what it is.
+  line=$eval_flags
+  [ -z "$extra" ] || line="${line:+$line }$extra"
+  printf 'eval: %s\ncolmap: %s\n' "$line" "$maps_flags" > "$vdir/flags.txt"
   for entry in "${inputs[@]}"; do
     name=${entry%%|*}
     selected "$name" || continue

@@ -18,10 +18,11 @@ for need in kitti06_first51_niconielsen/calib.txt evo/freiburg1_xyz-groundtruth.
   fi
 done
 out=$(mktemp -d)
+size="--frames 0:15 --max-keyframes 12 --keypoints 300"  # --eval-flags: every variant's flags.txt records them
 trap 'rm -rf "$out"' EXIT
 "$root/scripts/eval_sweep.sh" --bin "$bin" --data-root "$data" --only kitti06,synthetic_tum --seeds 1 \
   --fractions 0.2,0.4 --synthetic-fractions 0.4 --variants paper,track,authors,information,floor \
-  --eval-flags "--frames 0:15 --max-keyframes 12 --keypoints 300" -j 2 --out "$out"
+  --eval-flags "$size" -j 2 --out "$out"
 
 fail() { echo "eval_sweep_test: $*" >&2; exit 1; }
 # Every variant on both inputs but track, on KITTI 06 only.
@@ -53,11 +54,13 @@ for cost in track authors information; do
   grep -q "cost $cost" "$out/$cost/meta.txt" || fail "$cost: meta.txt does not say cost $cost"
 done
 grep -q "coverage floor 30" "$out/floor/meta.txt" || fail "floor: meta.txt does not say coverage floor 30"
-grep -qx "eval: --floor 30 --no-baselines" "$out/floor/flags.txt" || fail "floor: flags.txt does not hold its flags"
+grep -qx "eval: --floor 30 --no-baselines $size" "$out/floor/flags.txt" || fail "floor: flags.txt does not hold its flags"
+grep -qx "eval: $size" "$out/paper/flags.txt" || fail "paper: flags.txt does not hold the --eval-flags"
 # sweep_table.py labels the rows from flags.txt: floor's keepless rows, no baseline of its own.
 condensed=$("$root/scripts/sweep_table.py" "$out" --condensed)
-grep -q "^| \`--floor 30\` | 0.4 | " <<< "$condensed" || fail "sweep_table: no --floor 30 row"
-grep -q "^| \`--floor 30\` | .* | – | – | – |$" <<< "$condensed" || fail "sweep_table: floor has baseline cells"
-grep -q "^| fr1_xyz (tum) | [0-9.e-]* | \`--floor 30\` | 0.4 | " <<< "$condensed" ||
+floor="\`--floor 30 $size\`"
+grep -q "^| $floor | 0.4 | " <<< "$condensed" || fail "sweep_table: no --floor 30 row"
+grep -q "^| $floor | .* | – | – | – |$" <<< "$condensed" || fail "sweep_table: floor has baseline cells"
+grep -q "^| fr1_xyz (tum) | [0-9.e-]* | $floor | 0.4 | " <<< "$condensed" ||
   fail "sweep_table: no synthetic fr1_xyz row for floor"
 echo "eval_sweep_test: ok"
