@@ -57,6 +57,9 @@ grep -q "coverage floor 30" "$out/floor/meta.txt" || fail "floor: meta.txt does 
 grep -qx "eval: --floor 30 --no-baselines $size" "$out/floor/flags.txt" || fail "floor: flags.txt does not hold its flags"
 grep -qx "eval: $size" "$out/paper/flags.txt" || fail "paper: flags.txt does not hold the --eval-flags"
 # sweep_table.py labels the rows from flags.txt: floor's keepless rows, no baseline of its own.
+full=$("$root/scripts/sweep_table.py" "$out")
+grep -q "^ATE against local-BA observations, .*: correlation of the logs -\?[0-9.]* over [0-9]* runs.$" <<< "$full" ||
+  fail "sweep_table: no correlation line"
 condensed=$("$root/scripts/sweep_table.py" "$out" --condensed)
 floor="\`--floor 30 $size\`"
 grep -q "^| $floor | 0.4 | " <<< "$condensed" || fail "sweep_table: no --floor 30 row"
