@@ -3,7 +3,7 @@
 //
 //   keepless_maps_bench [--data DIR] [--colmap BIN] [--M 30,100,200 | --keep-fraction 0.1,0.3] [--K 20]
 //                       [--seeds 5] [--work DIR] [--cost paper|authors|information|track] [--theta 0.5]
-//                       [--model DIR --poses FILE] [--ba-iterations 100] [--exact-floor 30]
+//                       [--model DIR --poses FILE] [--ba-iterations 100] [--exact-floor 30] [--tie-seeds 0]
 //
 // On the shared fixture (DIR/colmap_kitti06_first51, 51 KITTI 06 images; or
 // --model, a COLMAP model of KITTI frames, with their --poses):
@@ -15,7 +15,9 @@
 // whose count is nearest); then keepless_exact, the whole model at exactly
 // K points (F x the model's points, or replay's count under --M) with every
 // image's floor, with longest-track-first at K and the filter nearest K
-// (rows *_exact). Each sparsified model is bundle-adjusted the same
+// (rows *_exact); with --tie-seeds N, those two rules again over N
+// relabellings of the points, whose ids decide their ties (rows
+// *_exact_ties, mean±sd). Each sparsified model is bundle-adjusted the same
 // way. Printed per row: points kept, min observations per image, BA time
 // and termination, camera-centre deviation from the full solution (max and
 // RMS, same gauge), and ATE (RMS) against the KITTI poses after the
@@ -73,6 +75,7 @@ struct Options {
   double theta = core::Params{}.theta;             // keepless's keep threshold (as keepless_sparsify --theta)
   std::uint64_t ba_iterations = 100;               // bundle_adjuster's limit (COLMAP's default)
   std::uint32_t exact_floor = sp::kDefaultFloor;   // observations per image the exact rows keep at least
+  int tie_seeds = 0;                               // relabellings for the *_exact_ties rows
 };
 
 struct Ba {
@@ -214,6 +217,54 @@ std::vector<std::int64_t> parse_list(const char* s) {
   return v;
 }
 
+// The model's points under one labelling: ids as read (seed 0) or permuted
+// by a seeded shuffle. Which points tie in an order (the network's per-pair
+// tie order, longest-track-first's equal lengths) is decided by the ids
+// alone, so relabelled runs show how far the ties move a figure.
+struct Labelled {
+  io::Keyframes kfs;                               // image-name order, metric
+  std::vector<std::vector<core::PointId>> images;  // each keyframe's observed point ids
+  std::vector<std::uint64_t> ids;                  // by point index
+  std::vector<std::size_t> longest;                // point indices, longest track first (ties: lower id)
+};
+
+Labelled label(const io::ColmapModel& original, const io::Similarity& sim, bool unmapped, int seed) {
+  io::ColmapModel m = original;
+  Labelled l;
+  l.ids.resize(m.points.size());
+  if (seed == 0) {
+    for (std::size_t i = 0; i < l.ids.size(); ++i) l.ids[i] = m.points[i].id;
+  } else {
+    std::iota(l.ids.begin(), l.ids.end(), std::uint64_t{1});
+    std::mt19937_64 rng(0x5eed0000u + static_cast<std::uint64_t>(seed));  // not the random baseline's stream
+    std::shuffle(l.ids.begin(), l.ids.end(), rng);
+    std::map<std::uint64_t, std::uint64_t> relabel;
+    for (std::size_t i = 0; i < l.ids.size(); ++i) relabel[m.points[i].id] = l.ids[i];
+    for (io::ColmapPoint3D& p : m.points) p.id = relabel[p.id];
+    for (io::ColmapImage& im : m.images) {
+      for (io::ColmapPoint2D& p : im.points2D) {
+        if (p.point3D_id != io::kNoPoint3D) p.point3D_id = relabel[p.point3D_id];
+      }
+    }
+  }
+  l.kfs = io::keyframes_from_colmap(m, io::KeyframeOrder::kName, sim, unmapped);
+  std::map<std::uint32_t, const io::ColmapImage*> by_id;
+  for (const io::ColmapImage& im : m.images) by_id[im.id] = &im;
+  for (const core::Keyframe& kf : l.kfs.file.keyframes) {
+    auto& ids = l.images.emplace_back();
+    for (const io::ColmapPoint2D& p : by_id[static_cast<std::uint32_t>(kf.id)]->points2D) {
+      if (p.point3D_id != io::kNoPoint3D) ids.push_back(p.point3D_id);
+    }
+  }
+  l.longest.resize(m.points.size());
+  std::iota(l.longest.begin(), l.longest.end(), 0);
+  std::stable_sort(l.longest.begin(), l.longest.end(), [&](std::size_t x, std::size_t y) {
+    const auto& p = m.points;
+    return p[x].track.size() != p[y].track.size() ? p[x].track.size() > p[y].track.size() : l.ids[x] < l.ids[y];
+  });
+  return l;
+}
+
 struct Bench {
   Options opt;
   io::ColmapModel original;
@@ -238,8 +289,7 @@ struct Bench {
     return r;
   }
 
-  std::vector<bool> keepless_culls(sp::Mode mode, std::int64_t M, double fraction, const io::Keyframes& kfs,
-                                   const std::vector<std::vector<core::PointId>>& images) {
+  std::vector<bool> keepless_culls(sp::Mode mode, std::int64_t M, double fraction, const Labelled& l) {
     core::Params params;
     params.pair_capacity = std::max<std::int64_t>(M, 1);
     if (std::isfinite(fraction)) params.budget = {core::BudgetKind::kFraction, 0, fraction};
@@ -248,20 +298,14 @@ struct Bench {
     params.image_width = static_cast<std::int32_t>(original.cameras.front().width);
     params.image_height = static_cast<std::int32_t>(original.cameras.front().height);
     sp::ModeResult r;
-    if (sp::decide(kfs.file, mode, params, opt.K, &r) != core::Status::kOk) die("decide failed");
-    sp::apply_floor(images, sp::kDefaultFloor, &r.decisions);
-    std::vector<bool> culled(original.points.size());
-    for (std::size_t i = 0; i < culled.size(); ++i) {
-      const std::int64_t s = sp::find_decision(r.decisions, original.points[i].id);
-      culled[i] = s >= 0 && r.decisions[s].verdict == core::Verdict::kCull;
-    }
-    return culled;
+    if (sp::decide(l.kfs.file, mode, params, opt.K, &r) != core::Status::kOk) die("decide failed");
+    sp::apply_floor(l.images, sp::kDefaultFloor, &r.decisions);
+    return culls_of(r.decisions, l);
   }
 
   // The whole model at exactly `count` points with every image's floor
   // (sparsify::keep_exactly on one budgeted whole-model decision).
-  std::vector<bool> exact_culls(std::uint64_t count, const io::Keyframes& kfs,
-                                const std::vector<std::vector<core::PointId>>& images) {
+  std::vector<bool> exact_culls(std::uint64_t count, const Labelled& l) {
     core::Params params;
     params.budget = {core::BudgetKind::kPoints, count, 0.0};
     params.cost_model = opt.cost;
@@ -269,15 +313,20 @@ struct Bench {
     params.image_width = static_cast<std::int32_t>(original.cameras.front().width);
     params.image_height = static_cast<std::int32_t>(original.cameras.front().height);
     sp::ModeResult r;
-    if (sp::decide(kfs.file, sp::Mode::kWhole, params, opt.K, &r) != core::Status::kOk) die("decide failed");
-    const sp::ExactCount e = sp::keep_exactly(images, opt.exact_floor, count, r.thresholds, &r.decisions);
+    if (sp::decide(l.kfs.file, sp::Mode::kWhole, params, opt.K, &r) != core::Status::kOk) die("decide failed");
+    const sp::ExactCount e = sp::keep_exactly(l.images, opt.exact_floor, count, r.thresholds, &r.decisions);
     std::printf("exact whole: %llu kept (%llu by the order, %u by the floor)%s\n",
                 static_cast<unsigned long long>(e.kept), static_cast<unsigned long long>(e.from_order), e.restored,
                 e.floor_fits ? "" : ": the floor alone keeps more");
-    std::vector<bool> culled(original.points.size());
+    return culls_of(r.decisions, l);
+  }
+
+  // Which of the model's points (by index) `decisions` cull.
+  std::vector<bool> culls_of(const std::vector<core::PointDecision>& decisions, const Labelled& l) const {
+    std::vector<bool> culled(l.ids.size());
     for (std::size_t i = 0; i < culled.size(); ++i) {
-      const std::int64_t s = sp::find_decision(r.decisions, original.points[i].id);
-      culled[i] = s >= 0 && r.decisions[s].verdict == core::Verdict::kCull;
+      const std::int64_t s = sp::find_decision(decisions, l.ids[i]);
+      culled[i] = s >= 0 && decisions[s].verdict == core::Verdict::kCull;
     }
     return culled;
   }
@@ -328,6 +377,9 @@ int main(int argc, char** argv) {
                                "COLMAP's; raise it where the full model does not converge)"},
       {"--exact-floor", "L", "observations every image keeps in the keepless_exact rows, taken from\n"
                              "within the count (default 30, COLMAP's minimum inliers to register)"},
+      {"--tie-seeds", "N", "also the keepless_exact and longest_track_exact rules over N relabellings\n"
+                           "of the points (ids shuffled by seeds 1..N; rows *_exact_ties, mean±sd):\n"
+                           "how far the orders' ties move the figures (default 0: off)"},
   };
   const std::string help =
       cli::usage("usage: keepless_maps_bench [options]", flags,
@@ -373,6 +425,7 @@ int main(int argc, char** argv) {
     else if (f == "--work") opt.work = value;
     else if (f == "--ba-iterations") opt.ba_iterations = count(1, 100000);
     else if (f == "--exact-floor") opt.exact_floor = static_cast<std::uint32_t>(count(0, 1000000));
+    else if (f == "--tie-seeds") opt.tie_seeds = static_cast<int>(count(0, 1000));
     else if (f == "--theta") {
       if (!core::parse_finite_double(value, &opt.theta) || !(opt.theta >= 0 && opt.theta <= 1)) {
         return cli::usage_error(kTool, std::string("bad value for --theta: '") + value + "' (a number in [0, 1])");
@@ -414,27 +467,11 @@ int main(int argc, char** argv) {
               b.original.points.size(), full.seconds, full.converged ? "converged" : "NOT converged",
               ate(b.full, b.gt), ate(b.original, b.gt), moved.max);
 
-  // Keyframes (image-name order, metric) and each image's observations.
-  const io::Keyframes kfs = io::keyframes_from_colmap(b.original, io::KeyframeOrder::kName, b.sim,
-                                                      opt.cost == core::CostModel::kAuthors);
-  std::vector<std::vector<core::PointId>> images;
-  {
-    std::map<std::uint32_t, const io::ColmapImage*> by_id;
-    for (const io::ColmapImage& im : b.original.images) by_id[im.id] = &im;
-    for (const core::Keyframe& kf : kfs.file.keyframes) {
-      auto& ids = images.emplace_back();
-      for (const io::ColmapPoint2D& p : by_id[static_cast<std::uint32_t>(kf.id)]->points2D) {
-        if (p.point3D_id != io::kNoPoint3D) ids.push_back(p.point3D_id);
-      }
-    }
-  }
-  // Longest track first (ties: lower id).
-  std::vector<std::size_t> longest(b.original.points.size());
-  std::iota(longest.begin(), longest.end(), 0);
-  std::stable_sort(longest.begin(), longest.end(), [&](std::size_t x, std::size_t y) {
-    const auto& p = b.original.points;
-    return p[x].track.size() != p[y].track.size() ? p[x].track.size() > p[y].track.size() : p[x].id < p[y].id;
-  });
+  // The points as read, and under --tie-seeds relabellings.
+  const bool unmapped = opt.cost == core::CostModel::kAuthors;
+  const Labelled as_read = label(b.original, b.sim, unmapped, 0);
+  std::vector<Labelled> relabelled;
+  for (int seed = 1; seed <= opt.tie_seeds; ++seed) relabelled.push_back(label(b.original, b.sim, unmapped, seed));
   // COLMAP's point_filtering: the count each --min_track_len leaves, from 2
   // until it keeps under 2 % of the points (a longer sequence has longer tracks).
   std::map<int, std::uint64_t> filter_count;
@@ -454,26 +491,48 @@ int main(int argc, char** argv) {
 
   std::printf("%-22s %5s %7s %7s %8s %-5s %10s %10s %8s\n", "method", "M", "points", "min_obs", "BA_s", "conv",
               "dev_max_m", "dev_rms_m", "ATE_m");
-  std::vector<Row> rows;
   std::string json = "{\"rows\":[";
   int not_converged = 0;
   double fraction = NAN;  // the operating point's keep fraction (NaN: an M)
+  // A row of the summary; the *_sd_m are 0 but for the rows over seeds.
   const auto add_json = [&](const std::string& method, std::int64_t M, std::uint64_t points, double min_obs,
-                            double ba_s, double dev_max, double dev_rms, double ate_m, double ate_sd,
-                            int converged, int failed, double fraction) {
-    char line[640];
+                            double ba_s, Stat dev_max, Stat dev_rms, Stat ate_m, int converged, int failed) {
+    char line[768];
     std::snprintf(line, sizeof line,
                   "%s{\"method\":\"%s\",\"M\":%" PRId64 ",\"points\":%" PRIu64
                   ",\"min_obs\":%.1f,\"ba_s\":%.3f,\"dev_max_m\":%.5f,\"dev_rms_m\":%.5f,\"ate_m\":%.5f,"
-                  "\"ate_sd_m\":%.5f,\"converged\":%d,\"failed\":%d,\"keep_fraction\":%s}",
-                  json.back() == '[' ? "" : ",", method.c_str(), M, points, min_obs, ba_s, dev_max, dev_rms, ate_m,
-                  ate_sd, converged, failed, std::isfinite(fraction) ? std::to_string(fraction).c_str() : "null");
+                  "\"ate_sd_m\":%.5f,\"dev_max_sd_m\":%.5f,\"dev_rms_sd_m\":%.5f,\"converged\":%d,\"failed\":%d,"
+                  "\"keep_fraction\":%s}",
+                  json.back() == '[' ? "" : ",", method.c_str(), M, points, min_obs, ba_s, dev_max.mean, dev_rms.mean,
+                  ate_m.mean, ate_m.sd, dev_max.sd, dev_rms.sd, converged, failed,
+                  std::isfinite(fraction) ? std::to_string(fraction).c_str() : "null");
     json += line;
     not_converged += failed;
   };
   const auto add_row = [&](const Row& r) {
-    add_json(r.method, r.M, r.points, r.min_obs, r.ba_s, r.dev_max, r.dev_rms, r.ate, 0, r.converged ? 1 : 0,
-             r.converged ? 0 : 1, fraction);
+    add_json(r.method, r.M, r.points, r.min_obs, r.ba_s, {r.dev_max, 0}, {r.dev_rms, 0}, {r.ate, 0},
+             r.converged ? 1 : 0, r.converged ? 0 : 1);
+  };
+  // Rows over seeds (each printed as it is scored): one line and one JSON
+  // row of means, with the sd of the deviations and the ATE.
+  const auto add_seeds = [&](const std::string& method, std::int64_t M, std::uint64_t points,
+                             const std::vector<Row>& runs) {
+    std::vector<double> dmax, drms, at, mins, ba_s;
+    int converged = 0;
+    for (const Row& r : runs) {
+      dmax.push_back(r.dev_max);
+      drms.push_back(r.dev_rms);
+      at.push_back(r.ate);
+      mins.push_back(r.min_obs);
+      ba_s.push_back(r.ba_s);
+      converged += r.converged;
+    }
+    const int n = static_cast<int>(runs.size());
+    const Stat sm = stat(dmax), sr = stat(drms), sa = stat(at), smin = stat(mins);
+    std::printf("%-22s %5" PRId64 " %7" PRIu64 " %7.1f %8.2f %d/%d   %5.4f±%.4f %5.4f±%.4f %.4f±%.4f%s\n",
+                (method + " (mean±sd)").c_str(), M, points, smin.mean, stat(ba_s).mean, converged, n, sm.mean, sm.sd,
+                sr.mean, sr.sd, sa.mean, sa.sd, converged < n ? "  (includes seeds whose BA did not converge)" : "");
+    add_json(method, M, points, smin.mean, stat(ba_s).mean, sm, sr, sa, converged, n - converged);
   };
   Row full_row{"full", 0, b.original.points.size(), min_observations(b.original), full.seconds, full.converged, 0, 0,
                ate(b.full, b.gt)};
@@ -487,33 +546,20 @@ int main(int argc, char** argv) {
   for (const auto& [M, F] : ops) {
     fraction = F;
     if (std::isfinite(F)) std::printf("keep fraction %.2f (a keep budget per window; M unused)\n", F);
-    const Row replay = b.score("keepless_replay", M, b.keepless_culls(sp::Mode::kReplay, M, F, kfs, images));
+    const Row replay = b.score("keepless_replay", M, b.keepless_culls(sp::Mode::kReplay, M, F, as_read));
     add_row(replay);
-    add_row(b.score("keepless_whole", M, b.keepless_culls(sp::Mode::kWhole, M, F, kfs, images)));
+    add_row(b.score("keepless_whole", M, b.keepless_culls(sp::Mode::kWhole, M, F, as_read)));
     const std::uint64_t n = replay.points;
-    add_row(b.score("longest_track", M, b.keep_first(longest, n)));
-    std::vector<double> dmax, drms, at, mins, ba_s;
-    int converged = 0;
+    add_row(b.score("longest_track", M, b.keep_first(as_read.longest, n)));
+    std::vector<Row> runs;
     for (int seed = 1; seed <= opt.seeds; ++seed) {
       std::vector<std::size_t> order(b.original.points.size());
       std::iota(order.begin(), order.end(), 0);
       std::mt19937_64 rng(static_cast<std::uint64_t>(seed));
       std::shuffle(order.begin(), order.end(), rng);
-      const Row r = b.score("random_seed" + std::to_string(seed), M, b.keep_first(order, n));
-      dmax.push_back(r.dev_max);
-      drms.push_back(r.dev_rms);
-      at.push_back(r.ate);
-      mins.push_back(r.min_obs);
-      ba_s.push_back(r.ba_s);
-      converged += r.converged;
+      runs.push_back(b.score("random_seed" + std::to_string(seed), M, b.keep_first(order, n)));
     }
-    const Stat sm = stat(dmax), sr = stat(drms), sa = stat(at), smin = stat(mins);
-    std::printf("%-22s %5" PRId64 " %7" PRIu64 " %7.1f %8.2f %d/%d   %5.4f±%.4f %5.4f±%.4f %.4f±%.4f%s\n",
-                "random (mean±sd)", M, n, smin.mean, stat(ba_s).mean, converged, opt.seeds, sm.mean, sm.sd, sr.mean,
-                sr.sd, sa.mean, sa.sd,
-                converged < opt.seeds ? "  (includes seeds whose BA did not converge)" : "");
-    add_json("random", M, n, smin.mean, stat(ba_s).mean, sm.mean, sr.mean, sa.mean, sa.sd, converged,
-             opt.seeds - converged, F);
+    add_seeds("random", M, n, runs);
     // COLMAP's own filter, at the track length whose count is nearest.
     const auto filter_row = [&](std::uint64_t target, const std::string& suffix) {
       int best = 2;
@@ -535,9 +581,20 @@ int main(int argc, char** argv) {
     // longest-track-first at K and COLMAP's filter nearest K.
     const std::uint64_t exact =
         std::isfinite(F) ? static_cast<std::uint64_t>(std::floor(F * b.original.points.size() + 0.5)) : n;
-    add_row(b.score("keepless_exact", M, b.exact_culls(exact, kfs, images)));
-    add_row(b.score("longest_track_exact", M, b.keep_first(longest, exact)));
+    add_row(b.score("keepless_exact", M, b.exact_culls(exact, as_read)));
+    add_row(b.score("longest_track_exact", M, b.keep_first(as_read.longest, exact)));
     filter_row(exact, "_exact");
+    // The same two rules over relabellings: how far their ties move them.
+    if (!relabelled.empty()) {
+      std::vector<Row> keepless_runs, longest_runs;
+      for (std::size_t k = 0; k < relabelled.size(); ++k) {
+        const std::string seed = "_ties" + std::to_string(k + 1);
+        keepless_runs.push_back(b.score("keepless_exact" + seed, M, b.exact_culls(exact, relabelled[k])));
+        longest_runs.push_back(b.score("longest_track_exact" + seed, M, b.keep_first(relabelled[k].longest, exact)));
+      }
+      add_seeds("keepless_exact_ties", M, exact, keepless_runs);
+      add_seeds("longest_track_exact_ties", M, exact, longest_runs);
+    }
   }
   json += "],\"full_ba_s\":" + std::to_string(full.seconds) + ",\"K\":" + std::to_string(opt.K) +
           ",\"seeds\":" + std::to_string(opt.seeds) + ",\"not_converged\":" + std::to_string(not_converged) +
