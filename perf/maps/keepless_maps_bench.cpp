@@ -597,7 +597,8 @@ int main(int argc, char** argv) {
     }
   }
   json += "],\"full_ba_s\":" + std::to_string(full.seconds) + ",\"K\":" + std::to_string(opt.K) +
-          ",\"seeds\":" + std::to_string(opt.seeds) + ",\"not_converged\":" + std::to_string(not_converged) +
+          ",\"seeds\":" + std::to_string(opt.seeds) + ",\"tie_seeds\":" + std::to_string(opt.tie_seeds) +
+          ",\"not_converged\":" + std::to_string(not_converged) +
           ",\"floor\":" + std::to_string(sp::kDefaultFloor) + ",\"exact_floor\":" + std::to_string(opt.exact_floor) +
           ",\"cost\":\"" + core::to_string(opt.cost) + "\",\"theta\":" + std::to_string(opt.theta) +
           ",\"ba_iterations\":" + std::to_string(opt.ba_iterations) + ",\"model\":\"" + json_escaped(model) + "\"}";
