@@ -360,4 +360,39 @@ void FractionBudget::record(const PointDecision* d, std::uint32_t n) {
   count_ = m;
 }
 
+std::uint32_t track_share_count(double share, std::uint32_t take) {
+  return static_cast<std::uint32_t>(std::floor(share * take + 0.5));
+}
+
+void take_longest_tracks(std::uint32_t* ranked, std::uint32_t candidates, std::uint32_t take, double share,
+                         const std::uint32_t* views, std::uint32_t max_views, std::uint32_t* histogram,
+                         std::uint32_t* scratch) {
+  const std::uint32_t by_track = track_share_count(share, take);
+  if (by_track == 0) return;
+  const std::uint32_t first = take - by_track;
+  const auto v = [&](std::uint32_t i) { return std::min(views[i], max_views); };
+  std::fill(histogram, histogram + max_views + 1, 0u);
+  for (std::uint32_t j = first; j < candidates; ++j) ++histogram[v(ranked[j])];
+  // The cut: every candidate with more than `cut` views, and the first
+  // `at_cut` with exactly `cut` in the network's order.
+  std::uint32_t cut = max_views, above = 0;
+  while (cut > 0 && above + histogram[cut] < by_track) above += histogram[cut--];
+  std::uint32_t at_cut = by_track - above;
+  std::uint32_t kept = first, rest = 0;
+  for (std::uint32_t j = first; j < candidates; ++j) {  // a stable partition; kept <= j
+    const std::uint32_t i = ranked[j];
+    bool longest = v(i) > cut;
+    if (v(i) == cut && at_cut > 0) {
+      longest = true;
+      --at_cut;
+    }
+    if (longest) {
+      ranked[kept++] = i;
+    } else {
+      scratch[rest++] = i;
+    }
+  }
+  std::copy(scratch, scratch + rest, ranked + kept);
+}
+
 }  // namespace keepless::core

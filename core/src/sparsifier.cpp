@@ -84,6 +84,7 @@ struct Sparsifier::Impl {
   std::vector<std::uint32_t> ranked;        // [max_points]
   std::vector<std::int32_t> rank_of;        // [max_points] a decision's rank in canonical_order
   std::vector<std::uint32_t> views_of;      // [max_points] a decision's n
+  std::vector<std::uint32_t> views_histogram;  // [max_keyframes + 1] a track share's (take_longest_tracks)
   std::uint32_t curve_top = 0;              // the curve's last bucket: the largest finite M*
   std::uint32_t max_points = 0;
   bool budgeted = false;
@@ -116,6 +117,7 @@ struct Sparsifier::Impl {
       ranked.resize(c.max_points);
       rank_of.resize(c.max_points);
       views_of.resize(c.max_points);
+      if (p.budget.track_share > 0.0) views_histogram.resize(std::size_t{c.max_keyframes} + 1);
     }
     if (p.budget.kind == BudgetKind::kFraction) fraction = std::make_unique<FractionBudget>(c.max_points);
     // The policies' scratch only where they are on (Params are fixed).
@@ -207,7 +209,8 @@ struct Sparsifier::Impl {
   // budget keeps the candidates (evaluated, in scope) with the smallest M*,
   // ties to the smaller point id; flows are reported at the budget's M (the
   // largest M* kept), so a point tied at that M beyond the budget is culled
-  // with a flow that M would keep.
+  // with a flow that M would keep. A track share swaps the last of the
+  // budget's points for the longest tracks (take_longest_tracks).
   template <typename Net>
   void decide_budget(const Window& window, const Net& net) {
     Summary& sum = summary;
@@ -272,6 +275,10 @@ struct Sparsifier::Impl {
       while (take < candidates && observations + views_of[ranked[take]] <= b.count) {
         observations += views_of[ranked[take++]];
       }
+    }
+    if (!views_histogram.empty()) {  // cursor is free again: the scratch
+      take_longest_tracks(ranked.data(), candidates, take, b.track_share, views_of.data(), caps.max_keyframes,
+                          views_histogram.data(), cursor.data());
     }
     observations = 0;
     std::uint32_t kept_top = 0;
@@ -474,6 +481,12 @@ Status Sparsifier::validate(const Params& p) {
       }
       break;
     default: return Status::kInvalidArgument;
+  }
+  // A track share takes part of a count (kPoints, kFraction) by track length.
+  const double share = p.budget.track_share;
+  if (!std::isfinite(share) || share < 0.0 || share > 1.0) return Status::kInvalidArgument;
+  if (share > 0.0 && p.budget.kind != BudgetKind::kPoints && p.budget.kind != BudgetKind::kFraction) {
+    return Status::kInvalidArgument;
   }
   switch (p.cost_model) {
     case CostModel::kPaper:

@@ -76,6 +76,7 @@ struct Options {
   std::uint64_t ba_iterations = 100;               // bundle_adjuster's limit (COLMAP's default)
   std::uint32_t exact_floor = sp::kDefaultFloor;   // observations per image the exact rows keep at least
   int tie_seeds = 0;                               // relabellings for the *_exact_ties rows
+  std::vector<double> track_shares;                // --track-share: keepless_exact_share<S> rows
 };
 
 struct Ba {
@@ -209,6 +210,17 @@ std::uint32_t min_observations(const io::ColmapModel& m) {
   return n.empty() ? 0 : *std::min_element(n.begin(), n.end());
 }
 
+// "0.5,1" (shortest form) for a JSON array.
+std::string join(const std::vector<double>& v) {
+  std::string out;
+  for (const double x : v) {
+    char item[32];
+    std::snprintf(item, sizeof item, "%s%g", out.empty() ? "" : ",", x);
+    out += item;
+  }
+  return out;
+}
+
 std::vector<std::int64_t> parse_list(const char* s) {
   std::vector<std::int64_t> v;
   std::stringstream in(s);
@@ -305,7 +317,7 @@ struct Bench {
 
   // The whole model at exactly `count` points with every image's floor
   // (sparsify::keep_exactly on one budgeted whole-model decision).
-  std::vector<bool> exact_culls(std::uint64_t count, const Labelled& l) {
+  std::vector<bool> exact_culls(std::uint64_t count, const Labelled& l, double track_share = 0.0) {
     core::Params params;
     params.budget = {core::BudgetKind::kPoints, count, 0.0};
     params.cost_model = opt.cost;
@@ -314,7 +326,8 @@ struct Bench {
     params.image_height = static_cast<std::int32_t>(original.cameras.front().height);
     sp::ModeResult r;
     if (sp::decide(l.kfs.file, sp::Mode::kWhole, params, opt.K, &r) != core::Status::kOk) die("decide failed");
-    const sp::ExactCount e = sp::keep_exactly(l.images, opt.exact_floor, count, r.thresholds, &r.decisions);
+    const sp::ExactCount e =
+        sp::keep_exactly(l.images, opt.exact_floor, count, r.thresholds, &r.decisions, track_share);
     std::printf("exact whole: %llu kept (%llu by the order, %u by the floor)%s\n",
                 static_cast<unsigned long long>(e.kept), static_cast<unsigned long long>(e.from_order), e.restored,
                 e.floor_fits ? "" : ": the floor alone keeps more");
@@ -380,6 +393,9 @@ int main(int argc, char** argv) {
       {"--tie-seeds", "N", "also the keepless_exact and longest_track_exact rules over N relabellings\n"
                            "of the points (ids shuffled by seeds 1..N; rows *_exact_ties, mean±sd):\n"
                            "how far the orders' ties move the figures (default 0: off)"},
+      {"--track-share", "LIST", "also keepless_exact with these track shares S in [0, 1] (S of the count\n"
+                                "by track length, as keepless_sparsify --track-share; rows\n"
+                                "keepless_exact_share<S>, and their ties with --tie-seeds)"},
   };
   const std::string help =
       cli::usage("usage: keepless_maps_bench [options]", flags,
@@ -409,16 +425,17 @@ int main(int argc, char** argv) {
       for (const std::int64_t m : opt.Ms) {
         if (m < 1) std::exit(cli::usage_error(kTool, std::string("bad value for --M: '") + value + "' (integers >= 1)"));
       }
-    } else if (f == "--keep-fraction") {
-      opt.fractions.clear();
+    } else if (f == "--keep-fraction" || f == "--track-share") {
+      std::vector<double>& list = f == "--keep-fraction" ? opt.fractions : opt.track_shares;
+      list.clear();
       std::stringstream in(value);
       for (std::string t; std::getline(in, t, ',');) {
         char* end = nullptr;
         const double x = std::strtod(t.c_str(), &end);
         if (t.empty() || *end != '\0' || !(x >= 0 && x <= 1)) {
-          return cli::usage_error(kTool, std::string("bad value for --keep-fraction: '") + value + "' (numbers in [0, 1])");
+          return cli::usage_error(kTool, "bad value for " + f + ": '" + value + "' (numbers in [0, 1])");
         }
-        opt.fractions.push_back(x);
+        list.push_back(x);
       }
     } else if (f == "--K") opt.K = static_cast<std::uint32_t>(count(1, 100000));
     else if (f == "--seeds") opt.seeds = static_cast<int>(count(1, 1000));
@@ -595,9 +612,22 @@ int main(int argc, char** argv) {
       add_seeds("keepless_exact_ties", M, exact, keepless_runs);
       add_seeds("longest_track_exact_ties", M, exact, longest_runs);
     }
+    // The whole model's order with part of the count by track length.
+    for (const double S : opt.track_shares) {
+      char name[48];
+      std::snprintf(name, sizeof name, "keepless_exact_share%g", S);
+      add_row(b.score(name, M, b.exact_culls(exact, as_read, S)));
+      std::vector<Row> runs;
+      for (std::size_t k = 0; k < relabelled.size(); ++k) {
+        runs.push_back(b.score(name + std::string("_ties") + std::to_string(k + 1), M,
+                               b.exact_culls(exact, relabelled[k], S)));
+      }
+      if (!runs.empty()) add_seeds(name + std::string("_ties"), M, exact, runs);
+    }
   }
   json += "],\"full_ba_s\":" + std::to_string(full.seconds) + ",\"K\":" + std::to_string(opt.K) +
           ",\"seeds\":" + std::to_string(opt.seeds) + ",\"tie_seeds\":" + std::to_string(opt.tie_seeds) +
+          ",\"track_shares\":[" + join(opt.track_shares) + "]" +
           ",\"not_converged\":" + std::to_string(not_converged) +
           ",\"floor\":" + std::to_string(sp::kDefaultFloor) + ",\"exact_floor\":" + std::to_string(opt.exact_floor) +
           ",\"cost\":\"" + core::to_string(opt.cost) + "\",\"theta\":" + std::to_string(opt.theta) +

@@ -75,6 +75,9 @@ const std::vector<keepless::cli::Flag> kFlags = {
     {"--keep-fraction", "F", "instead of --M: keep the share F in [0, 1] of the points evaluated over the\n"
                              "windows (F of those new to each window, plus those kept before)"},
     {"--keep-observations", "B", "instead of --M: keep points while their observations sum to <= B"},
+    {"--track-share", "S", "with --keep-points or --keep-fraction: take the share S in [0, 1] of the\n"
+                           "count by track length (most keyframes of the window first) instead of\n"
+                           "the network's order (default 0)"},
     {"--theta", "X", "keep iff flow > X * n(n-1)/2, in [0, 1] (default 0.5)"},
     {"--box", "WxH", "spatial-diversity box in pixels (default 64x48)"},
     {"--scope", "window|newest", "decide every point, or only the newest keyframe's (default window)"},
@@ -124,6 +127,7 @@ bool parse_limit(const char* text, std::uint32_t* out) {
 // Returns -1 on success, else the exit status (after printing).
 int parse_args(int argc, char** argv, Options* opt, bool* help, bool* version) {
   bool m_given = false;  // --M and a keep budget exclude each other
+  double track_share = 0.0;
   for (int i = 1; i < argc; ++i) {
     const keepless::cli::Flag* entry = nullptr;
     const char* value = nullptr;
@@ -176,6 +180,10 @@ int parse_args(int argc, char** argv, Options* opt, bool* help, bool* version) {
         }
         opt->params.budget = core::KeepBudget{
             flag == "--keep-points" ? core::BudgetKind::kPoints : core::BudgetKind::kObservations, n, 0.0};
+      }
+    } else if (flag == "--track-share") {
+      if (!core::parse_finite_double(value, &track_share) || !(track_share >= 0.0 && track_share <= 1.0)) {
+        return usage_error(bad + " (a number in [0, 1])");
       }
     } else if (flag == "--theta") {
       double theta = 0;
@@ -239,6 +247,11 @@ int parse_args(int argc, char** argv, Options* opt, bool* help, bool* version) {
     return usage_error(std::string("--M and --keep-") + core::to_string(opt->params.budget.kind) +
                        " exclude each other: a keep budget replaces M");
   }
+  if (track_share > 0.0 && opt->params.budget.kind != core::BudgetKind::kPoints &&
+      opt->params.budget.kind != core::BudgetKind::kFraction) {
+    return usage_error("--track-share needs --keep-points or --keep-fraction: it is a share of their count");
+  }
+  opt->params.budget.track_share = track_share;
   if (opt->window.empty() == opt->model.path.empty()) {
     return usage_error("one of --window, --colmap, --bal is required");
   }
@@ -384,14 +397,14 @@ int decide_window_unguarded(const Options& opt, const core::WindowFile& file, co
       "\"scope\":\"%s\",\"floor\":%u,\"cost\":\"%s\",\"out_of_scope\":%u,"
       "\"floor_keyframes\":%u,\"floor_promoted\":%u,\"floor_short\":%u,"
       "\"budget\":\"%s\",\"budget_value\":%s,\"budget_m\":%" PRId64 ",\"budget_observations\":%" PRIu64 ","
-      "\"maturity\":%u,\"guarded\":%u,\"track_fallback\":%u}\n",
+      "\"maturity\":%u,\"guarded\":%u,\"track_fallback\":%u,\"track_share\":%g}\n",
       sum.keyframes, sum.points, sum.evaluated, sum.kept, sum.culled, sum.skipped, sum.pairs,
       sum.arcs, sum.max_flow, sum.total_cost, opt.params.pair_capacity, theta, opt.params.box_width,
       opt.params.box_height, parse_ms, build_ms, solve_ms, memory, core::to_string(opt.params.scope),
       opt.params.coverage_floor, core::to_string(opt.params.cost_model), sum.out_of_scope,
       sum.floor_keyframes, sum.floor_promoted, sum.floor_short,
       core::to_string(opt.params.budget.kind), budget_value, sum.budget_m, sum.budget_observations,
-      opt.params.maturity_keyframes, sum.guarded, sum.track_fallback);
+      opt.params.maturity_keyframes, sum.guarded, sum.track_fallback, opt.params.budget.track_share);
   return std::fflush(stdout) == 0 ? 0 : kExitInternal;
 }
 

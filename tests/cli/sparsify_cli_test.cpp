@@ -19,6 +19,7 @@
 #include <fstream>
 #include <map>
 #include <sstream>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -260,6 +261,10 @@ TEST_F(SparsifyCliTest, FlagErrorsPrintOneUsageLine) {
       {"--window", window, "--keep-points", "-1"},
       {"--window", window, "--keep-observations", "x"},
       {"--window", window, "--keep-points", "3", "--keep-fraction", "0.3"},
+      {"--window", window, "--keep-points", "3", "--track-share", "1.5"},
+      {"--window", window, "--keep-points", "3", "--track-share", "nan"},
+      {"--window", window, "--track-share", "0.5"},  // a share of a count: needs one
+      {"--window", window, "--keep-observations", "20", "--track-share", "0.5"},
   };
   for (const auto& args : cases) {
     std::string shown;
@@ -505,13 +510,17 @@ TEST_F(SparsifyCliTest, KeepBudgetsReachTheLibrary) {
     const char* value;
     core::KeepBudget budget;
     const char* kind;
+    const char* share;
   };
-  for (const B& b : {B{"--keep-points", "7", {core::BudgetKind::kPoints, 7, 0.0}, "points"},
-                     B{"--keep-fraction", "0.3", {core::BudgetKind::kFraction, 0, 0.3}, "fraction"},
+  for (const B& b : {B{"--keep-points", "7", {core::BudgetKind::kPoints, 7, 0.0}, "points", "0"},
+                     B{"--keep-fraction", "0.3", {core::BudgetKind::kFraction, 0, 0.3}, "fraction", "0"},
                      B{"--keep-observations", "20", {core::BudgetKind::kObservations, 20, 0.0},
-                       "observations"}}) {
-    SCOPED_TRACE(b.flag);
-    const Result r = sparsify({"--window", window, b.flag, b.value, "--decisions", out});
+                       "observations", "0"},
+                     B{"--keep-points", "7", {core::BudgetKind::kPoints, 7, 0.0, 0.5}, "points", "0.5"},
+                     B{"--keep-fraction", "0.3", {core::BudgetKind::kFraction, 0, 0.3, 1.0}, "fraction", "1"}}) {
+    SCOPED_TRACE(std::string(b.flag) + " --track-share " + b.share);
+    const Result r =
+        sparsify({"--window", window, b.flag, b.value, "--track-share", b.share, "--decisions", out});
     ASSERT_EQ(r.status, 0) << r.err;
     core::Params params;
     params.budget = b.budget;
@@ -532,14 +541,20 @@ TEST_F(SparsifyCliTest, KeepBudgetsReachTheLibrary) {
               std::string::npos)
         << r.out;
     EXPECT_NE(r.out.find("\"budget_m\":" + std::to_string(s.summary().budget_m) + ","), std::string::npos);
+    EXPECT_NE(r.out.find(std::string("\"track_share\":") + b.share + "}"), std::string::npos) << r.out;
+    // The very points the library keeps (a share changes which, not how many).
+    std::set<core::PointId> library_kept, file_kept;
+    for (std::uint32_t i = 0; i < s.decision_count(); ++i) {
+      if (s.decisions()[i].verdict == core::Verdict::kKeep) library_kept.insert(s.decisions()[i].point);
+    }
     std::ifstream in(out);
-    std::uint32_t kept = 0, lines = 0;
+    std::uint32_t lines = 0;
     for (std::string line; std::getline(in, line);) {
       ++lines;
-      kept += line.find(" keep ") != std::string::npos;
+      if (line.find(" keep ") != std::string::npos) file_kept.insert(std::stoull(line));
     }
-    EXPECT_EQ(kept, s.summary().kept);
-    EXPECT_GT(lines, kept);
+    EXPECT_EQ(file_kept, library_kept);
+    EXPECT_GT(lines, file_kept.size());
   }
 }
 

@@ -484,6 +484,64 @@ TEST(KeepBudgets, ForgetHistoryStartsAFractionAfresh) {
   EXPECT_GT(differed_without, 0u);  // the case has teeth: reused ids were remembered
 }
 
+// A track share S: of a count K, K - floor(S x K + 0.5) points by the
+// network's order (M*, id), the rest the other candidates with the most
+// window observations, ties in that order; S = 0 is the order alone.
+TEST(KeepBudgets, TrackShareTakesTheLongestTracksAfterTheOrder) {
+  Window window(kCaps);
+  std::uint64_t differs = 0;
+  for (std::uint64_t seed = 600; seed <= 630 && !HasFailure(); ++seed) {
+    test::RandomCase c = test::random_case(seed, 12, 120);
+    test::random_policies(c, seed);
+    c.params.coverage_floor = 0;
+    ASSERT_TRUE(test::load(window, c.frames)) << "seed " << seed;
+    const std::set<PointId> candidates = candidates_of(window, c.params);
+    const auto views = views_of(window);
+    const auto e = static_cast<std::uint32_t>(candidates.size());
+    Params order_params = c.params;
+    order_params.budget = KeepBudget{BudgetKind::kPoints, 0, 0.0};
+    Sparsifier order_of(kCaps, order_params);
+    ASSERT_EQ(order_of.run(window), Status::kOk);
+    std::vector<std::pair<std::uint32_t, PointId>> order;  // (M*, id): the network's order
+    for (std::uint32_t i = 0; i < order_of.decision_count(); ++i) {
+      const PointId id = order_of.decisions()[i].point;
+      if (candidates.count(id) > 0) order.emplace_back(order_of.keep_thresholds()[i], id);
+    }
+    std::sort(order.begin(), order.end());
+    for (double share : {0.0, 0.25, 0.5, 1.0}) {
+      for (std::uint32_t k = 0; k <= e + 1; k += 1 + e / 9) {
+        Params p = c.params;
+        p.budget = KeepBudget{BudgetKind::kPoints, k, 0.0, share};
+        ASSERT_EQ(Sparsifier::validate(p), Status::kOk);
+        Sparsifier s(kCaps, p);
+        ASSERT_EQ(s.run(window), Status::kOk);
+        const std::uint32_t take = std::min(k, e);
+        const auto by_track = static_cast<std::uint32_t>(std::floor(share * take + 0.5));
+        std::set<PointId> expected;
+        for (std::uint32_t j = 0; j < take - by_track; ++j) expected.insert(order[j].second);
+        std::vector<std::pair<std::uint32_t, std::uint32_t>> rest;  // (-views, position in the order)
+        for (std::uint32_t j = take - by_track; j < e; ++j) rest.emplace_back(~views.at(order[j].second), j);
+        std::sort(rest.begin(), rest.end());
+        for (std::uint32_t j = 0; j < by_track; ++j) expected.insert(order[rest[j].second].second);
+        const std::set<PointId> kept = kept_of(s);
+        ASSERT_EQ(kept, expected) << "seed " << seed << " K " << k << " S " << share;
+        Params plain = p;
+        plain.budget.track_share = 0.0;
+        Sparsifier ordered(kCaps, plain);
+        ASSERT_EQ(ordered.run(window), Status::kOk);
+        differs += kept_of(ordered) != kept;
+      }
+    }
+    // A fraction's count is unchanged by the share.
+    Params f = c.params;
+    f.budget = KeepBudget{BudgetKind::kFraction, 0, 0.3, 0.5};
+    Sparsifier s(kCaps, f);
+    ASSERT_EQ(s.run(window), Status::kOk);
+    ASSERT_EQ(s.summary().kept, static_cast<std::uint32_t>(std::floor(0.3 * e + 0.5))) << "seed " << seed;
+  }
+  EXPECT_GT(differs, 50u);  // the share changes what is kept, not only in theory
+}
+
 TEST(KeepBudgets, InvalidBudgets) {
   Params p;
   p.budget = KeepBudget{BudgetKind::kFraction, 0, 1.5};
@@ -496,6 +554,16 @@ TEST(KeepBudgets, InvalidBudgets) {
   EXPECT_EQ(Sparsifier::validate(p), Status::kOk);
   p.budget = KeepBudget{static_cast<BudgetKind>(9), 0, 0.0};
   EXPECT_EQ(Sparsifier::validate(p), Status::kInvalidArgument);
+  for (double share : {-0.1, 1.5, std::nan("")}) {
+    p.budget = KeepBudget{BudgetKind::kPoints, 10, 0.0, share};
+    EXPECT_EQ(Sparsifier::validate(p), Status::kInvalidArgument) << share;
+  }
+  p.budget = KeepBudget{BudgetKind::kObservations, 10, 0.0, 0.5};  // a share of a count only
+  EXPECT_EQ(Sparsifier::validate(p), Status::kInvalidArgument);
+  p.budget = KeepBudget{BudgetKind::kNone, 0, 0.0, 0.5};
+  EXPECT_EQ(Sparsifier::validate(p), Status::kInvalidArgument);
+  p.budget = KeepBudget{BudgetKind::kFraction, 0, 0.2, 1.0};
+  EXPECT_EQ(Sparsifier::validate(p), Status::kOk);
   EXPECT_STREQ(to_string(BudgetKind::kObservations), "observations");
 }
 

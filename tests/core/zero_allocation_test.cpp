@@ -176,14 +176,14 @@ Counted slide_counted(const Capacities& caps, const std::vector<std::unique_ptr<
 
 // The same with every policy on: the newest keyframe's scope, a floor that
 // binds, and each cost model reading depths, intrinsics and unmapped
-// keypoints, without and with each keep budget; from-scratch and
-// incremental, both starts.
+// keypoints, without and with each keep budget (and a track share);
+// from-scratch and incremental, both starts.
 TEST(ZeroAllocation, PoliciesAndCostModelsAllocateNothing) {
   const Capacities caps{12, 2048, 8192, 32768, 2048};
   std::vector<std::unique_ptr<Sparsifier>> sparsifiers;
   // Each with no budget and with each kind of keep budget.
   const KeepBudget budgets[] = {{}, {BudgetKind::kPoints, 40, 0.0}, {BudgetKind::kFraction, 0, 0.3},
-                                {BudgetKind::kObservations, 150, 0.0}};
+                                {BudgetKind::kObservations, 150, 0.0}, {BudgetKind::kPoints, 40, 0.0, 0.5}};
   for (CostModel model : {CostModel::kPaper, CostModel::kAuthors, CostModel::kInformation, CostModel::kTrack}) {
     for (const KeepBudget& budget : budgets) {
       Params p;

@@ -200,6 +200,39 @@ TEST_F(SparsifyMaps, WholeModeWithTheFloorKeepsEveryImageAtTheFloor) {
   EXPECT_NE(r.out.find("whole: kept "), std::string::npos);
 }
 
+// --track-share 1: the whole model's count taken entirely by track length,
+// so no culled point is seen by more images than a kept one.
+TEST_F(SparsifyMaps, AWholeTrackShareKeepsTheLongestTracks) {
+  const std::string out = path("share1");
+  const maps_test::Result r = sparsify({"--colmap", fixture("sparse"), "--mode", "whole", "--keep-points", "1420",
+                                        "--track-share", "1", "--min-obs-per-image", "0", "--out", out});
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_EQ(json_number(last_line(r.out), "points_kept"), 1420);
+  EXPECT_NE(last_line(r.out).find("\"track_share\":1}"), std::string::npos);
+  io::ColmapModel original, kept;
+  io::ColmapFormat format;
+  std::string error;
+  ASSERT_TRUE(io::read_colmap_model(fixture("sparse"), &original, &format, &error)) << error;
+  ASSERT_TRUE(io::read_colmap_model(out, &kept, &format, &error)) << error;
+  ASSERT_EQ(kept.points.size(), 1420u);
+  const auto images_of = [](const io::ColmapPoint3D& p) {
+    std::set<std::uint32_t> images;
+    for (const io::ColmapTrackElement& e : p.track) images.insert(e.image_id);
+    return images.size();
+  };
+  std::set<std::uint64_t> kept_ids;
+  std::size_t shortest_kept = SIZE_MAX, longest_culled = 0;
+  for (const io::ColmapPoint3D& p : kept.points) {
+    kept_ids.insert(p.id);
+    shortest_kept = std::min(shortest_kept, images_of(p));
+  }
+  for (const io::ColmapPoint3D& p : original.points) {
+    if (kept_ids.count(p.id) == 0) longest_culled = std::max(longest_culled, images_of(p));
+  }
+  EXPECT_GE(shortest_kept, longest_culled);
+  EXPECT_GT(shortest_kept, 2u);  // the fixture's long tracks, not a degenerate cut
+}
+
 TEST_F(SparsifyMaps, BalAndWindowInputsAreWrittenBackInTheirFormat) {
   KEEPLESS_MAPS_NEED(maps_test::bal_problem());
   const std::string bal = std::string(KEEPLESS_MAPS_DATA) + "/bal_zenslam/problem-49-7776-pre.txt";

@@ -2,13 +2,14 @@
 
 #include <algorithm>
 
+#include "keepless/core/keep_thresholds.hpp"
 #include "sparsify/modes.hpp"
 
 namespace keepless::sparsify {
 
 ExactCount keep_exactly(const std::vector<std::vector<core::PointId>>& images, std::uint32_t floor,
                         std::uint64_t count, const std::vector<std::uint32_t>& thresholds,
-                        std::vector<core::PointDecision>* decisions) {
+                        std::vector<core::PointDecision>* decisions, double track_share) {
   std::vector<core::PointDecision>& d = *decisions;
   std::vector<std::size_t> order;
   std::uint64_t skipped = 0;
@@ -22,6 +23,24 @@ ExactCount keep_exactly(const std::vector<std::vector<core::PointId>>& images, s
   std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
     return thresholds[a] != thresholds[b] ? thresholds[a] < thresholds[b] : d[a].point < d[b].point;
   });
+  if (track_share > 0.0) {
+    std::vector<std::uint32_t> views(d.size()), ranked(order.begin(), order.end()), scratch(order.size());
+    for (const std::vector<core::PointId>& image : images) {
+      std::vector<core::PointId> seen = image;  // an image counts once per point
+      std::sort(seen.begin(), seen.end());
+      seen.erase(std::unique(seen.begin(), seen.end()), seen.end());
+      for (const core::PointId id : seen) {
+        const std::int64_t i = find_decision(d, id);
+        if (i >= 0) ++views[static_cast<std::size_t>(i)];
+      }
+    }
+    const auto max_views = static_cast<std::uint32_t>(images.size());
+    std::vector<std::uint32_t> histogram(std::size_t{max_views} + 1);
+    const auto take = static_cast<std::uint32_t>(std::min<std::uint64_t>(count > skipped ? count - skipped : 0, order.size()));
+    core::take_longest_tracks(ranked.data(), static_cast<std::uint32_t>(ranked.size()), take, track_share, views.data(),
+                              max_views, histogram.data(), scratch.data());
+    order.assign(ranked.begin(), ranked.end());
+  }
   // The first k of the order kept, the rest culled, then the floor.
   std::uint32_t restored = 0;
   const auto take = [&](std::size_t k) {

@@ -491,7 +491,7 @@ int run_model(const ModelOptions& opt) {
       "\"scope\":\"%s\",\"floor\":%u,\"cost\":\"%s\",\"out_of_scope\":%u,"
       "\"floor_keyframes\":%u,\"floor_promoted\":%u,\"floor_short\":%u,"
       "\"input_bytes\":%" PRIu64 ",\"output_bytes\":%" PRIu64 ",\"points2D_dropped\":%" PRIu64 ","
-      "\"maturity\":%u,\"guarded\":%u,\"track_fallback\":%u}\n",
+      "\"maturity\":%u,\"guarded\":%u,\"track_fallback\":%u,\"track_share\":%g}\n",
       t.keyframes, t.points, t.evaluated, points_kept, culled, t.skipped, t.pairs, t.arcs, t.max_flow, t.total_cost,
       opt.params.pair_capacity, theta, opt.params.box_width, opt.params.box_height, parse_ms, solve_ms,
       r.memory_bytes, input_name(opt.input),
@@ -502,7 +502,7 @@ int run_model(const ModelOptions& opt) {
       med_obs, floor, restored, m.keyframes.duplicates, time_ms, core::to_string(opt.params.scope),
       opt.params.coverage_floor, core::to_string(opt.params.cost_model), t.out_of_scope, t.floor_keyframes,
       t.floor_promoted, t.floor_short, input_bytes, output_bytes, m.compacted,
-      opt.params.maturity_keyframes, t.guarded, t.track_fallback);
+      opt.params.maturity_keyframes, t.guarded, t.track_fallback, opt.params.budget.track_share);
   return std::fflush(stdout) == 0 ? 0 : kExitInternal;
 }
 

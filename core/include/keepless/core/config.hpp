@@ -103,12 +103,19 @@ enum TrackTerm : std::uint8_t {
 // Candidates are the evaluated points within Params::scope. The coverage
 // floor's promotions come on top of the budget (Summary::floor_promoted).
 // With a budget, M (Params::pair_capacity) is not used for selection.
+// A track share S (kPoints and kFraction) takes floor(S x K + 0.5) of the K
+// points by track length instead: the first K minus those by the order
+// above, then the other candidates with the most window observations n,
+// ties in that order (take_longest_tracks). The network's order spreads
+// points evenly over the keyframe pairs; camera accuracy after BA follows
+// long tracks more (docs/evaluation/budget-sweep.md, offline).
 enum class BudgetKind : std::uint8_t { kNone, kPoints, kFraction, kObservations };
 
 struct KeepBudget {
   BudgetKind kind = BudgetKind::kNone;
-  std::uint64_t count = 0;  // kPoints: K; kObservations: B
-  double fraction = 0.0;    // kFraction: F
+  std::uint64_t count = 0;   // kPoints: K; kObservations: B
+  double fraction = 0.0;     // kFraction: F
+  double track_share = 0.0;  // S in [0, 1]; 0: every point by the network's order
 };
 
 // "none", "points", "fraction", "observations".

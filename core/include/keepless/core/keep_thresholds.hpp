@@ -99,4 +99,17 @@ class FractionBudget {
   std::uint64_t granted_ = 0;
 };
 
+// A keep budget's track share (KeepBudget::track_share). `ranked` holds the
+// `candidates` in the network's order (M*, id) and the budget keeps `take`
+// of them; of those, floor(share x take + 0.5) are taken by track length:
+// the first take minus that many stay, then come the other candidates with
+// the most views (views[i]: candidate i's window observations n, counted up
+// to max_views), ties in the network's order, then the rest in that order.
+// So ranked[0, take) is what the budget keeps. `histogram` holds
+// max_views + 1 entries and `scratch` `candidates`; no allocation.
+std::uint32_t track_share_count(double share, std::uint32_t take);
+void take_longest_tracks(std::uint32_t* ranked, std::uint32_t candidates, std::uint32_t take, double share,
+                         const std::uint32_t* views, std::uint32_t max_views, std::uint32_t* histogram,
+                         std::uint32_t* scratch);
+
 }  // namespace keepless::core
