@@ -320,7 +320,8 @@ TEST(BalBridge, TrackLengthIsEachPointsObservations) {
 // The whole model at exactly the requested count with every image's floor:
 // on the fixture with the track cost, each count is met exactly, every
 // image keeps at least the floor, and the points taken by the order are a
-// prefix of the budget's order (smallest M* first) up to the floor's.
+// prefix of the budget's order (smallest M* first) up to the floor's; with
+// a track share it keeps what the library's budget does.
 TEST(ExactCount, KeepsExactlyTheCountWithEveryImagesFloor) {
   KEEPLESS_MAPS_NEED(maps_test::fixture("sparse/images.bin"));
   const Fixture f = read_fixture();
@@ -353,6 +354,24 @@ TEST(ExactCount, KeepsExactlyTheCountWithEveryImagesFloor) {
       EXPECT_GE(per_image[i], std::min<std::size_t>(kFloor, images[i].size())) << "image " << i << ", count " << count;
     }
     EXPECT_GT(e.from_order, 0u);
+  }
+  // A track share: the same points as the library's budget with that share
+  // (the floor restores nothing at this count).
+  for (const double share : {0.5, 1.0}) {
+    core::Params p = params_for(f.model, core::CostModel::kPaper);
+    p.budget = {core::BudgetKind::kPoints, 2000, 0.0};
+    sparsify::ModeResult r;
+    ASSERT_EQ(sparsify::decide(k.file, sparsify::Mode::kWhole, p, 20, &r), core::Status::kOk);
+    const sparsify::ExactCount e = sparsify::keep_exactly(images, kFloor, 2000, r.thresholds, &r.decisions, share);
+    EXPECT_EQ(e.kept, 2000u);
+    EXPECT_EQ(e.restored, 0u);
+    p.budget.track_share = share;
+    sparsify::ModeResult library;
+    ASSERT_EQ(sparsify::decide(k.file, sparsify::Mode::kWhole, p, 20, &library), core::Status::kOk);
+    ASSERT_EQ(library.decisions.size(), r.decisions.size());
+    for (std::size_t i = 0; i < r.decisions.size(); ++i) {
+      ASSERT_EQ(r.decisions[i].verdict, library.decisions[i].verdict) << "point " << r.decisions[i].point << ", share " << share;
+    }
   }
   // A count below what the floor needs: the floor's set, said so.
   core::Params p = params_for(f.model, core::CostModel::kTrack);

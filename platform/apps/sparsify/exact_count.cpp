@@ -36,8 +36,8 @@ ExactCount keep_exactly(const std::vector<std::vector<core::PointId>>& images, s
     }
     const auto max_views = static_cast<std::uint32_t>(images.size());
     std::vector<std::uint32_t> histogram(std::size_t{max_views} + 1);
-    const auto take = static_cast<std::uint32_t>(std::min<std::uint64_t>(count > skipped ? count - skipped : 0, order.size()));
-    core::take_longest_tracks(ranked.data(), static_cast<std::uint32_t>(ranked.size()), take, track_share, views.data(),
+    const auto wanted = static_cast<std::uint32_t>(std::min<std::uint64_t>(count > skipped ? count - skipped : 0, order.size()));
+    core::take_longest_tracks(ranked.data(), static_cast<std::uint32_t>(ranked.size()), wanted, track_share, views.data(),
                               max_views, histogram.data(), scratch.data());
     order.assign(ranked.begin(), ranked.end());
   }
