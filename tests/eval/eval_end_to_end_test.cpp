@@ -348,6 +348,25 @@ TEST(KeeplessEval, ThetaReachesKeepless) {
   EXPECT_EQ(kept("--theta 0.5"), by_default);
 }
 
+// --track-share reaches keepless: other points kept, so another trajectory;
+// a share of 0 is the default.
+TEST(KeeplessEval, TrackShareReachesKeepless) {
+  require_binary();
+  const std::string tum = data("evo/freiburg1_xyz-groundtruth.txt");
+  SKIP_WITHOUT(tum);
+  const auto result = [&](const std::string& share) {
+    const RunOutput r = run("--quick --no-ablation --no-baselines --seeds 1 --kept-fraction 0.3 --max-keyframes 12 " +
+                            share + " --trajectory " + tum + " --format tum");
+    EXPECT_EQ(r.status, 0);
+    Json j;
+    EXPECT_TRUE(Parser(r.last_line).parse(&j));
+    return num(j.at("runs").items.at(0), "ate_ours_m");
+  };
+  const double by_order = result("");
+  EXPECT_NE(result("--track-share 1"), by_order);
+  EXPECT_EQ(result("--track-share 0"), by_order);
+}
+
 TEST(KeeplessEval, RejectsBadFlagsWithStatus2) {
   require_binary();
   EXPECT_EQ(run("--no-such-flag").status, 2);
@@ -355,6 +374,8 @@ TEST(KeeplessEval, RejectsBadFlagsWithStatus2) {
   EXPECT_EQ(run("--cost cheap --bal /nonexistent").status, 2);
   EXPECT_EQ(run("--floor -1 --bal /nonexistent").status, 2);
   EXPECT_EQ(run("--theta 1.5 --bal /nonexistent").status, 2);
+  EXPECT_EQ(run("--track-share 1.5 --kept-fraction 0.3 --bal /nonexistent").status, 2);
+  EXPECT_EQ(run("--track-share 0.5 --M 100 --bal /nonexistent").status, 2);
   EXPECT_EQ(run("--decide oldest --bal /nonexistent").status, 2);
   EXPECT_EQ(run("--keyframe-culling sometimes --bal /nonexistent").status, 2);
   EXPECT_EQ(run("--M abc --bal /nonexistent").status, 2);
