@@ -4,6 +4,7 @@
 //   keepless_maps_bench [--data DIR] [--colmap BIN] [--M 30,100,200 | --keep-fraction 0.1,0.3] [--K 20]
 //                       [--seeds 5] [--work DIR] [--cost paper|authors|information|track] [--theta 0.5]
 //                       [--model DIR --poses FILE] [--ba-iterations 100] [--exact-floor 30] [--tie-seeds 0]
+//                       [--track-share 0.5,1]
 //
 // On the shared fixture (DIR/colmap_kitti06_first51, 51 KITTI 06 images; or
 // --model, a COLMAP model of KITTI frames, with their --poses):
@@ -17,7 +18,9 @@
 // image's floor, with longest-track-first at K and the filter nearest K
 // (rows *_exact); with --tie-seeds N, those two rules again over N
 // relabellings of the points, whose ids decide their ties (rows
-// *_exact_ties, mean±sd). Each sparsified model is bundle-adjusted the same
+// *_exact_ties, mean±sd); with --track-share, keepless_exact with part of
+// the count by track length (rows keepless_exact_share<S>, and their ties).
+// Each sparsified model is bundle-adjusted the same
 // way. Printed per row: points kept, min observations per image, BA time
 // and termination, camera-centre deviation from the full solution (max and
 // RMS, same gauge), and ATE (RMS) against the KITTI poses after the
