@@ -93,6 +93,9 @@ std::string node_usage() {
          "                            (F of those new to each decision, plus those it kept before)\n"
          "  --keep-observations B     keep budget: points in the same order while their window\n"
          "                            observations sum to <= B\n"
+         "  --track-share S           with --keep-points or --keep-fraction: take the share S in [0, 1] of\n"
+         "                            the count by track length (most window keyframes first) instead of\n"
+         "                            the network's order (default 0)\n"
          "  --theta X                 keep iff flow > X * n(n-1)/2 (default 0.5)\n"
          "  --box WxH                 spatial-diversity box in pixels (default 64x48)\n"
          "  --scope window|newest     decide every window point, or only the newest keyframe's (default window)\n"
@@ -175,6 +178,7 @@ ParseResult parse_node_arguments(int argc, const char* const* argv, NodeConfig& 
                                  std::string& error) {
   if (ParseResult r = parse_profile(argc, argv, config, error); r != ParseResult::kOk) return r;
   bool m_given = false;  // --M and a keep budget exclude each other
+  double track_share = 0.0;  // set on the budget once it is known, whatever the flags' order
   for (int i = 1; i < argc; ++i) {
     std::string flag = argv[i];
     if (is_profile_flag(flag)) {  // applied above
@@ -287,6 +291,10 @@ ParseResult parse_node_arguments(int argc, const char* const* argv, NodeConfig& 
         config.params.budget = core::KeepBudget{
             flag == "--keep-points" ? core::BudgetKind::kPoints : core::BudgetKind::kObservations, n, 0.0};
       }
+    } else if (flag == "--track-share") {
+      if (!parse_double(value, track_share) || !(track_share >= 0 && track_share <= 1)) {
+        return bad("expected a number in [0, 1]");
+      }
     } else if (flag == "--theta") {
       double t = 0;
       if (!parse_double(value, t) || t < 0 || t > 1) return bad("expected a number in [0, 1]");
@@ -354,6 +362,12 @@ ParseResult parse_node_arguments(int argc, const char* const* argv, NodeConfig& 
             " exclude each other: a keep budget replaces M";
     return ParseResult::kError;
   }
+  if (track_share > 0 && config.params.budget.kind != core::BudgetKind::kPoints &&
+      config.params.budget.kind != core::BudgetKind::kFraction) {
+    error = "--track-share needs --keep-points or --keep-fraction: it is a share of their count";
+    return ParseResult::kError;
+  }
+  config.params.budget.track_share = track_share;
   // The worst-case window must stay addressable by the solver's int32 arc ids.
   const std::uint64_t arcs = static_cast<std::uint64_t>(config.window) * config.max_observations *
                              (config.window - 1) / 2;

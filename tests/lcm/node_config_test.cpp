@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "keepless/core/sparsifier.hpp"
 #include "keepless/platform/latency_histogram.hpp"
 #include "keepless/platform/node.hpp"
 #include "keepless/platform/node_config.hpp"
@@ -259,6 +260,43 @@ TEST(NodeConfig, ParsesTheKeepBudgets) {
   NodeConfig d;
   ASSERT_EQ(parse({"--M", "10", "--keep-points", "5"}, d, error), ParseResult::kError);
   EXPECT_NE(error.find("exclude each other"), std::string::npos) << error;
+}
+
+TEST(NodeConfig, ParsesTheTrackShareOfACountBudget) {
+  using keepless::core::BudgetKind;
+  std::string error;
+  NodeConfig c;
+  ASSERT_EQ(parse({}, c, error), ParseResult::kOk);
+  EXPECT_EQ(c.params.budget.track_share, 0.0);
+  // Before or after its budget: the share ends on the budget.
+  for (const std::vector<std::string>& flags :
+       {std::vector<std::string>{"--track-share", "0.5", "--keep-fraction", "0.2"},
+        {"--keep-fraction", "0.2", "--track-share=0.5"}}) {
+    NodeConfig f;
+    ASSERT_EQ(parse(flags, f, error), ParseResult::kOk) << error;
+    EXPECT_EQ(f.params.budget.kind, BudgetKind::kFraction);
+    EXPECT_EQ(f.params.budget.track_share, 0.5);
+    EXPECT_EQ(keepless::core::Sparsifier::validate(f.params), keepless::core::Status::kOk);
+  }
+  NodeConfig p;
+  ASSERT_EQ(parse({"--keep-points", "300", "--track-share", "1"}, p, error), ParseResult::kOk) << error;
+  EXPECT_EQ(p.params.budget.track_share, 1.0);
+  for (const std::vector<std::string>& bad :
+       {std::vector<std::string>{"--keep-fraction", "0.2", "--track-share", "1.5"},
+        {"--keep-fraction", "0.2", "--track-share", "-0.1"}, {"--keep-fraction", "0.2", "--track-share", "nan"},
+        {"--keep-points", "5", "--track-share", "x"}}) {
+    NodeConfig d;
+    EXPECT_EQ(parse(bad, d, error), ParseResult::kError) << bad[2] << " " << bad[3];
+    EXPECT_FALSE(error.empty());
+  }
+  // A share of a count: not of an observation budget, nor without a budget.
+  for (const std::vector<std::string>& bad :
+       {std::vector<std::string>{"--track-share", "0.5"}, {"--keep-observations", "900", "--track-share", "0.5"},
+        {"--M", "50", "--track-share", "0.5"}}) {
+    NodeConfig d;
+    ASSERT_EQ(parse(bad, d, error), ParseResult::kError) << bad[0];
+    EXPECT_NE(error.find("--track-share needs --keep-points or --keep-fraction"), std::string::npos) << error;
+  }
 }
 
 TEST(NodeConfig, ParsesTheMaturityGuard) {

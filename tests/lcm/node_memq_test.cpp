@@ -646,25 +646,40 @@ TEST_F(NodeOnMemq, RejectsBadTrackedFlags) {
   EXPECT_NE(node_->window().keyframe(3).tracked, nullptr);
 }
 
-// --keep-fraction 0.3 over a sliding window whose culled points the VO
-// drops: the node decides what the library does on the same keyframes, the
-// first decision keeps floor(0.3 x evaluated + 0.5), and after every
-// decision the points kept are exactly floor(0.3 x N + 0.5) of the N points
-// evaluated so far (re-deciding a point does not compound the share).
-TEST_F(NodeOnMemq, KeepFractionHoldsThatShareOfTheMap) {
+// --keep-fraction 0.3 (with --track-share S) over a sliding window whose
+// culled points the VO drops: the node decides what the library does on the
+// same keyframes, the first decision keeps floor(0.3 x evaluated + 0.5), and
+// after every decision the points kept are exactly floor(0.3 x N + 0.5) of
+// the N points evaluated so far (re-deciding a point does not compound the
+// share). The share changes which points, never how many: on these
+// keyframes, whose older points crowd one spatial-diversity box, so that
+// the network's order prefers the new ones, it changes some decisions.
+class KeepFractionOnMemq : public NodeOnMemq, public ::testing::WithParamInterface<double> {};
+
+TEST_P(KeepFractionOnMemq, HoldsThatShareOfTheMap) {
   NodeConfig c = default_config();
   c.params.budget = keepless::core::KeepBudget{keepless::core::BudgetKind::kFraction, 0, 0.3};
+  c.params.budget.track_share = GetParam();
+  c.window = 8;
   make_node(c);
   kt::ReferenceNode ref(keepless::platform::window_capacities(config_), config_.params, config_.window);
+  keepless::core::Params by_order = config_.params;
+  by_order.budget.track_share = 0.0;
+  kt::ReferenceNode order_only(keepless::platform::window_capacities(config_), by_order, config_.window);
+  int changed_by_share = 0;
   std::set<std::int64_t> culled, evaluated;
   std::deque<std::vector<std::int64_t>> window;  // the ids of the node's window keyframes
   for (int i = 0; i < 12; ++i) {
     std::vector<std::int64_t> ids;
-    for (std::int64_t id : kt::id_range(i * 8, 40)) {
-      if (culled.count(id) == 0) ids.push_back(id);
+    for (std::int64_t id : kt::id_range(i * 4, 40)) {
+      if (culled.count(id) == 0 && (id * 7 + i) % 5 != 0) ids.push_back(id);  // tracks of varied length
     }
     keepless::keyframe_t m = kt::make_keyframe(i + 1, 100 + i, ids);
+    for (std::size_t j = 0; j < ids.size(); ++j) {  // the older points crowd one spatial-diversity box
+      if (ids[j] < i * 4 + 16) m.u[j] = m.v[j] = 100.0f;
+    }
     const kt::ReferenceDecision expected = ref.step(m);
+    changed_by_share += order_only.step(m).culled != expected.culled;
     send(m);
     ASSERT_EQ(decisions_.size(), static_cast<std::size_t>(i + 1));
     const std::string where = "keyframe " + std::to_string(i);
@@ -687,6 +702,9 @@ TEST_F(NodeOnMemq, KeepFractionHoldsThatShareOfTheMap) {
     EXPECT_EQ(evaluated.size() - culled.size(), static_cast<std::size_t>(std::floor(0.3 * n + 0.5))) << where;
   }
   EXPECT_GT(culled.size(), 0u);
+  EXPECT_EQ(changed_by_share > 0, GetParam() > 0.0) << changed_by_share << " decisions changed by the share";
 }
+
+INSTANTIATE_TEST_SUITE_P(TrackShares, KeepFractionOnMemq, ::testing::Values(0.0, 0.5, 1.0));
 
 }  // namespace
