@@ -263,14 +263,7 @@ Labelled label(const io::ColmapModel& original, const io::Similarity& sim, bool 
     }
   }
   l.kfs = io::keyframes_from_colmap(m, io::KeyframeOrder::kName, sim, unmapped);
-  std::map<std::uint32_t, const io::ColmapImage*> by_id;
-  for (const io::ColmapImage& im : m.images) by_id[im.id] = &im;
-  for (const core::Keyframe& kf : l.kfs.file.keyframes) {
-    auto& ids = l.images.emplace_back();
-    for (const io::ColmapPoint2D& p : by_id[static_cast<std::uint32_t>(kf.id)]->points2D) {
-      if (p.point3D_id != io::kNoPoint3D) ids.push_back(p.point3D_id);
-    }
-  }
+  l.images = io::observed_point_ids(m, l.kfs);
   l.longest.resize(m.points.size());
   std::iota(l.longest.begin(), l.longest.end(), 0);
   std::stable_sort(l.longest.begin(), l.longest.end(), [&](std::size_t x, std::size_t y) {

@@ -327,15 +327,7 @@ TEST(ExactCount, KeepsExactlyTheCountWithEveryImagesFloor) {
   const Fixture f = read_fixture();
   ASSERT_FALSE(::testing::Test::HasFailure());
   const io::Keyframes k = io::keyframes_from_colmap(f.model, io::KeyframeOrder::kName, f.sim);
-  std::unordered_map<std::uint32_t, const io::ColmapImage*> by_id;
-  for (const auto& im : f.model.images) by_id[im.id] = &im;
-  std::vector<std::vector<core::PointId>> images;
-  for (const core::Keyframe& kf : k.file.keyframes) {
-    auto& ids = images.emplace_back();
-    for (const auto& p : by_id.at(static_cast<std::uint32_t>(kf.id))->points2D) {
-      if (p.point3D_id != io::kNoPoint3D) ids.push_back(p.point3D_id);
-    }
-  }
+  const std::vector<std::vector<core::PointId>> images = io::observed_point_ids(f.model, k);
   constexpr std::uint32_t kFloor = 30;
   for (const std::uint64_t count : {800u, 2000u, 5000u}) {
     core::Params p = params_for(f.model, core::CostModel::kTrack);

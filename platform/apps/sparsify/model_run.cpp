@@ -7,7 +7,6 @@
 #include <filesystem>
 #include <new>
 #include <numeric>
-#include <unordered_map>
 
 #include "keepless/io/atomic_file.hpp"
 #include "keepless/io/bal_problem.hpp"
@@ -67,14 +66,7 @@ bool load(const ModelOptions& opt, const core::WindowFileLimits& window_limits, 
       const io::KeyframeOrder order = opt.order_given ? opt.order : io::KeyframeOrder::kName;
       m->keyframes = io::keyframes_from_colmap(m->colmap, order, metric,
                                                opt.params.cost_model == core::CostModel::kAuthors);
-      std::unordered_map<std::uint32_t, const io::ColmapImage*> by_id;
-      for (const io::ColmapImage& im : m->colmap.images) by_id[im.id] = &im;
-      for (const core::Keyframe& kf : m->keyframes.file.keyframes) {
-        std::vector<core::PointId>& ids = m->images.emplace_back();
-        for (const io::ColmapPoint2D& p : by_id[static_cast<std::uint32_t>(kf.id)]->points2D) {
-          if (p.point3D_id != io::kNoPoint3D) ids.push_back(p.point3D_id);
-        }
-      }
+      m->images = io::observed_point_ids(m->colmap, m->keyframes);
       m->model_points = m->colmap.points.size();
       return true;
     }

@@ -242,4 +242,18 @@ Keyframes keyframes_from_bal(const BalProblem& problem, KeyframeOrder /*order: i
   return out;
 }
 
+std::vector<std::vector<core::PointId>> observed_point_ids(const ColmapModel& model, const Keyframes& keyframes) {
+  std::unordered_map<std::uint32_t, const ColmapImage*> by_id;
+  for (const ColmapImage& image : model.images) by_id[image.id] = &image;
+  std::vector<std::vector<core::PointId>> images;
+  images.reserve(keyframes.file.keyframes.size());
+  for (const core::Keyframe& kf : keyframes.file.keyframes) {
+    std::vector<core::PointId>& ids = images.emplace_back();
+    for (const ColmapPoint2D& p : by_id.at(static_cast<std::uint32_t>(kf.id))->points2D) {
+      if (p.point3D_id != kNoPoint3D) ids.push_back(p.point3D_id);
+    }
+  }
+  return images;
+}
+
 }  // namespace keepless::io

@@ -93,4 +93,8 @@ Keyframes keyframes_from_colmap(const ColmapModel& model, KeyframeOrder order, c
                                 bool unmapped = false);
 Keyframes keyframes_from_bal(const BalProblem& problem, KeyframeOrder order, const Similarity& to_metric);
 
+// Each keyframe's image's observed 3D point ids (its 2D points that map one,
+// repeats kept), in the keyframes' order: what a per-image floor counts.
+std::vector<std::vector<core::PointId>> observed_point_ids(const ColmapModel& model, const Keyframes& keyframes);
+
 }  // namespace keepless::io
