@@ -68,7 +68,9 @@ const std::vector<keepless::cli::Flag> kFlags = {
     {"--scale", "S", "multiply camera centres by S to get metres (default 1)"},
     {"--sim3", "FILE", "a similarity to metres: s, R row-major, t (13 numbers)"},
     {"--min-obs-per-image", "F", "give culled points back until every image has F observations\n"
-                                 "(default 30 for COLMAP and BAL, 0 for a window file)"},
+                                 "(default 30 for COLMAP and BAL, 0 for a window file); in whole mode\n"
+                                 "with --keep-points or --keep-fraction from within the count: the\n"
+                                 "order's last points make way"},
     {"--decisions", "OUT", "write '<point_id> <keep|cull|skip> <flow> <capacity>' a line"},
     {"--M", "N", "pair -> sink capacity, 1..2147483647 (default 100)"},
     {"--keep-points", "K", "instead of --M: keep exactly K of the evaluated points (or all)"},

@@ -200,6 +200,36 @@ TEST_F(SparsifyMaps, WholeModeWithTheFloorKeepsEveryImageAtTheFloor) {
   EXPECT_NE(r.out.find("whole: kept "), std::string::npos);
 }
 
+// Whole mode with a count: a floor that binds takes its points from within
+// the count, so the count stays exact; one that cannot fit keeps what it
+// needs and warns.
+TEST_F(SparsifyMaps, AWholeCountKeepsItsFloorWithinTheCount) {
+  const auto run = [&](const std::string& count, const std::string& floor) {
+    return sparsify({"--colmap", fixture("sparse"), "--mode", "whole", "--keep-points", count, "--track-share", "1",
+                     "--min-obs-per-image", floor});
+  };
+  const maps_test::Result free = run("710", "0");
+  ASSERT_EQ(free.status, 0) << free.err;
+  const double least = json_number(last_line(free.out), "min_obs_per_image");
+  ASSERT_GT(least, 0);
+  const int floor = static_cast<int>(least) + 15;  // binds on at least one image
+  const maps_test::Result r = run("710", std::to_string(floor));
+  ASSERT_EQ(r.status, 0) << r.err;
+  const std::string json = last_line(r.out);
+  EXPECT_EQ(json_number(json, "points_kept"), 710);
+  EXPECT_GE(json_number(json, "min_obs_per_image"), floor);
+  EXPECT_GT(json_number(json, "floor_restored"), 0);
+  EXPECT_EQ(r.err.find("the floor"), std::string::npos) << r.err;
+
+  const maps_test::Result tight = run("60", "100");
+  ASSERT_EQ(tight.status, 0) << tight.err;
+  const std::string tight_json = last_line(tight.out);
+  EXPECT_GT(json_number(tight_json, "points_kept"), 60);
+  EXPECT_EQ(json_number(tight_json, "points_kept"), json_number(tight_json, "floor_restored"));
+  EXPECT_GE(json_number(tight_json, "min_obs_per_image"), 100);
+  EXPECT_NE(tight.err.find("alone needs more than the count of 60 points"), std::string::npos) << tight.err;
+}
+
 // --track-share 1: the whole model's count taken entirely by track length,
 // so no culled point is seen by more images than a kept one.
 TEST_F(SparsifyMaps, AWholeTrackShareKeepsTheLongestTracks) {

@@ -14,6 +14,7 @@
 #include "keepless/platform/window_file_io.hpp"
 #include "keepless/platform/memory_estimate.hpp"
 #include "keepless/platform/monotonic_clock.hpp"
+#include "sparsify/exact_count.hpp"
 
 namespace keepless::sparsify {
 
@@ -417,7 +418,18 @@ int run_model(const ModelOptions& opt) {
     std::fprintf(stderr, "keepless_sparsify: %s failed: %s\n", to_string(mode), core::to_string(s));
     return kExitInternal;
   }
-  const std::uint32_t restored = apply_floor(m.images, floor, &r.decisions);
+  // Whole mode with a count: a floor that binds takes its points from within
+  // the count (the order's last make way), so the count stays exact.
+  std::uint64_t count = 0;
+  for (const core::PointDecision& d : r.decisions) count += d.verdict != core::Verdict::kCull;
+  std::uint32_t restored = apply_floor(m.images, floor, &r.decisions);
+  bool floor_fits = true;
+  const core::BudgetKind kind = params.budget.kind;
+  if (restored > 0 && mode == Mode::kWhole && (kind == core::BudgetKind::kPoints || kind == core::BudgetKind::kFraction)) {
+    const ExactCount e = keep_exactly(m.images, floor, count, r.thresholds, &r.decisions, params.budget.track_share);
+    restored = e.restored;
+    floor_fits = e.floor_fits;
+  }
   const std::vector<std::uint32_t> per_image = kept_observations(m.images, r.decisions);
   const double time_ms = ms_since(t_solve);
   std::uint32_t culled = 0, kept = 0;
@@ -436,6 +448,12 @@ int run_model(const ModelOptions& opt) {
   }
   // Warnings once all is written (an error stays the only stderr line).
   warn_thin_images(m, r.decisions);
+  if (!floor_fits) {
+    std::fprintf(stderr,
+                 "keepless_sparsify: warning: the floor (--min-obs-per-image %u) alone needs more than the count of "
+                 "%" PRIu64 " points: %u kept for it, none by the order\n",
+                 floor, count, restored);
+  }
   // A keep budget sets the count directly: M does not apply.
   if (opt.input == Input::kColmap && params.budget.kind == core::BudgetKind::kNone && params.pair_capacity < kEvidenceM) {
     warn_low_m(params.pair_capacity);
