@@ -61,17 +61,18 @@ inline bool keyframes_fit(const Window& window, const Capacities& caps) {
   return true;
 }
 
-// Point -> pair cost from the two observations' scores (0 with the spatial
-// term off).
+// Point -> pair cost from the two observations' scores, times
+// Params::spatial_weight (0 with the spatial term off).
 inline std::int64_t pair_arc_cost(const Params& params, std::uint32_t a, std::uint32_t b) {
   if (!(params.cost_terms & kSpatialCost)) return 0;
+  std::int64_t cost = 0;
   switch (params.cost_model) {
-    case CostModel::kAuthors: return authors_spatial_cost(a, b);
+    case CostModel::kAuthors: cost = authors_spatial_cost(a, b); break;
     case CostModel::kInformation:
-    case CostModel::kTrack: return std::int64_t{a} + b;
-    case CostModel::kPaper: break;
+    case CostModel::kTrack: cost = std::int64_t{a} + b; break;
+    case CostModel::kPaper: cost = spatial_cost(a, b); break;
   }
-  return spatial_cost(a, b);
+  return cost * params.spatial_weight;
 }
 
 // Pair -> sink cost (0 with the baseline term off).
@@ -87,6 +88,7 @@ inline std::int64_t pair_sink_cost(const Params& params, const double centre_j[3
 inline bool same_network(const Params& a, const Params& b) {
   return a.pair_capacity == b.pair_capacity && a.box_width == b.box_width &&
          a.box_height == b.box_height && a.cost_terms == b.cost_terms &&
+         a.spatial_weight == b.spatial_weight &&
          a.cost_model == b.cost_model && a.image_width == b.image_width &&
          a.image_height == b.image_height && a.track_terms == b.track_terms;
 }

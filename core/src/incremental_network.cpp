@@ -255,11 +255,14 @@ struct IncrementalNetwork::Impl {
     spatial_memo.resize(std::size_t{kSpatialMemo} * kSpatialMemo);
   }
 
-  // The point -> pair costs of small scores under `params` (all < 256).
+  // The point -> pair costs of small scores under `params` before
+  // spatial_weight (all < 256); spatial() applies the weight.
   void memoise_arc_costs() {
+    Params unweighted = params;
+    unweighted.spatial_weight = 1;
     for (std::uint32_t a = 0; a < kSpatialMemo; ++a) {
       for (std::uint32_t b = 0; b < kSpatialMemo; ++b) {
-        spatial_memo[a * kSpatialMemo + b] = static_cast<std::uint8_t>(pair_arc_cost(params, a, b));
+        spatial_memo[a * kSpatialMemo + b] = static_cast<std::uint8_t>(pair_arc_cost(unweighted, a, b));
       }
     }
   }
@@ -278,7 +281,7 @@ struct IncrementalNetwork::Impl {
   // --- costs --------------------------------------------------------------
 
   std::int64_t spatial(std::uint32_t a, std::uint32_t b) const {
-    if (a < kSpatialMemo && b < kSpatialMemo) return spatial_memo[a * kSpatialMemo + b];
+    if (a < kSpatialMemo && b < kSpatialMemo) return std::int64_t{spatial_memo[a * kSpatialMemo + b]} * params.spatial_weight;
     return pair_arc_cost(params, a, b);
   }
   std::int64_t baseline(std::uint32_t fa, std::uint32_t fb) const {

@@ -470,6 +470,7 @@ Status Sparsifier::validate(const Params& p) {
   if (p.pair_capacity < 1) return Status::kInvalidArgument;
   if (!std::isfinite(p.theta) || p.theta < 0.0 || p.theta > 1.0) return Status::kInvalidArgument;
   if (p.box_width < 0 || p.box_height < 0) return Status::kInvalidArgument;
+  if (p.spatial_weight < 1 || p.spatial_weight > kMaxSpatialWeight) return Status::kInvalidArgument;
   if (p.scope != Scope::kWindow && p.scope != Scope::kNewest) return Status::kInvalidArgument;
   switch (p.budget.kind) {
     case BudgetKind::kNone:

@@ -1,6 +1,7 @@
 // The paper's ablation switches cost terms off: a switched-off term costs 0 on
 // its arcs, the solver's optimum still equals the per-pair closed form, and
 // c_b alone never changes which points are kept (it is constant per pair).
+// Params::spatial_weight multiplies c_s, and the optimum stays exact.
 
 #include <gtest/gtest.h>
 
@@ -77,6 +78,41 @@ TEST(CostTerms, SwitchedOffTermsCostNothingAndTheOptimumStaysCanonical) {
     }
   }
   EXPECT_GT(nonzero_cs, 100u);  // the windows exercise c_s
+}
+
+TEST(CostTerms, TheSpatialWeightMultipliesCsAndTheOptimumStaysCanonical) {
+  Window window(kCaps);
+  ClosedForm closed(kCaps);
+  std::uint32_t changed = 0;
+  for (std::uint64_t seed = 1; seed <= 100; ++seed) {
+    const test::RandomCase c = test::random_case(seed);
+    ASSERT_TRUE(test::load(window, c.frames)) << "seed " << seed;
+    Sparsifier paper(kCaps, c.params);
+    ASSERT_EQ(paper.run(window), Status::kOk) << "seed " << seed;
+    for (const std::int32_t w : {7, 1000, kMaxSpatialWeight}) {
+      Params p = c.params;
+      p.spatial_weight = w;
+      Sparsifier s(kCaps, p);
+      ASSERT_EQ(s.run(window), Status::kOk) << "seed " << seed << " weight " << w;
+      ASSERT_EQ(s.network().pair_arc_count(), paper.network().pair_arc_count());
+      for (std::uint32_t a = 0; a < s.network().pair_arc_count(); ++a) {
+        ASSERT_EQ(s.network().arc_spatial_cost(a), w * paper.network().arc_spatial_cost(a)) << "seed " << seed;
+      }
+      closed.solve(s.network(), p);
+      ASSERT_EQ(closed.total_cost(), s.summary().total_cost) << "seed " << seed << " weight " << w;
+      for (std::uint32_t i = 0; i < s.decision_count(); ++i) {
+        ASSERT_EQ(closed.point_flow(i), s.decisions()[i].flow) << "seed " << seed << " weight " << w;
+      }
+      changed += !same_verdicts(decisions_of(paper), decisions_of(s));
+    }
+  }
+  EXPECT_GT(changed, 10u);  // a weight that outranks c_c keeps other points
+  for (const std::int32_t bad : {0, -1, kMaxSpatialWeight + 1}) {
+    Params p;
+    p.spatial_weight = bad;
+    Sparsifier s(kCaps, p);
+    EXPECT_EQ(s.run(Window(kCaps)), Status::kInvalidArgument) << bad;
+  }
 }
 
 }  // namespace

@@ -248,6 +248,7 @@ TEST(Incremental, TiesEverywhere) {
     spec.params.cost_terms = static_cast<std::uint8_t>(seed % 8);
     spec.params.theta = seed % 4 == 0 ? 0.0 : 0.5;
     spec.params.box_width = seed % 5 == 0 ? 0 : 64;
+    spec.params.spatial_weight = seed % 3 == 1 ? 1000 : 1;  // c_s outranking c_c
     matched += check_stream(seed * 7, spec, &swaps, &errors);
   }
   EXPECT_GT(matched, 1000u);

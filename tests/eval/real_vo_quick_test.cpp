@@ -292,3 +292,42 @@ TEST(RealVoQuick, NoKeyframeCullingKeepsEveryKeyframeMade) {
     EXPECT_EQ(alive, made);
   }
 }
+
+// Two knobs of keepless's preference in the real VO: --tie-order hash (ties
+// by a hash of the point id instead of the id, which grows with the point's
+// age) and --cost-terms (which of the paper's costs are summed). Neither
+// touches the budget: on a monocular KITTI slice deciding the window, keepless
+// still keeps F of the points it evaluated; each changes which points it
+// keeps, so its run differs from the default's.
+TEST(RealVoQuick, TieOrderAndCostTermsChangeThePointsNotTheBudget) {
+  const std::string bin = KEEPLESS_EVAL_BIN;
+  const std::string data = std::string(KEEPLESS_EVAL_DATA) + "/kitti06_first51_niconielsen";
+  ASSERT_TRUE(std::filesystem::exists(bin)) << bin << " is missing: build target keepless_eval";
+  if (!std::filesystem::exists(data + "/image_l/000020.png")) {
+    GTEST_SKIP() << "no KITTI 06 data at " << data << " (set KEEPLESS_EVAL_DATA_DIR)";
+  }
+  // keepless's run line from its "culled" count to its ATE: what follows from the decisions, no timings.
+  const auto ours = [&](const std::string& extra) {
+    const EvalOutput o = run_eval("--images '" + data + "/image_l' --calib '" + data + "/calib.txt' --poses '" + data +
+                                  "/poses.txt' --frames 0:20 --seeds 1 --kept-fraction 0.2 --no-ablation --no-baselines "
+                                  "--defer 2 --defer-refine --decide window " + extra);
+    EXPECT_EQ(o.status, 0) << o.all;
+    std::string line;
+    for (const std::string& l : o.runs) {
+      const std::size_t from = l.find(" culled "), to = l.find(", local BA");
+      if (l.find(" ours M=") != std::string::npos && from < to && to != std::string::npos) line = l.substr(from, to - from);
+    }
+    EXPECT_FALSE(line.empty()) << o.all;
+    const std::size_t at = line.find(" map ");
+    EXPECT_NE(at, std::string::npos) << line;
+    if (at != std::string::npos) {
+      EXPECT_NEAR(std::atof(line.c_str() + at + 5), 20.0, 0.1) << extra << ": " << line;
+    }
+    return line;
+  };
+  const std::string by_id = ours("");
+  EXPECT_EQ(ours("--tie-order id"), by_id);
+  EXPECT_NE(ours("--tie-order hash"), by_id);
+  EXPECT_NE(ours("--cost-terms c_s"), by_id);
+  EXPECT_EQ(ours("--cost-terms c_c,c_s"), by_id);  // c_b is one cost per pair: it never reorders a pair's points
+}

@@ -279,12 +279,14 @@ inline std::vector<std::uint64_t> ref_scores(const RefKeyframe& f, const core::P
 
 inline std::int64_t ref_arc_cost(const core::Params& params, std::uint64_t a, std::uint64_t b) {
   if (!(params.cost_terms & core::kSpatialCost)) return 0;
+  std::int64_t cost = 0;
   switch (params.cost_model) {
-    case core::CostModel::kAuthors: return ref_authors_spatial_cost(a, b);
+    case core::CostModel::kAuthors: cost = ref_authors_spatial_cost(a, b); break;
     case core::CostModel::kInformation:
-    case core::CostModel::kTrack: return static_cast<std::int64_t>(a + b);
-    default: return ref_spatial_cost(a, b);
+    case core::CostModel::kTrack: cost = static_cast<std::int64_t>(a + b); break;
+    default: cost = ref_spatial_cost(a, b);
   }
+  return cost * params.spatial_weight;
 }
 
 inline std::int64_t ref_sink_cost(const core::Params& params, const double* a, const double* b) {

@@ -84,6 +84,10 @@ const std::vector<cli::Flag> kFlags = {
                                                   "error and triangulation angle"},
     {"--track-terms", "LIST", "the qualities --cost track sums, comma-separated from length, age,\n"
                               "error, angle (default all four)"},
+    {"--cost-terms", "LIST", "the real VO: the paper's cost terms keepless sums, comma-separated from\n"
+                             "c_c, c_s, c_b (default all three; core::Params cost_terms)"},
+    {"--spatial-weight", "W", "keepless's c_s times W, 1..65536 (core::Params spatial_weight; default 1,\n"
+                              "the paper's; larger lets spatial diversity outrank connectivity)"},
     {"--maturity", "A", "tracking-safe culling: points first seen in the newest A window keyframes\n"
                         "are not decided yet (core::Params maturity_keyframes); every selector\n"
                         "culls only what keepless decided, so the baselines get the same guard\n"
@@ -102,6 +106,8 @@ const std::vector<cli::Flag> kFlags = {
                                   "newest, the new keyframe's (the authors' integration; default), or\n"
                                   "window, every point of the local window, so a point kept before\n"
                                   "can be culled later (keepless with --scope window)"},
+    {"--tie-order", "id|hash", "how keepless breaks ties in the real VO: by point id (default; the VO's\n"
+                              "ids grow with the points' age) or by a bijective hash of it"},
     {"--tracked-flags", nullptr, "the real VO sends the new keyframe's tracked flags (the points it\n"
                                  "matched in that frame), which no selector culls"},
     {"--keyframe-culling", "on|off|count-culled",
@@ -151,11 +157,12 @@ struct Args {
   int max_keyframes = -1, keypoints = -1, window = -1, ba_iterations = -1, image_frames = -1;
   bool window_sizes = false;
   bool noise_free = false, baselines = true, ablation = true, ablation_all = false;
-  keepless::core::Params policy;  // scope, coverage_floor, theta, cost_model, maturity_keyframes, track_terms; the rest is set per variant
+  keepless::core::Params policy;  // scope, coverage_floor, theta, cost_model, maturity_keyframes, track_terms, cost_terms (the real VO), spatial_weight; the rest is set per variant
   bool tracked_flags = false;     // --tracked-flags (the real VO)
   bool defer_fixed = false;       // --defer-fixed (the real VO)
   bool defer_refine = false;      // --defer-refine (the real VO)
   bool decide_window = false;     // --decide window (the real VO)
+  bool hashed_ids = false;        // --tie-order hash (the real VO)
   ke::vo::KeyframeCulling keyframe_culling{};  // --keyframe-culling (the real VO)
 };
 
@@ -284,6 +291,34 @@ Args parse(int argc, char** argv) {
       if (v != "newest" && v != "window") fail("--decide: expected newest or window, got '" + v + "'");
       a.decide_window = v == "window";
     }
+    else if (f == "--cost-terms") {
+      const std::string v = val();
+      const std::pair<const char*, std::uint8_t> terms[] = {{"c_c", keepless::core::kConnectivityCost},
+                                                           {"c_s", keepless::core::kSpatialCost},
+                                                           {"c_b", keepless::core::kBaselineCost}};
+      a.policy.cost_terms = 0;
+      std::stringstream list(v);
+      for (std::string t; std::getline(list, t, ',');) {
+        const auto* it = std::find_if(std::begin(terms), std::end(terms), [&](const auto& x) { return t == x.first; });
+        if (it == std::end(terms) || (a.policy.cost_terms & it->second) != 0)
+          fail("--cost-terms: expected a comma-separated list of c_c, c_s, c_b, got '" + v + "'");
+        a.policy.cost_terms = static_cast<std::uint8_t>(a.policy.cost_terms | it->second);
+      }
+      if (a.policy.cost_terms == 0) fail("--cost-terms: expected a comma-separated list of c_c, c_s, c_b, got '" + v + "'");
+    }
+    else if (f == "--spatial-weight") {
+      const std::string v = val();
+      char* end = nullptr;
+      const long w = std::strtol(v.c_str(), &end, 10);
+      if (end == v.c_str() || *end != '\0' || w < 1 || w > keepless::core::kMaxSpatialWeight)
+        fail("--spatial-weight: expected an integer in 1.." + std::to_string(keepless::core::kMaxSpatialWeight) + ", got '" + v + "'");
+      a.policy.spatial_weight = static_cast<std::int32_t>(w);
+    }
+    else if (f == "--tie-order") {
+      const std::string v = val();
+      if (v != "id" && v != "hash") fail("--tie-order: expected id or hash, got '" + v + "'");
+      a.hashed_ids = v == "hash";
+    }
     else if (f == "--cost") {
       const std::string v = val();
       if (!keepless::core::parse_cost_model(v.c_str(), &a.policy.cost_model))
@@ -400,6 +435,7 @@ ke::VariantSpec variant(const keepless::core::Params& policy, const std::string&
     v.params.budget = {keepless::core::BudgetKind::kFraction, 0, fraction, policy.budget.track_share};
   }
   v.params.cost_terms = costs;
+  v.params.spatial_weight = policy.spatial_weight;
   return v;
 }
 
@@ -521,6 +557,10 @@ int main(int argc, char** argv) {
   if (a.defer_fixed) summary.settings += ", excluded points fixed in BA";
   if (a.defer_refine) summary.settings += ", excluded points refined";
   if (a.decide_window) summary.settings += ", the window's points decided";
+  if (a.hashed_ids) summary.settings += ", ties by hashed id";
+  if (a.policy.spatial_weight != 1) summary.settings += ", spatial weight " + std::to_string(a.policy.spatial_weight);
+  if (a.policy.cost_terms != keepless::core::Params{}.cost_terms)
+    summary.settings += ", cost terms " + std::to_string(a.policy.cost_terms);
   if (a.keyframe_culling == ke::vo::KeyframeCulling::kOff) summary.settings += ", no keyframe culling";
   if (a.keyframe_culling == ke::vo::KeyframeCulling::kCountCulled) {
     summary.settings += ", keyframe culling counts culled points";
@@ -629,6 +669,7 @@ int main(int argc, char** argv) {
     vo.defer_fixed = a.defer_fixed;
     vo.defer_refine = a.defer_refine;
     vo.decide_window = a.decide_window;
+    vo.hashed_ids = a.hashed_ids;
     vo.keyframe_culling = a.keyframe_culling;
     vo.out = a.out;
     std::string err;

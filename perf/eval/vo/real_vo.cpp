@@ -44,6 +44,30 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
+// RealVoOptions::hashed_ids: lowbias32 (C. Wellons' hash prospector) and its
+// inverse, a bijection of the 32-bit map indices; the adapter's reserved ids
+// of unmapped keypoints (top bit set) pass through.
+core::PointId hashed_id(int p) {
+  auto x = static_cast<std::uint32_t>(p);
+  x ^= x >> 16;
+  x *= 0x7feb352dU;
+  x ^= x >> 15;
+  x *= 0x846ca68bU;
+  x ^= x >> 16;
+  return x;
+}
+
+core::PointId unhashed_id(core::PointId id) {
+  if (id >> 32) return id;
+  auto x = static_cast<std::uint32_t>(id);
+  x ^= x >> 16;
+  x *= 0x43021123U;
+  x ^= x >> 15 ^ x >> 30;
+  x *= 0x1d69e2a5U;
+  x ^= x >> 16;
+  return x;
+}
+
 // This thread's CPU time: what a solve costs whatever else the machine runs.
 double thread_cpu_seconds() {
   timespec ts{};
@@ -682,7 +706,7 @@ std::vector<core::PointId> Vo::select_points(int kf, const std::vector<int>& loc
       if (f.mp[i] >= 0 && !map_.points[static_cast<std::size_t>(f.mp[i])].bad &&
           !map_.points[static_cast<std::size_t>(f.mp[i])].excluded) {
         keypoints.push_back(f.f.keys[i]);
-        ids.push_back(static_cast<core::PointId>(f.mp[i]));
+        ids.push_back(opt_.hashed_ids ? hashed_id(f.mp[i]) : static_cast<core::PointId>(f.mp[i]));
         if (flags) tracked.push_back(f.tracked[i]);
         depths.push_back((f.Tcw * map_.points[static_cast<std::size_t>(f.mp[i])].X).z());
         if (send_quality) quality.push_back(point_quality(map_, f.mp[i], kf, cam_));
@@ -717,16 +741,19 @@ std::vector<core::PointId> Vo::select_points(int kf, const std::vector<int>& loc
   }
   const KeyFrame& f = map_.kfs[static_cast<std::size_t>(maturity > 0 ? ordered[ordered.size() - 1 - maturity] : kf)];
   std::vector<Candidate> candidates;
-  std::vector<core::PointId> keepless_culls;
+  // Keepless's culls and every point it evaluated, under the map's indices
+  // (hashed_ids), sorted.
+  const auto map_ids = [this](std::vector<core::PointId>* ids) {
+    if (opt_.hashed_ids)
+      for (core::PointId& id : *ids) id = unhashed_id(id);
+    std::sort(ids->begin(), ids->end());
+  };
+  std::vector<core::PointId> keepless_culls, evaluated;
   opencv::culled_points(sparsifier_, &keepless_culls);
-  std::vector<core::PointId> evaluated;
-  {
-    std::vector<core::PointId> kept;
-    opencv::points_with_verdict(sparsifier_, core::Verdict::kKeep, &kept);
-    evaluated = kept;
-    evaluated.insert(evaluated.end(), keepless_culls.begin(), keepless_culls.end());
-    std::sort(evaluated.begin(), evaluated.end());
-  }
+  opencv::points_with_verdict(sparsifier_, core::Verdict::kKeep, &evaluated);
+  evaluated.insert(evaluated.end(), keepless_culls.begin(), keepless_culls.end());
+  map_ids(&keepless_culls);
+  map_ids(&evaluated);
   // The candidates: the evaluated points of the decided keyframe, or with
   // decide_window those of every window keyframe, each once, described by
   // its keypoint in the newest keyframe that observes it.
@@ -765,6 +792,11 @@ std::vector<core::PointId> Vo::select_points(int kf, const std::vector<int>& loc
     for (const Candidate& c : candidates) ids.push_back(c.id);
     std::sort(ids.begin(), ids.end());
     budget_view.assign(sparsifier_.decisions(), sparsifier_.decisions() + sparsifier_.decision_count());
+    if (opt_.hashed_ids) {  // FractionBudget reads ascending ids
+      for (core::PointDecision& d : budget_view) d.point = unhashed_id(d.point);
+      std::sort(budget_view.begin(), budget_view.end(),
+                [](const core::PointDecision& a, const core::PointDecision& b) { return a.point < b.point; });
+    }
     for (core::PointDecision& d : budget_view) {
       d.verdict = std::binary_search(ids.begin(), ids.end(), d.point) ? core::Verdict::kCull : core::Verdict::kSkip;
     }

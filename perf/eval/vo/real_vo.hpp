@@ -48,6 +48,11 @@ struct RealVoOptions {
   // later and a kept fraction is F of the points new to each window plus
   // those kept before among all of the window's.
   bool decide_window = false;
+  // keepless sees each point under a bijective hash of its map index instead
+  // of the index itself, so its ties (equal arc costs in a pair, equal M* at
+  // a budget's cut; both to the smaller id) fall in an order unrelated to the
+  // points' age (map indices grow as points are made).
+  bool hashed_ids = false;
   // Keyframe culling (ORB-SLAM's: a keyframe 90 % of whose points three others
   // see is deleted). kOff: never; culled points make keyframes look redundant.
   // kCountCulled: the test also counts each point the selector deleted, with

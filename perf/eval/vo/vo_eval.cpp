@@ -85,12 +85,15 @@ bool evaluate_real_vo(const VoInput& in, const VoEvalOptions& o, std::vector<Com
     vo.params.coverage_floor = o.policy.coverage_floor;
     vo.params.cost_model = o.policy.cost_model;
     vo.params.track_terms = o.policy.track_terms;
+    vo.params.cost_terms = o.policy.cost_terms;
+    vo.params.spatial_weight = o.policy.spatial_weight;
     vo.params.maturity_keyframes = o.policy.maturity_keyframes;
     vo.params.defer_keyframes = o.policy.defer_keyframes;
     vo.tracked_flags = o.tracked_flags;
     vo.defer_fixed = o.defer_fixed;
     vo.defer_refine = o.defer_refine;
     vo.decide_window = o.decide_window;
+    vo.hashed_ids = o.hashed_ids;
     vo.keyframe_culling = o.keyframe_culling;
     vo.seed = o.seeds[si];
     vo.selector = Selector::kOriginal;

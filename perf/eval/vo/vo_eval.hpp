@@ -36,6 +36,7 @@ struct VoEvalOptions {
   bool defer_fixed = false;    // RealVoOptions::defer_fixed
   bool defer_refine = false;   // RealVoOptions::defer_refine
   bool decide_window = false;  // RealVoOptions::decide_window (keepless with scope window)
+  bool hashed_ids = false;     // RealVoOptions::hashed_ids
   KeyframeCulling keyframe_culling = KeyframeCulling::kOn;  // RealVoOptions::keyframe_culling
   std::string out;  // non-empty: NAME_trajectory.svg and NAME_keypoints.svg there
 };

@@ -122,6 +122,8 @@ struct KeepBudget {
 const char* to_string(BudgetKind kind);
 // --- end keep budgets -------------------------------------------------------
 
+constexpr std::int32_t kMaxSpatialWeight = 1 << 16;
+
 // The paper's section III-B parameters, and the decision policies around them.
 struct Params {
   std::int64_t pair_capacity = 100;  // M
@@ -131,6 +133,13 @@ struct Params {
   // Which costs the network uses (the paper's ablation); the default, all
   // three, is the paper's method. A term switched off costs 0 on its arcs.
   std::uint8_t cost_terms = kConnectivityCost | kSpatialCost | kBaselineCost;
+  // Beyond the paper: the point -> pair cost (c_s, or the cost model's
+  // replacement) is multiplied by it, 1 .. kMaxSpatialWeight. 1 is the
+  // paper's; c_c (up to ~m^2/2 for a two-view point) otherwise outranks c_s
+  // (0 .. ~4), so a pair prefers the points with the most window views and
+  // c_s only breaks their ties. No weight tried beat 1 on both real
+  // monocular sequences (docs/design/policies.md).
+  std::int32_t spatial_weight = 1;
   Scope scope = Scope::kWindow;
   // Coverage floor L: after the solve, every window keyframe keeps at least L
   // of its evaluated points (those not culled: kept, or skipped by the scope),
