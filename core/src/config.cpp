@@ -1,5 +1,6 @@
 #include "keepless/core/config.hpp"
 
+#include <cstddef>
 #include <cstring>
 #include <initializer_list>
 
@@ -48,27 +49,46 @@ bool parse_cost_model(const char* text, CostModel* out) {
   return false;
 }
 
-bool parse_track_terms(const char* text, std::uint8_t* out) {
-  static constexpr struct {
-    const char* name;
-    std::uint8_t bit;
-  } kTerms[] = {{"length", kTrackLength}, {"age", kTrackAge}, {"error", kTrackError}, {"angle", kTrackAngle}};
-  std::uint8_t terms = 0;
+namespace {
+
+struct NamedBit {
+  const char* name;
+  std::uint8_t bit;
+};
+
+// A comma-separated list of `names`, each at most once, as their bits.
+template <std::size_t N>
+bool parse_bits(const char* text, const NamedBit (&names)[N], std::uint8_t* out) {
+  std::uint8_t bits = 0;
   const char* at = text;
   for (;;) {
     const char* end = std::strchr(at, ',');
     const std::size_t n = end != nullptr ? static_cast<std::size_t>(end - at) : std::strlen(at);
     std::uint8_t bit = 0;
-    for (const auto& t : kTerms) {
+    for (const NamedBit& t : names) {
       if (std::strlen(t.name) == n && std::strncmp(at, t.name, n) == 0) bit = t.bit;
     }
-    if (bit == 0 || (terms & bit) != 0) return false;
-    terms = static_cast<std::uint8_t>(terms | bit);
+    if (bit == 0 || (bits & bit) != 0) return false;
+    bits = static_cast<std::uint8_t>(bits | bit);
     if (end == nullptr) break;
     at = end + 1;
   }
-  *out = terms;
+  *out = bits;
   return true;
+}
+
+}  // namespace
+
+bool parse_track_terms(const char* text, std::uint8_t* out) {
+  static constexpr NamedBit kTerms[] = {
+      {"length", kTrackLength}, {"age", kTrackAge}, {"error", kTrackError}, {"angle", kTrackAngle}};
+  return parse_bits(text, kTerms, out);
+}
+
+bool parse_cost_terms(const char* text, std::uint8_t* out) {
+  static constexpr NamedBit kTerms[] = {
+      {"c_c", kConnectivityCost}, {"c_s", kSpatialCost}, {"c_b", kBaselineCost}};
+  return parse_bits(text, kTerms, out);
 }
 
 }  // namespace keepless::core

@@ -87,6 +87,8 @@ const std::vector<keepless::cli::Flag> kFlags = {
     {"--cost", "paper|authors|information|track", "point -> pair costs (default paper)"},
     {"--track-terms", "LIST", "what --cost track sums: length,age,error,angle (default all; COLMAP\n"
                               "gives length and error, BAL length)"},
+    {"--cost-terms", "LIST", "the costs summed: c_c,c_s,c_b (default all three, the paper's; without\n"
+                             "c_c a pair prefers spatial diversity over its points' views)"},
     {"--maturity", "A", "tracking-safe culling: points first seen in the newest A keyframes of a\n"
                         "window are not decided yet (default 0: off)"},
     {"--image", "WxH", "the image the authors' grid covers (default 640x480; COLMAP: its cameras')"},
@@ -219,6 +221,10 @@ int parse_args(int argc, char** argv, Options* opt, bool* help, bool* version) {
     } else if (flag == "--track-terms") {
       if (!core::parse_track_terms(value, &opt->params.track_terms)) {
         return usage_error(bad + " (a comma-separated list of length, age, error, angle)");
+      }
+    } else if (flag == "--cost-terms") {
+      if (!core::parse_cost_terms(value, &opt->params.cost_terms)) {
+        return usage_error(bad + " (a comma-separated list of c_c, c_s, c_b)");
       }
     } else if (flag == "--image") {
       int w = 0, h = 0;

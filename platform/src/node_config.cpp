@@ -104,6 +104,8 @@ std::string node_usage() {
          "                            point -> pair costs (default paper; docs/design/policies.md)\n"
          "  --track-terms LIST        what --cost track sums of keyframe_t's point quality, comma-separated\n"
          "                            from length, age, error, angle (default all four)\n"
+         "  --cost-terms LIST         the costs summed, comma-separated from c_c, c_s, c_b (default all three,\n"
+         "                            the paper's; without c_c a pair prefers spatial diversity over views)\n"
          "  --image WxH               the image the authors' 64x48 grid covers (default 640x480)\n"
          "  --maturity A              points first seen in the newest A window keyframes are not decided\n"
          "                            yet (default 0: off); a keyframe_t's tracked flags are always honoured\n"
@@ -315,6 +317,10 @@ ParseResult parse_node_arguments(int argc, const char* const* argv, NodeConfig& 
     } else if (flag == "--track-terms") {
       if (!core::parse_track_terms(value.c_str(), &config.params.track_terms)) {
         return bad("expected a comma-separated list of length, age, error, angle");
+      }
+    } else if (flag == "--cost-terms") {
+      if (!core::parse_cost_terms(value.c_str(), &config.params.cost_terms)) {
+        return bad("expected a comma-separated list of c_c, c_s, c_b");
       }
     } else if (flag == "--maturity") {
       if (!parse_u64(value, 0, std::numeric_limits<std::uint32_t>::max(), n)) return bad("expected an integer >= 0");

@@ -80,6 +80,19 @@ TEST(CostTerms, SwitchedOffTermsCostNothingAndTheOptimumStaysCanonical) {
   EXPECT_GT(nonzero_cs, 100u);  // the windows exercise c_s
 }
 
+TEST(CostTerms, TermNames) {
+  std::uint8_t terms = 0;
+  EXPECT_TRUE(parse_cost_terms("c_s", &terms));
+  EXPECT_EQ(terms, kSpatialCost);
+  EXPECT_TRUE(parse_cost_terms("c_b,c_s,c_c", &terms));
+  EXPECT_EQ(terms, Params{}.cost_terms);
+  EXPECT_TRUE(parse_cost_terms("c_s,c_b", &terms));
+  for (const char* bad : {"", "c_s,", ",c_b", "c_s,c_s", "c_d", "C_s", "c_s c_b"}) {
+    EXPECT_FALSE(parse_cost_terms(bad, &terms)) << bad;
+    EXPECT_EQ(terms, kSpatialCost | kBaselineCost);
+  }
+}
+
 TEST(CostTerms, TheSpatialWeightMultipliesCsAndTheOptimumStaysCanonical) {
   Window window(kCaps);
   ClosedForm closed(kCaps);

@@ -218,7 +218,8 @@ TEST(NodeConfig, ParsesThePolicyFlags) {
   for (const std::vector<std::string>& bad :
        {std::vector<std::string>{"--scope", "all"}, {"--floor", "-1"}, {"--floor", "4294967296"},
         {"--cost", "Paper"}, {"--image", "0x480"}, {"--image", "640"}, {"--max-unmapped", "-1"},
-        {"--track-terms", "length,length"}, {"--track-terms", ""}, {"--track-terms", "size"}}) {
+        {"--track-terms", "length,length"}, {"--track-terms", ""}, {"--track-terms", "size"},
+        {"--cost-terms", "c_s,c_s"}, {"--cost-terms", ""}, {"--cost-terms", "c_d"}}) {
     NodeConfig d;
     EXPECT_EQ(parse(bad, d, error), ParseResult::kError) << bad[0] << " " << bad[1];
   }
@@ -229,6 +230,10 @@ TEST(NodeConfig, ParsesThePolicyFlags) {
   EXPECT_EQ(t.params.track_terms, 15);
   ASSERT_EQ(parse({"--cost", "track", "--track-terms", "length,error"}, t, error), ParseResult::kOk) << error;
   EXPECT_EQ(t.params.track_terms, keepless::core::kTrackLength | keepless::core::kTrackError);
+  // The paper's cost terms (default all three).
+  EXPECT_EQ(t.params.cost_terms, 7);
+  ASSERT_EQ(parse({"--cost-terms", "c_s,c_b"}, t, error), ParseResult::kOk) << error;
+  EXPECT_EQ(t.params.cost_terms, keepless::core::kSpatialCost | keepless::core::kBaselineCost);
 }
 
 TEST(NodeConfig, ParsesTheKeepBudgets) {

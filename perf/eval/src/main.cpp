@@ -293,18 +293,8 @@ Args parse(int argc, char** argv) {
     }
     else if (f == "--cost-terms") {
       const std::string v = val();
-      const std::pair<const char*, std::uint8_t> terms[] = {{"c_c", keepless::core::kConnectivityCost},
-                                                           {"c_s", keepless::core::kSpatialCost},
-                                                           {"c_b", keepless::core::kBaselineCost}};
-      a.policy.cost_terms = 0;
-      std::stringstream list(v);
-      for (std::string t; std::getline(list, t, ',');) {
-        const auto* it = std::find_if(std::begin(terms), std::end(terms), [&](const auto& x) { return t == x.first; });
-        if (it == std::end(terms) || (a.policy.cost_terms & it->second) != 0)
-          fail("--cost-terms: expected a comma-separated list of c_c, c_s, c_b, got '" + v + "'");
-        a.policy.cost_terms = static_cast<std::uint8_t>(a.policy.cost_terms | it->second);
-      }
-      if (a.policy.cost_terms == 0) fail("--cost-terms: expected a comma-separated list of c_c, c_s, c_b, got '" + v + "'");
+      if (!keepless::core::parse_cost_terms(v.c_str(), &a.policy.cost_terms))
+        fail("--cost-terms: expected a comma-separated list of c_c, c_s, c_b, got '" + v + "'");
     }
     else if (f == "--spatial-weight") {
       const std::string v = val();

@@ -183,5 +183,8 @@ bool parse_cost_model(const char* text, CostModel* out);
 // "error", "angle" (each at most once); false (and *out unchanged) for
 // anything else, an empty list included.
 bool parse_track_terms(const char* text, std::uint8_t* out);
+// Params::cost_terms from a comma-separated list of "c_c", "c_s", "c_b", the
+// same way.
+bool parse_cost_terms(const char* text, std::uint8_t* out);
 
 }  // namespace keepless::core
