@@ -296,14 +296,8 @@ Args parse(int argc, char** argv) {
       if (!keepless::core::parse_cost_terms(v.c_str(), &a.policy.cost_terms))
         fail("--cost-terms: expected a comma-separated list of c_c, c_s, c_b, got '" + v + "'");
     }
-    else if (f == "--spatial-weight") {
-      const std::string v = val();
-      char* end = nullptr;
-      const long w = std::strtol(v.c_str(), &end, 10);
-      if (end == v.c_str() || *end != '\0' || w < 1 || w > keepless::core::kMaxSpatialWeight)
-        fail("--spatial-weight: expected an integer in 1.." + std::to_string(keepless::core::kMaxSpatialWeight) + ", got '" + v + "'");
-      a.policy.spatial_weight = static_cast<std::int32_t>(w);
-    }
+    else if (f == "--spatial-weight")
+      a.policy.spatial_weight = static_cast<std::int32_t>(parse_int(f, val(), 1, keepless::core::kMaxSpatialWeight));
     else if (f == "--tie-order") {
       const std::string v = val();
       if (v != "id" && v != "hash") fail("--tie-order: expected id or hash, got '" + v + "'");
