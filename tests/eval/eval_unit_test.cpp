@@ -233,6 +233,45 @@ TEST(EvalContract, RealVoRunsReportFramesTracked) {
       << j;
 }
 
+// A lost original is scored at its few tracked frames held still: every
+// comparison with the original skips its failed seeds and says how many it used.
+TEST(EvalContract, RatiosToTheOriginalSkipTheSeedsItFailed) {
+  ke::Comparison c;
+  c.info.input = "seq";
+  c.info.name = "seq";
+  c.info.kind = "images";
+  c.info.error_floor_m = 0.5;
+  c.target_fraction = 0.1;
+  c.original = {rec(1.0, 100, 400, 1), rec(30.0, 10, 40, 2), rec(2.0, 100, 400, 3)};
+  c.ours = {rec(1.5, 30, 100, 1), rec(1.0, 30, 100, 2), rec(2.5, 30, 100, 3)};
+  c.random = {rec(2.0, 30, 100, 1), rec(9.0, 30, 100, 2), rec(1.0, 30, 100, 3)};
+  for (auto* v : {&c.original, &c.ours, &c.random})
+    for (ke::RunRecord& r : *v) r.frames = 60, r.frames_tracked = 60;
+  c.original[1].frames_tracked = 5;
+  const ke::ContractRun r = ke::summarize(c);
+  EXPECT_EQ(r.seeds, 3);
+  EXPECT_EQ(r.ratio_seeds, 2);
+  EXPECT_DOUBLE_EQ(r.ate_original.mean, 11.0);  // the plain mean keeps every run, marked failed
+  EXPECT_DOUBLE_EQ(r.ate_ratio, 4.0 / 3.0);     // (1.5 + 2.5) / (1 + 2), not 5 / 33
+  EXPECT_DOUBLE_EQ(r.ate_ratio_random, 1.0);    // (2 + 1) / (1 + 2)
+  EXPECT_TRUE(std::isnan(r.ate_ratio_anms));    // not run
+  EXPECT_NEAR(r.ate_ratio_floored, std::sqrt(4.0 + 0.25) / std::sqrt(2.25 + 0.25), 1e-12);
+  EXPECT_EQ(r.better_seeds, 0);  // seed 2 is not a win over a lost original
+  EXPECT_EQ(r.worse_seeds, 2);
+  EXPECT_EQ(r.below_random_seeds, 2);  // between selectors every seed counts
+  EXPECT_DOUBLE_EQ(r.mp_percent.mean, 30.0);  // not 300 % of the lost original's 10 points
+  EXPECT_DOUBLE_EQ(r.sqrt_obs_ratio, 2.0);
+  const std::string j = ke::contract_json({r}, "");
+  EXPECT_NE(j.find("\"ratio_seeds\":2"), std::string::npos) << j;
+  EXPECT_NE(j.find("\"ate_ratio_random\":1.0000"), std::string::npos) << j;
+  ke::EvalSummary s;
+  s.comparisons = {c};
+  s.runs = {r};
+  const std::string md = ke::markdown_tables(s);
+  EXPECT_NE(md.find("| 1.33 (2 seeds) |"), std::string::npos) << md;
+  EXPECT_NE(md.find("1.33 (2.00) / 1.00 (2.00) / – (–) / – (–) (2 seeds)"), std::string::npos) << md;
+}
+
 // A diverged BA is a failure too; the tables mark every mean that includes one.
 TEST(EvalContract, FailuresAreCountedInTheTables) {
   ke::Comparison c;

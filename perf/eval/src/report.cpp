@@ -6,7 +6,6 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
-#include <functional>
 #include <sstream>
 #include <tuple>
 
@@ -39,7 +38,10 @@ std::string with_failed(const std::string& cell, int failed) {
 std::string op_label(const ContractRun& r) {
   return std::isfinite(r.target_fraction) ? "F = " + f(r.target_fraction, 2) : "M = " + std::to_string(r.M);
 }
-double ratio(const Stat& a, const Stat& g) { return g.mean > 0 ? a.mean / g.mean : NAN; }
+// A ratio to the original over fewer seeds than the run's (the original failed on the others) says so.
+std::string over_ratio_seeds(const std::string& cell, const ContractRun& r) {
+  return r.ratio_seeds < r.seeds ? cell + " (" + std::to_string(r.ratio_seeds) + " seeds)" : cell;
+}
 
 // The four trajectory groups of the paper's Table V (ours: TUM, EuRoC MH,
 // EuRoC V, KITTI), each the mean over its inputs of ATE / original ATE.
@@ -65,9 +67,9 @@ std::vector<GroupRow> group_rows(const std::vector<ContractRun>& runs, const std
     it->kf += r.kf_percent.mean;
     it->ba += r.ba_time_percent.mean;
     it->ours += r.ate_ratio;
-    it->random += ratio(r.ate_random, r.ate_original);
-    it->longest += ratio(r.ate_longest_track, r.ate_original);
-    it->anms += ratio(r.ate_anms, r.ate_original);
+    it->random += r.ate_ratio_random;
+    it->longest += r.ate_ratio_longest_track;
+    it->anms += r.ate_ratio_anms;
     it->sq_ours += r.sqrt_obs_ratio;
     it->sq_random += r.sqrt_obs_ratio_random;
     it->sq_longest += r.sqrt_obs_ratio_longest_track;
@@ -162,23 +164,22 @@ std::string svg_ate_vs_kept(const EvalSummary& s) {
   Svg svg(760, 480);
   double ymax = 1.5;
   for (const ContractRun& r : s.runs)
-    for (const Stat* a : {&r.ate_ours, &r.ate_random, &r.ate_longest_track, &r.ate_anms})
-      if (std::isfinite(ratio(*a, r.ate_original))) ymax = std::max(ymax, ratio(*a, r.ate_original));
+    for (double v : {r.ate_ratio, r.ate_ratio_random, r.ate_ratio_longest_track, r.ate_ratio_anms})
+      if (std::isfinite(v)) ymax = std::max(ymax, v);
   ymax = std::min(std::ceil(ymax * 2) / 2, 10.0);
   Axes ax{80, 40, 520, 380, 0, 100, 0, ymax};
   ax.draw(svg, "map points kept (% of original, mean over seeds)", "RMS ATE / original",
           "ATE vs kept points at equal count (each input)");
   svg.line(ax.X(0), ax.Y(1), ax.X(100), ax.Y(1), "#999");
-  struct Series { const char* name; const char* colour; std::function<const Stat&(const ContractRun&)> ate, mp; };
-  const Series series[] = {
-      {"ours", "#1f77b4", [](const ContractRun& r) -> const Stat& { return r.ate_ours; }, [](const ContractRun& r) -> const Stat& { return r.mp_percent; }},
-      {"random", "#7f7f7f", [](const ContractRun& r) -> const Stat& { return r.ate_random; }, [](const ContractRun& r) -> const Stat& { return r.mp_percent_random; }},
-      {"longest track", "#2ca02c", [](const ContractRun& r) -> const Stat& { return r.ate_longest_track; }, [](const ContractRun& r) -> const Stat& { return r.mp_percent_longest_track; }},
-      {"ANMS (SSC)", "#d62728", [](const ContractRun& r) -> const Stat& { return r.ate_anms; }, [](const ContractRun& r) -> const Stat& { return r.mp_percent_anms; }}};
+  struct Series { const char* name; const char* colour; double ContractRun::*ratio; Stat ContractRun::*mp; };
+  const Series series[] = {{"ours", "#1f77b4", &ContractRun::ate_ratio, &ContractRun::mp_percent},
+                           {"random", "#7f7f7f", &ContractRun::ate_ratio_random, &ContractRun::mp_percent_random},
+                           {"longest track", "#2ca02c", &ContractRun::ate_ratio_longest_track, &ContractRun::mp_percent_longest_track},
+                           {"ANMS (SSC)", "#d62728", &ContractRun::ate_ratio_anms, &ContractRun::mp_percent_anms}};
   double ly = 60;
   for (const Series& se : series) {
     for (const ContractRun& r : s.runs) {
-      const double y = ratio(se.ate(r), r.ate_original), x = se.mp(r).mean;
+      const double y = r.*se.ratio, x = (r.*se.mp).mean;
       if (std::isfinite(x) && std::isfinite(y)) svg.circle(ax.X(std::min(100.0, x)), ax.Y(std::min(ymax, y)), 4, se.colour);
     }
     svg.circle(620, ly, 4, se.colour);
@@ -383,7 +384,7 @@ std::string markdown_tables(const EvalSummary& s) {
         << " | " << r.M << " | " << pm(r.mp_percent, 1) << " | " << pm(r.kf_percent, 1) << " | "
         << pm(r.ba_time_percent, 1) << " | " << with_failed(ate_pm(r.ate_original), r.failed.original) << " | "
         << with_failed(ate_pm(r.ate_ours), r.failed.ours) << " | "
-        << bold_if(r.ate_ratio <= 1.0, f(r.ate_ratio, 2)) << " | " << f(r.sqrt_obs_ratio, 2) << " | "
+        << over_ratio_seeds(bold_if(r.ate_ratio <= 1.0, f(r.ate_ratio, 2)), r) << " | " << f(r.sqrt_obs_ratio, 2) << " | "
         << (r.info.error_floor_m > 0 ? f(r.info.error_floor_m, 4) : "–") << " | " << f(r.ate_ratio_floored, 3) << " | "
         << r.better_seeds << " / " << r.worse_seeds << " |\n";
     }
@@ -404,14 +405,15 @@ std::string markdown_tables(const EvalSummary& s) {
       auto quad = [](double a, double b, double c, double d, int prec) {
         return f(a, prec) + " / " + f(b, prec) + " / " + f(c, prec) + " / " + f(d, prec);
       };
-      auto rq = [&](const Stat& a, double sq) { return f(ratio(a, r.ate_original), 2) + " (" + f(sq, 2) + ")"; };
+      auto rq = [&](double ratio, double sq) { return f(ratio, 2) + " (" + f(sq, 2) + ")"; };
       o << "| " << r.info.name << " | " << cell(r.ate_ours, r.failed.ours) << " | "
         << cell(r.ate_random, r.failed.random) << " | " << cell(r.ate_longest_track, r.failed.longest_track) << " | "
         << cell(r.ate_anms, r.failed.anms) << " | "
         << quad(r.mp_percent.mean, r.mp_percent_random.mean, r.mp_percent_longest_track.mean, r.mp_percent_anms.mean, 1) << " | "
         << quad(r.kf_percent.mean, r.kf_percent_random.mean, r.kf_percent_longest_track.mean, r.kf_percent_anms.mean, 0) << " | "
-        << rq(r.ate_ours, r.sqrt_obs_ratio) << " / " << rq(r.ate_random, r.sqrt_obs_ratio_random) << " / "
-        << rq(r.ate_longest_track, r.sqrt_obs_ratio_longest_track) << " / " << rq(r.ate_anms, r.sqrt_obs_ratio_anms) << " | "
+        << over_ratio_seeds(rq(r.ate_ratio, r.sqrt_obs_ratio) + " / " + rq(r.ate_ratio_random, r.sqrt_obs_ratio_random) +
+                                " / " + rq(r.ate_ratio_longest_track, r.sqrt_obs_ratio_longest_track) + " / " +
+                                rq(r.ate_ratio_anms, r.sqrt_obs_ratio_anms), r) << " | "
         << below(r.ate_random, r.below_random_seeds) << " | " << below(r.ate_longest_track, r.below_longest_track_seeds)
         << " | " << below(r.ate_anms, r.below_anms_seeds) << " |\n";
     }
@@ -494,7 +496,7 @@ std::string markdown_tables(const EvalSummary& s) {
     for (const ContractRun& r : s.runs) {
       if (r.info.kind != "trajectory" || op_label(r) != label) continue;
       mp += r.mp_percent.mean; kf += r.kf_percent.mean; ba += r.ba_time_percent.mean; rat += r.ate_ratio;
-      better += r.better_seeds; worse += r.worse_seeds; seeds += r.seeds;
+      better += r.better_seeds; worse += r.worse_seeds; seeds += r.ratio_seeds;
       ++n;
     }
     if (n == 0) continue;
@@ -523,7 +525,7 @@ std::string markdown_tables(const EvalSummary& s) {
       const std::string what = r.info.kind + " " + r.info.name + " (" + (r.info.sim3 ? "Sim(3)" : "SE(3)") + ")";
       if (r.info.kind != "bal")
         o << "| " << what << ": not worse than the original | ratio " << f(r.ate_ratio, 2) << ", " << r.better_seeds
-          << " better / " << r.worse_seeds << " worse of " << r.seeds << " | "
+          << " better / " << r.worse_seeds << " worse of " << r.ratio_seeds << " | "
           << yes(r.ate_ratio <= 1.0 && r.better_seeds >= r.worse_seeds) << " |\n";
       for (auto [name, a, below] : {std::tuple{"random", &r.ate_random, r.below_random_seeds},
                                     std::tuple{"longest-track-first", &r.ate_longest_track, r.below_longest_track_seeds},

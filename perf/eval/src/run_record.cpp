@@ -2,6 +2,7 @@
 
 #include <cstdio>
 #include <sstream>
+#include <utility>
 
 namespace keepless::eval {
 namespace {
@@ -15,24 +16,35 @@ Stat stat_over(const std::vector<RunRecord>& v, F f) {
   return stat_of(x);
 }
 
-// Per seed: f(variant record, original record of the same seed).
+// Per seed on which the original ran without failure: f(variant record, original record).
+// Every comparison with the original goes through here: a lost original's ATE is that of its
+// few tracked frames held still, its map and BA those of a few frames, and would make every
+// method look better than the original.
 template <typename F>
 Stat paired(const std::vector<RunRecord>& v, const std::vector<RunRecord>& original, F f) {
   std::vector<double> x;
-  for (std::size_t i = 0; i < v.size() && i < original.size(); ++i) x.push_back(f(v[i], original[i]));
+  for (std::size_t i = 0; i < v.size() && i < original.size(); ++i)
+    if (!original[i].failed()) x.push_back(f(v[i], original[i]));
   return stat_of(x);
 }
 
-int count_below(const std::vector<RunRecord>& a, const std::vector<RunRecord>& b) {
+// Seeds on which a's ATE is below b's; with the original as `reference`, only those it did not fail.
+int count_below(const std::vector<RunRecord>& a, const std::vector<RunRecord>& b,
+                const std::vector<RunRecord>* reference = nullptr) {
   int n = 0;
-  for (std::size_t i = 0; i < a.size() && i < b.size(); ++i) n += a[i].ate_m < b[i].ate_m ? 1 : 0;
+  for (std::size_t i = 0; i < a.size() && i < b.size(); ++i)
+    if (!reference || (i < reference->size() && !(*reference)[i].failed())) n += a[i].ate_m < b[i].ate_m ? 1 : 0;
   return n;
 }
 
-double mean_observations(const std::vector<RunRecord>& v) {
-  std::vector<double> x;
-  for (const RunRecord& r : v) x.push_back(double(r.observations));
-  return stat_of(x).mean;
+// Mean ATE of v and of the original over the same (paired) seeds.
+std::pair<double, double> paired_ate(const std::vector<RunRecord>& v, const std::vector<RunRecord>& original) {
+  return {paired(v, original, [](const RunRecord& a, const RunRecord&) { return a.ate_m; }).mean,
+          paired(v, original, [](const RunRecord&, const RunRecord& o) { return o.ate_m; }).mean};
+}
+double ratio_to_original(const std::vector<RunRecord>& v, const std::vector<RunRecord>& original) {
+  const auto [a, o] = paired_ate(v, original);
+  return o > 0 ? a / o : NAN;
 }
 
 void field(std::ostringstream& o, const char* key, const std::string& value) { o << ",\"" << key << "\":" << value; }
@@ -87,17 +99,21 @@ ContractRun summarize(const Comparison& c) {
   r.ate_anms = stat_over(c.anms, ate);
   r.ate_r_original = stat_over(g, [](const RunRecord& a) { return a.ate_r_deg; });
   r.ate_r_ours = stat_over(c.ours, [](const RunRecord& a) { return a.ate_r_deg; });
-  r.better_seeds = count_below(c.ours, g);
-  r.worse_seeds = count_below(g, c.ours);
+  r.ratio_seeds = paired(c.ours, g, [](const RunRecord&, const RunRecord&) { return 0.0; }).n;
+  r.better_seeds = count_below(c.ours, g, &g);
+  r.worse_seeds = count_below(g, c.ours, &g);
   r.below_random_seeds = count_below(c.ours, c.random);
   r.below_longest_track_seeds = count_below(c.ours, c.longest_track);
   r.below_anms_seeds = count_below(c.ours, c.anms);
-  const double ao = r.ate_original.mean, an = r.ate_ours.mean;
+  const auto [an, ao] = paired_ate(c.ours, g);
   r.ate_ratio = ao > 0 ? an / ao : NAN;
-  const double oo = mean_observations(g);
-  auto sqrt_obs = [&](const std::vector<RunRecord>& v) {
-    const double n = mean_observations(v);
-    return n > 0 ? std::sqrt(oo / n) : NAN;
+  r.ate_ratio_random = ratio_to_original(c.random, g);
+  r.ate_ratio_longest_track = ratio_to_original(c.longest_track, g);
+  r.ate_ratio_anms = ratio_to_original(c.anms, g);
+  auto sqrt_obs = [&](const std::vector<RunRecord>& v) {  // sqrt(mean original observations / mean v's)
+    const double n = paired(v, g, [](const RunRecord& a, const RunRecord&) { return double(a.observations); }).mean;
+    const double o = paired(v, g, [](const RunRecord&, const RunRecord& o) { return double(o.observations); }).mean;
+    return n > 0 ? std::sqrt(o / n) : NAN;
   };
   r.sqrt_obs_ratio = sqrt_obs(c.ours);
   r.sqrt_obs_ratio_random = sqrt_obs(c.random);
@@ -175,6 +191,10 @@ std::string run_json(const ContractRun& r) {
   field(o, "below_longest_track_seeds", std::to_string(r.below_longest_track_seeds));
   field(o, "below_anms_seeds", std::to_string(r.below_anms_seeds));
   field(o, "ate_ratio", json_number(r.ate_ratio, 4));
+  field(o, "ate_ratio_random", json_number(r.ate_ratio_random, 4));
+  field(o, "ate_ratio_longest_track", json_number(r.ate_ratio_longest_track, 4));
+  field(o, "ate_ratio_anms", json_number(r.ate_ratio_anms, 4));
+  field(o, "ratio_seeds", std::to_string(r.ratio_seeds));
   field(o, "sqrt_obs_ratio", json_number(r.sqrt_obs_ratio, 4));
   field(o, "sqrt_obs_ratio_random", json_number(r.sqrt_obs_ratio_random, 4));
   field(o, "sqrt_obs_ratio_longest_track", json_number(r.sqrt_obs_ratio_longest_track, 4));

@@ -11,7 +11,10 @@
 //              "ate_random_m", "ate_longest_track_m", "ate_anms_m", "better_seeds",
 //              "worse_seeds", "sqrt_obs_ratio", ...}, ...], ...}
 // plus "failed_seeds" {"original", "ours", "random", "longest_track", "anms"}
-// (runs that lost tracking or whose BA diverged), "frames" and
+// (runs that lost tracking or whose BA diverged), "ratio_seeds" (the seeds on
+// which the original did not fail: every comparison with the original, the
+// percentages, "ate_ratio*", "sqrt_obs_ratio*", "better_seeds", "worse_seeds",
+// uses only those), "frames" and
 // "frames_tracked" (0 where not a real VO), and, for the real VO (kind
 // images / rgbd), "frames_tracked_VARIANT".
 
@@ -96,9 +99,13 @@ struct ContractRun {
   Stat ate_r_original, ate_r_ours;
   Stat mp_percent_random, mp_percent_longest_track, mp_percent_anms;
   Stat kf_percent_random, kf_percent_longest_track, kf_percent_anms;
+  // Every figure against the original (percentages, ratios, better / worse) is over the
+  // ratio_seeds seeds on which the original did not fail.
+  int ratio_seeds = 0;
   int better_seeds = 0, worse_seeds = 0;  // ours vs original, seed by seed
-  int below_random_seeds = 0, below_longest_track_seeds = 0, below_anms_seeds = 0;
   double ate_ratio = NAN;        // mean ours / mean original
+  double ate_ratio_random = NAN, ate_ratio_longest_track = NAN, ate_ratio_anms = NAN;
+  int below_random_seeds = 0, below_longest_track_seeds = 0, below_anms_seeds = 0;  // every seed
   double sqrt_obs_ratio = NAN;   // sqrt(mean observations original / ours)
   double sqrt_obs_ratio_random = NAN, sqrt_obs_ratio_longest_track = NAN, sqrt_obs_ratio_anms = NAN;
   double ate_ratio_floored = NAN;  // with error_floor_m added in quadrature to both
