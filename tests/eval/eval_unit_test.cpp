@@ -7,6 +7,7 @@
 #include <fstream>
 #include <iterator>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -259,17 +260,26 @@ TEST(EvalContract, RatiosToTheOriginalSkipTheSeedsItFailed) {
   EXPECT_EQ(r.better_seeds, 0);  // seed 2 is not a win over a lost original
   EXPECT_EQ(r.worse_seeds, 2);
   EXPECT_EQ(r.below_random_seeds, 2);  // between selectors every seed counts
+  // ... and so does the paired difference: 1.5 - 2, 1 - 9, 2.5 - 1.
+  EXPECT_EQ(r.ate_diff_random.n, 3);
+  EXPECT_DOUBLE_EQ(r.ate_diff_random.mean, -7.0 / 3.0);
+  EXPECT_NEAR(r.ate_diff_random.se(), std::sqrt((std::pow(-0.5 + 7.0 / 3, 2) + std::pow(-8.0 + 7.0 / 3, 2) +
+                                                  std::pow(1.5 + 7.0 / 3, 2)) / 2.0 / 3.0), 1e-12);
+  EXPECT_EQ(r.ate_diff_anms.n, 0);  // not run
   EXPECT_DOUBLE_EQ(r.mp_percent.mean, 30.0);  // not 300 % of the lost original's 10 points
   EXPECT_DOUBLE_EQ(r.sqrt_obs_ratio, 2.0);
   const std::string j = ke::contract_json({r}, "");
   EXPECT_NE(j.find("\"ratio_seeds\":2"), std::string::npos) << j;
   EXPECT_NE(j.find("\"ate_ratio_random\":1.0000"), std::string::npos) << j;
+  EXPECT_NE(j.find("\"ate_diff_random_m\":-2.333333,\"ate_diff_random_se_m\":2.891559"), std::string::npos) << j;
+  EXPECT_NE(j.find("\"ate_diff_anms_m\":null,\"ate_diff_anms_se_m\":null"), std::string::npos) << j;
   ke::EvalSummary s;
   s.comparisons = {c};
   s.runs = {r};
   const std::string md = ke::markdown_tables(s);
   EXPECT_NE(md.find("| 1.33 (2 seeds) |"), std::string::npos) << md;
   EXPECT_NE(md.find("1.33 (2.00) / 1.00 (2.00) / – (–) / – (–) (2 seeds)"), std::string::npos) << md;
+  EXPECT_NE(md.find("| 2 / 3 (-2.333 ± 2.892) | – | – |"), std::string::npos) << md;
 }
 
 // A diverged BA is a failure too; the tables mark every mean that includes one.
@@ -326,6 +336,37 @@ TEST(EvalContract, FailuresAreCountedInTheTables) {
   ASSERT_EQ(back.comparisons[0].ours.size(), 2u);
   EXPECT_TRUE(back.comparisons[0].random[0].diverged);
   EXPECT_EQ(back.comparisons[0].ours[1].frames_tracked, 7);
+}
+
+// Other seeds of the same input, run from another directory (an absolute path
+// instead of a relative one), join its comparison instead of making a second row.
+TEST(EvalContract, ReportsMergeSeedsOfOneInputWrittenByOtherPaths) {
+  const std::string root = ::testing::TempDir() + "/eval_merge";
+  std::filesystem::remove_all(root);
+  std::string error;
+  for (auto [dir, input, seed] : {std::tuple{"a", "../shared/data/seq_x/image_0", 1},
+                                  std::tuple{"b", "/work/shared/data/seq_x/image_0/", 2},
+                                  std::tuple{"c", "../shared/data/seq_y/image_0", 3}}) {
+    ke::Comparison c;
+    c.info.input = input;
+    c.info.name = "seq";
+    c.info.kind = "images";
+    c.target_fraction = 0.2;
+    c.original = {rec(1.0, 100, 400, seed)};
+    c.ours = {rec(1.5, 30, 100, seed)};
+    c.original[0].variant = "original";
+    c.ours[0].variant = "ours";
+    ke::EvalSummary s;
+    s.comparisons = {c};
+    s.runs = {ke::summarize(c)};
+    ASSERT_TRUE(ke::write_outputs(s, root + "/" + dir, &error)) << error;
+  }
+  ke::EvalSummary back;
+  for (const char* dir : {"a", "b", "c"}) ASSERT_TRUE(ke::read_outputs(root + "/" + dir, &back, &error)) << error;
+  ASSERT_EQ(back.comparisons.size(), 2u);  // seq_x (seeds 1, 2) and seq_y, another sequence
+  EXPECT_EQ(back.comparisons[0].ours.size(), 2u);
+  EXPECT_EQ(back.comparisons[0].original.size(), 2u);
+  EXPECT_EQ(back.comparisons[1].ours.size(), 1u);
 }
 
 }  // namespace

@@ -389,7 +389,8 @@ std::string markdown_tables(const EvalSummary& s) {
         << r.better_seeds << " / " << r.worse_seeds << " |\n";
     }
     o << "\n#### Baselines keeping the same count per window (" << label << "; ATE in m, lowest mean in bold; "
-         "\"ours below\": seeds on which ours had the lower ATE)\n\n"
+         "\"ours below\": seeds on which ours had the lower ATE, then ours' ATE minus the baseline's, "
+         "mean ± standard error over the seeds)\n\n"
          "| Input | ours | random | longest track | ANMS (SSC) | MP % ours / random / longest / ANMS | "
          "KF % ours / random / longest / ANMS | ATE ratio (√(obs ratio)) ours / random / longest / ANMS | "
          "ours below random | below longest | below ANMS |\n|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
@@ -401,7 +402,13 @@ std::string markdown_tables(const EvalSummary& s) {
       auto cell = [&](const Stat& a, int failed) {
         return a.n == 0 ? std::string("–") : with_failed(bold_if(a.mean == best, ate_pm(a)), failed);
       };
-      auto below = [&](const Stat& a, int n) { return a.n == 0 ? std::string("–") : std::to_string(n) + " / " + std::to_string(r.seeds); };
+      const int digits = ate_digits(r.ate_ours.mean);
+      auto below = [&](const Stat& a, int n, const Stat& d) {
+        if (a.n == 0) return std::string("–");
+        char diff[96];
+        std::snprintf(diff, sizeof diff, " (%+.*f ± %.*f)", digits, d.mean, digits, d.se());
+        return std::to_string(n) + " / " + std::to_string(r.seeds) + (std::isfinite(d.mean) ? diff : "");
+      };
       auto quad = [](double a, double b, double c, double d, int prec) {
         return f(a, prec) + " / " + f(b, prec) + " / " + f(c, prec) + " / " + f(d, prec);
       };
@@ -414,8 +421,9 @@ std::string markdown_tables(const EvalSummary& s) {
         << over_ratio_seeds(rq(r.ate_ratio, r.sqrt_obs_ratio) + " / " + rq(r.ate_ratio_random, r.sqrt_obs_ratio_random) +
                                 " / " + rq(r.ate_ratio_longest_track, r.sqrt_obs_ratio_longest_track) + " / " +
                                 rq(r.ate_ratio_anms, r.sqrt_obs_ratio_anms), r) << " | "
-        << below(r.ate_random, r.below_random_seeds) << " | " << below(r.ate_longest_track, r.below_longest_track_seeds)
-        << " | " << below(r.ate_anms, r.below_anms_seeds) << " |\n";
+        << below(r.ate_random, r.below_random_seeds, r.ate_diff_random) << " | "
+        << below(r.ate_longest_track, r.below_longest_track_seeds, r.ate_diff_longest_track) << " | "
+        << below(r.ate_anms, r.below_anms_seeds, r.ate_diff_anms) << " |\n";
     }
     // The real VO: tracking is part of the result (a lost frame is not scored by the ATE).
     bool vo_header = false;
@@ -617,6 +625,18 @@ std::string json_summary(const EvalSummary& s) {
   return contract_json(s.runs, o.str());
 }
 
+namespace {
+// Which input a record is, across directories: the sweep names inputs by absolute paths, a run by
+// hand by relative ones, so the key is the path's last two components (the sequence's folder and
+// its image folder or file), not the path as written.
+std::string input_key(const std::string& input, double target_fraction, std::int64_t M) {
+  std::filesystem::path p = std::filesystem::path(input).lexically_normal();
+  if (!p.has_filename()) p = p.parent_path();
+  return (p.parent_path().filename() / p.filename()).string() + "|" + json_number(target_fraction, 3) + "|" +
+         std::to_string(M);
+}
+}  // namespace
+
 bool read_outputs(const std::string& out_dir, EvalSummary* s, std::string* error) {
   namespace fsys = std::filesystem;
   const std::string csv_path = (fsys::path(out_dir) / "runs.csv").string();
@@ -659,8 +679,7 @@ bool read_outputs(const std::string& out_dir, EvalSummary* s, std::string* error
   // read: a directory holding other seeds of the same point (the sweep's
   // one process per seed) adds its records to the same comparison.
   std::vector<std::string> keys;
-  for (const Comparison& c : s->comparisons)
-    keys.push_back(c.info.input + "|" + json_number(c.target_fraction, 3) + "|" + std::to_string(c.M));
+  for (const Comparison& c : s->comparisons) keys.push_back(input_key(c.info.input, c.target_fraction, c.M));
   int lineno = 1;
   while (std::getline(csv, line)) {
     ++lineno;
@@ -700,7 +719,8 @@ bool read_outputs(const std::string& out_dir, EvalSummary* s, std::string* error
     r.ba_cpu_s = col("ba_cpu_s") < 0 ? NAN : num("ba_cpu_s");
     r.diverged = count("diverged") != 0;
     // One comparison per input and operating point (compared_M tells --M points apart).
-    const std::string key = str("input") + "|" + str("target_fraction") + "|" + str("compared_M");
+    const std::int64_t compared_m = col("compared_M") < 0 ? 0 : static_cast<std::int64_t>(num("compared_M"));
+    const std::string key = input_key(str("input"), num("target_fraction"), compared_m);
     auto it = std::find(keys.begin(), keys.end(), key);
     if (it == keys.end()) {
       keys.push_back(key);

@@ -2,6 +2,7 @@
 
 #include <cstdio>
 #include <sstream>
+#include <tuple>
 #include <utility>
 
 namespace keepless::eval {
@@ -35,6 +36,13 @@ int count_below(const std::vector<RunRecord>& a, const std::vector<RunRecord>& b
   for (std::size_t i = 0; i < a.size() && i < b.size(); ++i)
     if (!reference || (i < reference->size() && !(*reference)[i].failed())) n += a[i].ate_m < b[i].ate_m ? 1 : 0;
   return n;
+}
+
+// a's ATE minus b's, seed by seed.
+Stat ate_differences(const std::vector<RunRecord>& a, const std::vector<RunRecord>& b) {
+  std::vector<double> d;
+  for (std::size_t i = 0; i < a.size() && i < b.size(); ++i) d.push_back(a[i].ate_m - b[i].ate_m);
+  return stat_of(d);
 }
 
 // Mean ATE of v and of the original over the same (paired) seeds.
@@ -105,6 +113,9 @@ ContractRun summarize(const Comparison& c) {
   r.below_random_seeds = count_below(c.ours, c.random);
   r.below_longest_track_seeds = count_below(c.ours, c.longest_track);
   r.below_anms_seeds = count_below(c.ours, c.anms);
+  r.ate_diff_random = ate_differences(c.ours, c.random);
+  r.ate_diff_longest_track = ate_differences(c.ours, c.longest_track);
+  r.ate_diff_anms = ate_differences(c.ours, c.anms);
   const auto [an, ao] = paired_ate(c.ours, g);
   r.ate_ratio = ao > 0 ? an / ao : NAN;
   r.ate_ratio_random = ratio_to_original(c.random, g);
@@ -190,6 +201,12 @@ std::string run_json(const ContractRun& r) {
   field(o, "below_random_seeds", std::to_string(r.below_random_seeds));
   field(o, "below_longest_track_seeds", std::to_string(r.below_longest_track_seeds));
   field(o, "below_anms_seeds", std::to_string(r.below_anms_seeds));
+  for (auto [key, se_key, d] : {std::tuple{"ate_diff_random_m", "ate_diff_random_se_m", &r.ate_diff_random},
+                                std::tuple{"ate_diff_longest_track_m", "ate_diff_longest_track_se_m", &r.ate_diff_longest_track},
+                                std::tuple{"ate_diff_anms_m", "ate_diff_anms_se_m", &r.ate_diff_anms}}) {
+    field(o, key, json_number(d->mean));
+    field(o, se_key, json_number(d->se()));
+  }
   field(o, "ate_ratio", json_number(r.ate_ratio, 4));
   field(o, "ate_ratio_random", json_number(r.ate_ratio_random, 4));
   field(o, "ate_ratio_longest_track", json_number(r.ate_ratio_longest_track, 4));

@@ -84,6 +84,7 @@ struct Comparison {
 struct Stat {
   double mean = NAN, sd = NAN;  // sd: sample standard deviation (0 for one value)
   int n = 0;
+  double se() const { return n > 0 ? sd / std::sqrt(double(n)) : NAN; }  // standard error of the mean
 };
 Stat stat_of(const std::vector<double>& v);
 
@@ -106,6 +107,9 @@ struct ContractRun {
   double ate_ratio = NAN;        // mean ours / mean original
   double ate_ratio_random = NAN, ate_ratio_longest_track = NAN, ate_ratio_anms = NAN;
   int below_random_seeds = 0, below_longest_track_seeds = 0, below_anms_seeds = 0;  // every seed
+  // Ours' ATE minus the baseline's, seed by seed (every seed): the paired difference whose
+  // mean and standard error say whether "below" is beyond the seeds' spread.
+  Stat ate_diff_random, ate_diff_longest_track, ate_diff_anms;
   double sqrt_obs_ratio = NAN;   // sqrt(mean observations original / ours)
   double sqrt_obs_ratio_random = NAN, sqrt_obs_ratio_longest_track = NAN, sqrt_obs_ratio_anms = NAN;
   double ate_ratio_floored = NAN;  // with error_floor_m added in quadrature to both
