@@ -405,9 +405,9 @@ std::string markdown_tables(const EvalSummary& s) {
       const int digits = ate_digits(r.ate_ours.mean);
       auto below = [&](const Stat& a, int n, const Stat& d) {
         if (a.n == 0) return std::string("–");
-        char diff[96];
-        std::snprintf(diff, sizeof diff, " (%+.*f ± %.*f)", digits, d.mean, digits, d.se());
-        return std::to_string(n) + " / " + std::to_string(r.seeds) + (std::isfinite(d.mean) ? diff : "");
+        const std::string seeds = std::to_string(n) + " / " + std::to_string(r.seeds);
+        if (!std::isfinite(d.mean)) return seeds;
+        return seeds + " (" + (d.mean >= 0 ? "+" : "") + f(d.mean, digits) + " ± " + f(d.se(), digits) + ")";
       };
       auto quad = [](double a, double b, double c, double d, int prec) {
         return f(a, prec) + " / " + f(b, prec) + " / " + f(c, prec) + " / " + f(d, prec);
