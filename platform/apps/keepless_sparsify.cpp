@@ -35,6 +35,7 @@
 #include "keepless/core/decision.hpp"
 #include "keepless/core/sparsifier.hpp"
 #include "keepless/core/status.hpp"
+#include "keepless/core/use.hpp"
 #include "keepless/core/window.hpp"
 #include "keepless/core/window_file.hpp"
 #include "keepless/platform/memory_estimate.hpp"
@@ -61,6 +62,10 @@ const std::vector<keepless::cli::Flag> kFlags = {
     {"--compact", nullptr, "COLMAP: also drop the 2D points no kept 3D point references; lost:\n"
                            "those unmatched keypoints' positions, and 2D point indices no longer\n"
                            "match the feature database (default: keep every 2D point)"},
+    {"--use", "NAME", "settings per use from the budget sweep, applied before the other flags\n"
+                      "(they refine it): paper (the default), monocular (--scope newest\n"
+                      "--maturity 2), monocular-deferred and rgbd (the paper's here), offline\n"
+                      "(--mode whole --track-share 0.5; needs --keep-points or --keep-fraction)"},
     {"--mode", "replay|whole", "replay: the onboard node's sliding window; whole: one window\n"
                                "(default: replay for maps, whole for --window)"},
     {"--K", "N", "replay window in keyframes (default 20)"},
@@ -130,8 +135,18 @@ bool parse_limit(const char* text, std::uint32_t* out) {
 
 // Returns -1 on success, else the exit status (after printing).
 int parse_args(int argc, char** argv, Options* opt, bool* help, bool* version) {
+  // --use first, wherever it stands, so the other flags refine it.
+  core::Use use = core::Use::kPaper;
+  for (int i = 1; i + 1 < argc; ++i) {
+    if (std::strcmp(argv[i], "--use") != 0) continue;
+    if (!core::parse_use(argv[i + 1], &use)) {
+      return usage_error(std::string("bad value for --use: '") + argv[i + 1] +
+                         "' (paper, monocular, monocular-deferred, rgbd or offline)");
+    }
+    core::apply_use(use, &opt->params);
+  }
   bool m_given = false;  // --M and a keep budget exclude each other
-  double track_share = 0.0;
+  double track_share = opt->params.budget.track_share;
   for (int i = 1; i < argc; ++i) {
     const keepless::cli::Flag* entry = nullptr;
     const char* value = nullptr;
@@ -150,7 +165,9 @@ int parse_args(int argc, char** argv, Options* opt, bool* help, bool* version) {
     }
     const std::string bad = "bad value for " + flag + ": '" + value + "'";
     std::string map_error;
-    if (flag == "--window") {
+    if (flag == "--use") {
+      continue;  // applied above
+    } else if (flag == "--window") {
       if (*value == '\0') return usage_error(bad);
       opt->window = value;
     } else if (keepless::sparsify::parse_map_flag(flag, value, &opt->model, &map_error)) {
@@ -257,9 +274,14 @@ int parse_args(int argc, char** argv, Options* opt, bool* help, bool* version) {
   }
   if (track_share > 0.0 && opt->params.budget.kind != core::BudgetKind::kPoints &&
       opt->params.budget.kind != core::BudgetKind::kFraction) {
-    return usage_error("--track-share needs --keep-points or --keep-fraction: it is a share of their count");
+    return usage_error(std::string("--track-share needs --keep-points or --keep-fraction: it is a share of their count") +
+                       (use == core::Use::kOffline ? " (--use offline sets it to 0.5)" : ""));
   }
   opt->params.budget.track_share = track_share;
+  if (use == core::Use::kOffline && !opt->model.mode_given) {
+    opt->model.mode = keepless::sparsify::Mode::kWhole;
+    opt->model.mode_given = true;
+  }
   if (opt->window.empty() == opt->model.path.empty()) {
     return usage_error("one of --window, --colmap, --bal is required");
   }

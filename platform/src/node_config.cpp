@@ -7,6 +7,7 @@
 #include <cstring>
 #include <utility>
 
+#include "keepless/core/use.hpp"
 #include "keepless/platform/memory_estimate.hpp"
 
 namespace keepless::platform {
@@ -66,6 +67,10 @@ std::string node_usage() {
          "                            small (K 10, N 1000, 2000 points, 4500 observations, 7000 pair arcs;\n"
          "                            3.4 MB), default (K 20, N 2000, 6600, 19100, 51000; 15.5 MB),\n"
          "                            large (K 40, N 2000, 8100, 37000, 117000; 28.7 MB)\n"
+         "  --use NAME                settings per use, from the budget sweep, applied before the other flags\n"
+         "                            (they set --scope, --maturity, --defer and --track-share): paper (the\n"
+         "                            default), monocular (--scope newest --maturity 2), monocular-deferred\n"
+         "                            (--defer 2), rgbd (the paper's), offline (--track-share 0.5)\n"
          "  --max-points N            distinct points the window holds (default 6600; 0: K*N)\n"
          "  --max-window-observations N  observations the window holds (default 19100; 0: K*N)\n"
          "  --max-pair-arcs N         point -> pair arcs of the window's network, sum of n(n-1)/2 over its points\n"
@@ -122,28 +127,53 @@ std::string node_usage() {
          "  --version                 print the version and exit\n";
 }
 
-// --profile: applied before every other flag, wherever it is, so the
-// others refine it.
+// --profile and --use: applied before every other flag, wherever they are,
+// so the others refine them.
 namespace {
 
-bool is_profile_flag(const std::string& arg) { return arg == "--profile" || arg.rfind("--profile=", 0) == 0; }
+constexpr const char* kEarlyFlags[] = {"--profile", "--use"};
 
-ParseResult parse_profile(int argc, const char* const* argv, NodeConfig& config, std::string& error) {
-  for (int i = 1; i < argc; ++i) {
-    const std::string arg = argv[i];
-    if (!is_profile_flag(arg)) continue;
-    std::string name;
-    if (arg.size() > 9) {
-      name = arg.substr(10);
-    } else if (i + 1 < argc) {
-      name = argv[i + 1];
-    } else {
-      error = "option '--profile' needs a value";
-      return ParseResult::kError;
-    }
-    if (!apply_profile(name, config)) {
-      error = "--profile '" + name + "': expected small, default or large";
-      return ParseResult::kError;
+// The early flag `arg` is (spelled "--flag VALUE" or "--flag=VALUE"), or nullptr.
+const char* early_flag(const std::string& arg) {
+  for (const char* flag : kEarlyFlags) {
+    const std::string f = flag;
+    if (arg == f || arg.rfind(f + "=", 0) == 0) return flag;
+  }
+  return nullptr;
+}
+
+// Applies an early flag's value; false with `error` for an unknown name.
+bool apply_early_flag(const char* flag, const std::string& name, NodeConfig& config, std::string& error) {
+  if (std::strcmp(flag, "--profile") == 0) {
+    if (apply_profile(name, config)) return true;
+    error = "--profile '" + name + "': expected small, default or large";
+    return false;
+  }
+  core::Use use{};
+  if (!core::parse_use(name.c_str(), &use)) {
+    error = "--use '" + name + "': expected paper, monocular, monocular-deferred, rgbd or offline";
+    return false;
+  }
+  core::apply_use(use, &config.params);
+  return true;
+}
+
+// Every --profile, then every --use, in the order given.
+ParseResult parse_early_flags(int argc, const char* const* argv, NodeConfig& config, std::string& error) {
+  for (const char* flag : kEarlyFlags) {
+    for (int i = 1; i < argc; ++i) {
+      const std::string arg = argv[i];
+      if (early_flag(arg) != flag) continue;
+      std::string name;
+      if (arg.size() > std::strlen(flag)) {
+        name = arg.substr(std::strlen(flag) + 1);
+      } else if (i + 1 < argc) {
+        name = argv[i + 1];
+      } else {
+        error = std::string("option '") + flag + "' needs a value";
+        return ParseResult::kError;
+      }
+      if (!apply_early_flag(flag, name, config, error)) return ParseResult::kError;
     }
   }
   return ParseResult::kOk;
@@ -178,13 +208,15 @@ bool apply_profile(const std::string& name, NodeConfig& config) {
 
 ParseResult parse_node_arguments(int argc, const char* const* argv, NodeConfig& config,
                                  std::string& error) {
-  if (ParseResult r = parse_profile(argc, argv, config, error); r != ParseResult::kOk) return r;
+  if (ParseResult r = parse_early_flags(argc, argv, config, error); r != ParseResult::kOk) return r;
   bool m_given = false;  // --M and a keep budget exclude each other
-  double track_share = 0.0;  // set on the budget once it is known, whatever the flags' order
+  // Set on the budget once it is known, whatever the flags' order (--use offline's 0.5 unless given).
+  double track_share = config.params.budget.track_share;
+  const bool share_from_use = track_share > 0;
   for (int i = 1; i < argc; ++i) {
     std::string flag = argv[i];
-    if (is_profile_flag(flag)) {  // applied above
-      if (flag == "--profile") ++i;
+    if (const char* early = early_flag(flag)) {  // applied above
+      if (flag == early) ++i;
       continue;
     }
     std::string value;
@@ -371,6 +403,7 @@ ParseResult parse_node_arguments(int argc, const char* const* argv, NodeConfig& 
   if (track_share > 0 && config.params.budget.kind != core::BudgetKind::kPoints &&
       config.params.budget.kind != core::BudgetKind::kFraction) {
     error = "--track-share needs --keep-points or --keep-fraction: it is a share of their count";
+    if (share_from_use) error += " (--use offline sets it to 0.5)";
     return ParseResult::kError;
   }
   config.params.budget.track_share = track_share;

@@ -304,6 +304,61 @@ TEST(NodeConfig, ParsesTheTrackShareOfACountBudget) {
   }
 }
 
+// --use sets the policy flags of its use before the other flags, wherever it
+// stands, so they refine it; the paper's is the default.
+TEST(NodeConfig, ParsesTheUses) {
+  using keepless::core::Scope;
+  std::string error;
+  NodeConfig defaults;
+  ASSERT_EQ(parse({}, defaults, error), ParseResult::kOk);
+  NodeConfig paper;
+  ASSERT_EQ(parse({"--maturity", "3", "--use", "paper"}, paper, error), ParseResult::kOk) << error;
+  EXPECT_EQ(paper.params.maturity_keyframes, 3u);  // the flag refines the use
+  EXPECT_EQ(paper.params.scope, defaults.params.scope);
+  for (const std::vector<std::string>& flags :
+       {std::vector<std::string>{"--use", "monocular", "--keep-fraction", "0.2"},
+        {"--keep-fraction", "0.2", "--use=monocular"}}) {
+    NodeConfig m;
+    ASSERT_EQ(parse(flags, m, error), ParseResult::kOk) << error;
+    EXPECT_EQ(m.params.scope, Scope::kNewest);
+    EXPECT_EQ(m.params.maturity_keyframes, 2u);
+    EXPECT_EQ(m.params.defer_keyframes, 0u);
+    EXPECT_EQ(m.params.budget.fraction, 0.2);
+  }
+  NodeConfig refined;
+  ASSERT_EQ(parse({"--scope", "window", "--use", "monocular", "--maturity", "1"}, refined, error), ParseResult::kOk);
+  EXPECT_EQ(refined.params.scope, Scope::kWindow);
+  EXPECT_EQ(refined.params.maturity_keyframes, 1u);
+  NodeConfig deferred;
+  ASSERT_EQ(parse({"--use", "monocular-deferred"}, deferred, error), ParseResult::kOk) << error;
+  EXPECT_EQ(deferred.params.defer_keyframes, 2u);
+  EXPECT_EQ(deferred.params.scope, Scope::kWindow);
+  NodeConfig rgbd;
+  ASSERT_EQ(parse({"--use", "rgbd"}, rgbd, error), ParseResult::kOk) << error;
+  EXPECT_EQ(rgbd.params.scope, defaults.params.scope);
+  EXPECT_EQ(rgbd.params.maturity_keyframes, 0u);
+  EXPECT_EQ(rgbd.params.defer_keyframes, 0u);
+  // --profile and --use together, each applied first.
+  NodeConfig both;
+  ASSERT_EQ(parse({"--use", "offline", "--profile", "small", "--keep-points", "300"}, both, error),
+            ParseResult::kOk) << error;
+  EXPECT_EQ(both.params.budget.track_share, 0.5);
+  EXPECT_EQ(both.window, 10u);
+  NodeConfig share;
+  ASSERT_EQ(parse({"--track-share", "1", "--use", "offline", "--keep-points", "300"}, share, error), ParseResult::kOk);
+  EXPECT_EQ(share.params.budget.track_share, 1.0);
+  // Offline's share is of a count.
+  NodeConfig no_count;
+  ASSERT_EQ(parse({"--use", "offline"}, no_count, error), ParseResult::kError);
+  EXPECT_NE(error.find("--use offline sets it to 0.5"), std::string::npos) << error;
+  for (const std::vector<std::string>& bad :
+       {std::vector<std::string>{"--use", "mono"}, {"--use"}, {"--use="}, {"--use", ""}}) {
+    NodeConfig d;
+    EXPECT_EQ(parse(bad, d, error), ParseResult::kError) << bad[0];
+    EXPECT_FALSE(error.empty());
+  }
+}
+
 TEST(NodeConfig, ParsesTheMaturityGuard) {
   NodeConfig c;
   std::string error;

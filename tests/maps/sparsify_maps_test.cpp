@@ -230,6 +230,35 @@ TEST_F(SparsifyMaps, AWholeCountKeepsItsFloorWithinTheCount) {
   EXPECT_NE(tight.err.find("alone needs more than the count of 60 points"), std::string::npos) << tight.err;
 }
 
+// --use offline is --mode whole --track-share 0.5: the same decisions and
+// model; its share needs a count, and the other flags refine it.
+TEST_F(SparsifyMaps, UseOfflineIsTheWholeModeWithHalfByTrackLength) {
+  const maps_test::Result use = sparsify({"--colmap", fixture("sparse"), "--use", "offline", "--keep-points", "710",
+                                          "--out", path("use"), "--decisions", path("use.d")});
+  ASSERT_EQ(use.status, 0) << use.err;
+  const maps_test::Result flags = sparsify({"--colmap", fixture("sparse"), "--mode", "whole", "--track-share", "0.5",
+                                            "--keep-points", "710", "--out", path("flags"), "--decisions", path("flags.d")});
+  ASSERT_EQ(flags.status, 0) << flags.err;
+  const std::string json = last_line(use.out);
+  EXPECT_NE(json.find("\"mode\":\"whole\""), std::string::npos) << json;
+  EXPECT_NE(json.find("\"track_share\":0.5}"), std::string::npos) << json;
+  EXPECT_EQ(json_number(json, "points_kept"), 710);
+  EXPECT_EQ(maps_test::read_all(path("use.d")), maps_test::read_all(path("flags.d")));
+  for (const char* f : {"cameras.bin", "images.bin", "points3D.bin"}) {
+    EXPECT_EQ(maps_test::read_all(path("use/") + f), maps_test::read_all(path("flags/") + f)) << f;
+  }
+  const maps_test::Result replay = sparsify({"--colmap", fixture("sparse"), "--mode", "replay", "--use", "offline",
+                                             "--keep-fraction", "0.1"});
+  ASSERT_EQ(replay.status, 0) << replay.err;
+  EXPECT_NE(last_line(replay.out).find("\"mode\":\"replay\""), std::string::npos);
+  const maps_test::Result no_count = sparsify({"--colmap", fixture("sparse"), "--use", "offline"});
+  EXPECT_EQ(no_count.status, 2);
+  EXPECT_NE(no_count.err.find("--use offline sets it to 0.5"), std::string::npos) << no_count.err;
+  const maps_test::Result unknown = sparsify({"--colmap", fixture("sparse"), "--use", "colmap"});
+  EXPECT_EQ(unknown.status, 2);
+  EXPECT_NE(unknown.err.find("bad value for --use: 'colmap'"), std::string::npos) << unknown.err;
+}
+
 // --track-share 1: the whole model's count taken entirely by track length,
 // so no culled point is seen by more images than a kept one.
 TEST_F(SparsifyMaps, AWholeTrackShareKeepsTheLongestTracks) {

@@ -1,0 +1,47 @@
+#pragma once
+// Settings per use, chosen from the budget sweep on real sequences
+// (docs/evaluation/budget-sweep.md#which-settings-per-use). A use sets the
+// decision policy only: the scope, the maturity guard, deferred culling and
+// the track share. M, theta, the costs and the budget's kind and count stay
+// the caller's, so they refine it.
+
+#include <cstdint>
+
+#include "keepless/core/config.hpp"
+
+namespace keepless::core {
+
+enum class Use : std::uint8_t {
+  // The paper's method: Params' defaults (Scope::kWindow, no guard, culls
+  // deleted at once, the network's order for a whole count).
+  kPaper,
+  // A monocular VO that deletes what it culls: decide the newest keyframe's
+  // points once two newer keyframes follow it (Scope::kNewest, maturity 2).
+  // The only immediate setting that tracked every seed of both KITTI
+  // sequences at F = 0.2; random, ANMS and longest-track-first under the
+  // same guard did not.
+  kMonocular,
+  // A monocular VO that implements both verdicts (decision_t's excluded and
+  // deleted lists) and keeps excluded points' structure refined: the whole
+  // window decided, culls deleted once 2 keyframes in a row miss them. It
+  // tracked every seed down to F = 0.05.
+  kMonocularDeferred,
+  // RGB-D: the paper's. Depth makes new points usable at once; every
+  // selector tracked down to F = 0.1 and keepless was no better than random.
+  kRgbd,
+  // A finished model, with a point count: half the count by track length,
+  // half by the network's order (within 1.2x of COLMAP's point_filtering in
+  // 13 of 15 cells, against 6 for the order alone).
+  kOffline,
+};
+
+// Sets scope, maturity_keyframes, defer_keyframes and budget.track_share to
+// the use's values; every other field of *params is left as it was.
+void apply_use(Use use, Params* params);
+
+// "paper", "monocular", "monocular-deferred", "rgbd", "offline"; parse_use
+// returns false (and leaves *out alone) for any other text.
+const char* to_string(Use use);
+bool parse_use(const char* text, Use* out);
+
+}  // namespace keepless::core
