@@ -293,6 +293,24 @@ TEST(RealVoQuick, NoKeyframeCullingKeepsEveryKeyframeMade) {
   }
 }
 
+// keepless's run line on the first 20 frames of KITTI 06 (monocular) at a
+// kept fraction of 0.2, keepless only, from its "culled" count to its ATE:
+// what follows from the decisions, no timings. Empty (and a failure) when
+// the run does not print one.
+std::string ours_on_kitti06(const std::string& data, const std::string& flags) {
+  const EvalOutput o = run_eval("--images '" + data + "/image_l' --calib '" + data + "/calib.txt' --poses '" + data +
+                                "/poses.txt' --frames 0:20 --seeds 1 --kept-fraction 0.2 --no-ablation --no-baselines " +
+                                flags);
+  EXPECT_EQ(o.status, 0) << o.all;
+  std::string line;
+  for (const std::string& l : o.runs) {
+    const std::size_t from = l.find(" culled "), to = l.find(", local BA");
+    if (l.find(" ours M=") != std::string::npos && from < to && to != std::string::npos) line = l.substr(from, to - from);
+  }
+  EXPECT_FALSE(line.empty()) << o.all;
+  return line;
+}
+
 // Two knobs of keepless's preference in the real VO: --tie-order hash (ties
 // by a hash of the point id instead of the id, which grows with the point's
 // age) and --cost-terms (which of the paper's costs are summed). Neither
@@ -306,18 +324,8 @@ TEST(RealVoQuick, TieOrderAndCostTermsChangeThePointsNotTheBudget) {
   if (!std::filesystem::exists(data + "/image_l/000020.png")) {
     GTEST_SKIP() << "no KITTI 06 data at " << data << " (set KEEPLESS_EVAL_DATA_DIR)";
   }
-  // keepless's run line from its "culled" count to its ATE: what follows from the decisions, no timings.
   const auto ours = [&](const std::string& extra) {
-    const EvalOutput o = run_eval("--images '" + data + "/image_l' --calib '" + data + "/calib.txt' --poses '" + data +
-                                  "/poses.txt' --frames 0:20 --seeds 1 --kept-fraction 0.2 --no-ablation --no-baselines "
-                                  "--defer 2 --defer-refine --decide window " + extra);
-    EXPECT_EQ(o.status, 0) << o.all;
-    std::string line;
-    for (const std::string& l : o.runs) {
-      const std::size_t from = l.find(" culled "), to = l.find(", local BA");
-      if (l.find(" ours M=") != std::string::npos && from < to && to != std::string::npos) line = l.substr(from, to - from);
-    }
-    EXPECT_FALSE(line.empty()) << o.all;
+    const std::string line = ours_on_kitti06(data, "--defer 2 --defer-refine --decide window " + extra);
     const std::size_t at = line.find(" map ");
     EXPECT_NE(at, std::string::npos) << line;
     if (at != std::string::npos) {
@@ -330,4 +338,26 @@ TEST(RealVoQuick, TieOrderAndCostTermsChangeThePointsNotTheBudget) {
   EXPECT_NE(ours("--tie-order hash"), by_id);
   EXPECT_NE(ours("--cost-terms c_s"), by_id);
   EXPECT_EQ(ours("--cost-terms c_c,c_s"), by_id);  // c_b is one cost per pair: it never reorders a pair's points
+}
+
+// --use NAME runs the flag set the docs name for it, VO side included: the
+// same keepless run line as the flags spelled out, and another than the
+// paper's settings.
+TEST(RealVoQuick, UsesRunTheFlagsTheyName) {
+  const std::string bin = KEEPLESS_EVAL_BIN;
+  const std::string data = std::string(KEEPLESS_EVAL_DATA) + "/kitti06_first51_niconielsen";
+  ASSERT_TRUE(std::filesystem::exists(bin)) << bin << " is missing: build target keepless_eval";
+  if (!std::filesystem::exists(data + "/image_l/000020.png")) {
+    GTEST_SKIP() << "no KITTI 06 data at " << data << " (set KEEPLESS_EVAL_DATA_DIR)";
+  }
+  const auto ours = [&](const std::string& flags) { return ours_on_kitti06(data, flags); };
+  const std::string paper = ours("");
+  EXPECT_EQ(ours("--use paper"), paper);
+  const std::string monocular = ours("--use monocular");
+  EXPECT_EQ(ours("--maturity 2 --scope newest --keyframe-culling count-culled"), monocular);
+  EXPECT_NE(monocular, paper);
+  const std::string deferred = ours("--use monocular-deferred");
+  EXPECT_EQ(ours("--defer 2 --defer-refine --decide window --keyframe-culling count-culled"), deferred);
+  EXPECT_NE(deferred, paper);
+  EXPECT_NE(deferred, monocular);
 }

@@ -21,6 +21,7 @@
 #include "bal_eval.hpp"
 #include "cli/cli.hpp"
 #include "keepless/core/config.hpp"
+#include "keepless/core/use.hpp"
 #include "keepless/platform/node_config.hpp"
 #include "kitti_images.hpp"
 #include "prng.hpp"
@@ -73,6 +74,11 @@ const std::vector<cli::Flag> kFlags = {
     {"--no-baselines", nullptr, "keepless only, no baselines"},
     {"--no-ablation", nullptr, "no ablation variants"},
     {"--ablation-all", nullptr, "every ablation variant"},
+    {"--use", "NAME", "a use (core::apply_use) and what it asks of the real VO, applied before\n"
+                      "the other flags, which refine it: monocular (--scope newest --maturity 2\n"
+                      "--keyframe-culling count-culled), monocular-deferred (--defer 2\n"
+                      "--defer-refine --decide window --keyframe-culling count-culled),\n"
+                      "offline (--track-share 0.5), paper and rgbd (the defaults)"},
     {"--scope", "window|newest", "keepless's decision scope (core::Params scope)"},
     {"--floor", "L", "keepless's coverage floor (core::Params coverage_floor)"},
     {"--theta", "T", "keepless's keep threshold theta_f in [0, 1] (core::Params theta; default 0.5)"},
@@ -193,9 +199,28 @@ std::vector<std::string> split(const std::string& s, char sep) {
   return out;
 }
 
+// --use: the use's policy and what its docs ask of the VO (count the culled
+// points in keyframe culling; with deferred culling keep excluded points
+// refined and decide the window).
+void apply_use(const std::string& name, Args* a) {
+  namespace kc = keepless::core;
+  kc::Use use{};
+  if (!kc::parse_use(name.c_str(), &use)) {
+    fail("--use: expected paper, monocular, monocular-deferred, rgbd or offline, got '" + name + "'");
+  }
+  kc::apply_use(use, &a->policy);
+  if (use == kc::Use::kMonocular || use == kc::Use::kMonocularDeferred) {
+    a->keyframe_culling = ke::vo::KeyframeCulling::kCountCulled;
+  }
+  a->defer_refine = a->decide_window = use == kc::Use::kMonocularDeferred;
+}
+
 Args parse(int argc, char** argv) {
   Args a;
   bool by_M = false, by_fraction = false, tracks_last = false;
+  for (int i = 1; i + 1 < argc; ++i) {
+    if (std::string(argv[i]) == "--use") apply_use(argv[i + 1], &a);
+  }
   for (int i = 1; i < argc; ++i) {
     const cli::Flag* flag = nullptr;
     const char* value = nullptr;
@@ -210,7 +235,8 @@ Args parse(int argc, char** argv) {
     }
     const std::string f = flag->name;
     auto val = [&]() -> std::string { return value; };
-    if (f == "--quick") a.quick = true;
+    if (f == "--use") continue;  // applied above
+    else if (f == "--quick") a.quick = true;
     else if (f == "--data-root") a.data_root = val();
     else if (f == "--trajectory") a.trajectories.push_back({val(), ""});
     else if (f == "--format") {
