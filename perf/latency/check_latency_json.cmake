@@ -2,7 +2,7 @@
 # (a JSON object): every documented key is present, identical_decisions is
 # true and allocations_after_warmup is 0. Timings are not asserted.
 #
-# With -DKEEP=F it also runs --keep-fraction F (see below).
+# With -DKEEP=F it also runs --keep-fraction F, alone and with each --use (see below).
 #
 # With -DCOST=authors|information (optionally -DFLOOR=L) it also runs that
 # cost model and checks the policy's keys: the stream carried what the model
@@ -24,7 +24,7 @@ function(run_latency last_var)
               allocations_after_warmup footprint_bytes ours_scratch_median_ms incremental_median_ms
               lemon_ns_median_ms lemon_cs_median_ms closed_form_median_ms ours_zero_flow_median_ms
               slide_zero_flow_median_ms identical_decisions
-              scope coverage_floor cost_model intrinsics_and_depths unmapped_per_kf floor_bound_decisions
+              use scope maturity_keyframes defer_keyframes track_share coverage_floor cost_model intrinsics_and_depths unmapped_per_kf floor_bound_decisions
               floor_promoted out_of_scope_mean decisions_digest reference reference_e2e_p50_ms
               reference_e2e_p99_ms reference_allocations_after_warmup reference_decisions_digest
               p50_ratio_to_paper p99_ratio_to_paper profile profile_fits node_memory_predicted_bytes
@@ -73,6 +73,38 @@ if(DEFINED KEEP)
   if(NOT reference_digest STREQUAL paper_digest OR digest STREQUAL paper_digest)
     message(FATAL_ERROR "the reference must decide as the paper run, the budget otherwise: ${keep_json}")
   endif()
+  # The uses (keepless_node's --use) with that fraction: the fields each sets,
+  # checked like the rest; monocular and offline decide otherwise than the
+  # plain fraction, monocular-deferred alike (its deferral is the node's).
+  foreach(use_expect "monocular;newest;2;0;0" "offline;window;0;0;0.5" "monocular-deferred;window;0;2;0")
+    list(GET use_expect 0 use)
+    run_latency(use_json --use ${use} --keep-fraction ${KEEP})
+    set(i 0)
+    foreach(key use scope maturity_keyframes defer_keyframes track_share)
+      string(JSON value GET "${use_json}" ${key})
+      list(GET use_expect ${i} expected)
+      math(EXPR i "${i} + 1")
+      if(NOT value STREQUAL expected AND NOT value EQUAL expected)  # EQUAL: numbers, as doubles
+        message(FATAL_ERROR "--use ${use}: ${key} is ${value}, expected ${expected}: ${use_json}")
+      endif()
+    endforeach()
+    string(JSON use_digest GET "${use_json}" decisions_digest)
+    string(JSON reference_digest GET "${use_json}" reference_decisions_digest)
+    if(NOT reference_digest STREQUAL paper_digest)
+      message(FATAL_ERROR "--use ${use}: the reference decided otherwise than the paper run: ${use_json}")
+    endif()
+    set(same OFF)
+    set(expect_same OFF)
+    if(use_digest STREQUAL digest)
+      set(same ON)
+    endif()
+    if(use STREQUAL "monocular-deferred")
+      set(expect_same ON)
+    endif()
+    if(NOT same STREQUAL expect_same)
+      message(FATAL_ERROR "--use ${use} decided ${use_digest}, the plain fraction ${digest}: ${use_json}")
+    endif()
+  endforeach()
 endif()
 if(NOT DEFINED COST)
   return()

@@ -52,7 +52,7 @@ double nearest_rank(std::vector<double> v, double p) {
 }  // namespace
 
 bool run_lcm_mode(const char* argv0, const KeyframeStream& stream, std::uint32_t warmup,
-                  LcmResult* out, std::string* error) {
+                  const std::vector<std::string>& node_flags, LcmResult* out, std::string* error) {
   std::string dir = argv0;
   const std::size_t slash = dir.rfind('/');
   dir = slash == std::string::npos ? "." : dir.substr(0, slash);
@@ -66,11 +66,12 @@ bool run_lcm_mode(const char* argv0, const KeyframeStream& stream, std::uint32_t
   std::uint32_t per_frame = 1;
   for (const auto& o : stream.observations) per_frame = std::max<std::uint32_t>(per_frame, static_cast<std::uint32_t>(o.size()));
   const core::Capacities need = window_needs(stream);
-  const std::vector<std::string> args = {
+  std::vector<std::string> args = {
       node, "--url", url, "--window", std::to_string(stream.window), "--max-observations",
       std::to_string(per_frame), "--max-points", std::to_string(std::max(need.max_points, per_frame)),
       "--max-window-observations", std::to_string(std::max(need.max_observations, per_frame)),
       "--max-pair-arcs", std::to_string(need.max_pair_arcs + 1), "--status-period-ms", "200", "--quiet"};
+  args.insert(args.end(), node_flags.begin(), node_flags.end());
   std::vector<char*> argv;
   for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
   argv.push_back(nullptr);
@@ -179,7 +180,8 @@ bool read_lcm_log(const std::string& path, KeyframeStream* out, std::string* err
 
 namespace keepless::perf {
 
-bool run_lcm_mode(const char*, const KeyframeStream&, std::uint32_t, LcmResult*, std::string* error) {
+bool run_lcm_mode(const char*, const KeyframeStream&, std::uint32_t, const std::vector<std::string>&, LcmResult*,
+                  std::string* error) {
   *error = "built without LCM";
   return false;
 }

@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "stream.hpp"
 
@@ -18,9 +19,10 @@ struct LcmResult {
 
 // Starts keepless_node (next to `argv0`) on a process-unique udpm port with
 // ttl=0, publishes the stream's keyframes one at a time and times each from
-// publish to the matching decision's arrival. Stops the node at the end.
+// publish to the matching decision's arrival. `node_flags` (the policy) are
+// passed to the node after the capacities. Stops the node at the end.
 bool run_lcm_mode(const char* argv0, const KeyframeStream& stream, std::uint32_t warmup,
-                  LcmResult* out, std::string* error);
+                  const std::vector<std::string>& node_flags, LcmResult* out, std::string* error);
 
 // The keyframe_t messages on channel KEEPLESS_KEYFRAME of an LCM log, in
 // log order, as a stream with the node's default window (20).

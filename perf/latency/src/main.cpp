@@ -8,13 +8,14 @@
 // NetworkSimplex and CostScaling after Preflow, the per-pair closed form)
 // and checks that every path decides the same: each window is also decided
 // from scratch by successive shortest paths from zero flow, independently
-// of the closed-form start. --scope, --floor and --cost set the decision
-// policy (core::Params); the stream then carries what the cost model reads
+// of the closed-form start. --use, --scope, --floor, --cost and the keep
+// budgets set the decision policy (core::Params) as keepless_node's flags
+// do; the stream then carries what the cost model reads
 // (intrinsics and depths, unmapped keypoints), and a second replay of the
 // same stream with the paper's defaults, in the same process, is the
 // reference the figures are divided by. With --lcm it measures
 // keyframe-published -> decision-received across keepless_node on loopback
-// (the node with its default policy). The last stdout line is one JSON object.
+// (the node with the same policy flags). The last stdout line is one JSON object.
 
 #include <algorithm>
 #include <cmath>
@@ -32,6 +33,7 @@
 #include "counting_new.hpp"  // this binary's only inclusion
 #include "keepless/core/closed_form.hpp"
 #include "keepless/core/sparsifier.hpp"
+#include "keepless/core/use.hpp"
 #include "keepless/platform/cpu_pinning.hpp"
 #include "lcm_mode.hpp"
 #include "node_memory.hpp"
@@ -57,7 +59,9 @@ struct Options {
   std::uint32_t reps = 3;                   // timing repetitions per sampled window (min kept)
   bool lcm = false;
   std::string log;
-  core::Params params;  // scope, coverage_floor, cost_model; the rest the paper's defaults
+  core::Params params;  // the use's fields, scope, coverage_floor, cost_model, budget; the rest the paper's
+  std::string use;      // --use NAME, or empty
+  std::vector<std::string> node_flags;  // the policy flags as given, for keepless_node with --lcm
   std::int64_t unmapped = -1;  // unmapped keypoints per keyframe; -1: see usage()
   std::string profile;         // keepless_node's --profile whose memory is reported
 };
@@ -70,11 +74,12 @@ std::string json_or_null(double v) {
   return buf;
 }
 
-// The policy is the paper's method as the library defaults it.
+// The policy is the paper's method as the library defaults it. (The
+// deferral, defer_keyframes, is the node's: the decisions do not read it.)
 bool is_reference(const core::Params& p) {
   const core::Params paper;
   return p.scope == paper.scope && p.coverage_floor == paper.coverage_floor && p.cost_model == paper.cost_model &&
-         p.budget.kind == core::BudgetKind::kNone;
+         p.maturity_keyframes == paper.maturity_keyframes && p.budget.kind == core::BudgetKind::kNone;
 }
 
 constexpr const char* kTool = "keepless_latency";
@@ -93,6 +98,10 @@ const std::vector<cli::Flag> kFlags = {
     {"--reps", "R", "timing repetitions per sampled window, the minimum kept (default 3)"},
     {"--lcm", nullptr, "also measure published -> received through keepless_node"},
     {"--log", "FILE", "replay the keyframe_t messages of an LCM log instead"},
+    {"--use", "NAME", "a use (keepless_node's flag: core::apply_use) before the other policy\n"
+                      "flags, which refine it: paper, monocular, monocular-deferred, rgbd,\n"
+                      "offline. The replay measures its decisions; the deferral of\n"
+                      "monocular-deferred is the node's, measured with --lcm"},
     {"--scope", "window|newest", "decision scope (keepless_node's flag; default window)"},
     {"--floor", "L", "coverage floor (keepless_node's flag; default 0)"},
     {"--cost", "paper|authors|information", "cost model (keepless_node's flag; default paper)"},
@@ -110,14 +119,24 @@ const std::vector<cli::Flag> kFlags = {
 
 std::string usage() {
   return cli::usage("usage: keepless_latency [options]", kFlags,
-                    "With --scope, --floor or --cost other than the defaults, the same stream is\n"
-                    "replayed again with the defaults as the reference of the *_ratio_to_paper\n"
-                    "figures. The last stdout line is a JSON summary.");
+                    "With a policy other than the defaults (--use, --scope, --floor, --cost, a keep\n"
+                    "budget), the same stream is replayed again with the defaults as the reference\n"
+                    "of the *_ratio_to_paper figures. The last stdout line is a JSON summary.");
 }
 
 // Returns -1 to go on, else the exit status.
 int parse(int argc, char** argv, Options* o) {
   const std::string help = usage();
+  for (int i = 1; i + 1 < argc; ++i) {
+    if (std::string(argv[i]) != "--use") continue;
+    core::Use use{};
+    if (!core::parse_use(argv[i + 1], &use)) {
+      return cli::usage_error(kTool, std::string("bad value for --use: '") + argv[i + 1] +
+                                         "' (paper, monocular, monocular-deferred, rgbd or offline)");
+    }
+    core::apply_use(use, &o->params);
+    o->use = argv[i + 1];
+  }
   for (int i = 1; i < argc; ++i) {
     const cli::Flag* flag = nullptr;
     const char* v = nullptr;
@@ -128,7 +147,13 @@ int parse(int argc, char** argv, Options* o) {
     const auto bad = [&](const char* expected) {
       return cli::usage_error(kTool, "bad value for " + a + ": '" + v + "' (" + expected + ")");
     };
-    if (a == "--mlock") {
+    for (const char* policy : {"--use", "--scope", "--floor", "--cost", "--keep-points", "--keep-fraction",
+                               "--keep-observations"}) {
+      if (a == policy) o->node_flags.insert(o->node_flags.end(), {a, v});
+    }
+    if (a == "--use") {
+      continue;  // applied above
+    } else if (a == "--mlock") {
       o->mlock = true;
     } else if (a == "--lcm") {
       o->lcm = true;
@@ -149,15 +174,16 @@ int parse(int argc, char** argv, Options* o) {
       if (end == v || *end != '\0' || !(x >= 0 && x <= 1) || o->params.budget.kind != core::BudgetKind::kNone) {
         return bad("one keep budget, F in [0, 1]");
       }
-      o->params.budget = core::KeepBudget{core::BudgetKind::kFraction, 0, x};
+      o->params.budget.kind = core::BudgetKind::kFraction;  // the use's track share kept
+      o->params.budget.fraction = x;
     } else if (a == "--keep-points" || a == "--keep-observations") {
       const unsigned long long x = std::strtoull(v, &end, 10);
       if (end == v || *end != '\0' || v[0] == '-' || x > 0xffffffffull ||
           o->params.budget.kind != core::BudgetKind::kNone) {
         return bad("one keep budget, an integer");
       }
-      o->params.budget = core::KeepBudget{
-          a == "--keep-points" ? core::BudgetKind::kPoints : core::BudgetKind::kObservations, x, 0.0};
+      o->params.budget.kind = a == "--keep-points" ? core::BudgetKind::kPoints : core::BudgetKind::kObservations;
+      o->params.budget.count = x;
     } else if (a == "--budget-ms" || a == "--budget-fraction") {
       const double x = std::strtod(v, &end);
       if (end == v || *end != '\0' || !std::isfinite(x) || x < 0) return bad("a number >= 0");
@@ -391,9 +417,10 @@ bool replay(const KeyframeStream& stream, std::uint32_t warmup, std::uint64_t bu
   core::Params unpolicied = params;
   unpolicied.scope = core::Scope::kWindow;
   unpolicied.coverage_floor = 0;
+  unpolicied.maturity_keyframes = 0;
   unpolicied.budget = core::KeepBudget{};  // the solvers are compared at M
   std::unique_ptr<core::Sparsifier> raw;
-  if (params.scope != core::Scope::kWindow || params.coverage_floor > 0 ||
+  if (params.scope != core::Scope::kWindow || params.coverage_floor > 0 || params.maturity_keyframes > 0 ||
       params.budget.kind != core::BudgetKind::kNone) {
     raw = std::make_unique<core::Sparsifier>(caps, unpolicied, core::SolveMode::kFromScratch,
                                              core::Start::kZeroFlow);
@@ -605,9 +632,10 @@ int main(int argc, char** argv) {
   if (o.params.budget.kind == core::BudgetKind::kPoints || o.params.budget.kind == core::BudgetKind::kObservations)
     std::printf(" %llu", static_cast<unsigned long long>(o.params.budget.count));
   std::printf("\n");
-  std::printf("policy: scope %s, floor %u, cost %s; stream: intrinsics and depths %s, %u unmapped keypoints"
-              " per keyframe; reference: %s\n",
-              core::to_string(o.params.scope), o.params.coverage_floor, core::to_string(o.params.cost_model),
+  std::printf("policy: use %s, scope %s, maturity %u, floor %u, cost %s, track share %.2f; stream: intrinsics and"
+              " depths %s, %u unmapped keypoints per keyframe; reference: %s\n",
+              o.use.empty() ? "-" : o.use.c_str(), core::to_string(o.params.scope), o.params.maturity_keyframes,
+              o.params.coverage_floor, core::to_string(o.params.cost_model), o.params.budget.track_share,
               camera ? "yes" : "no", unmapped_per_kf,
               with_reference ? "the paper's defaults on the same stream, replayed after" : "this run");
 
@@ -725,7 +753,7 @@ int main(int argc, char** argv) {
   LcmResult lcm;
   if (o.lcm) {
     std::string error;
-    if (!run_lcm_mode(argv[0], stream, o.warmup, &lcm, &error)) {
+    if (!run_lcm_mode(argv[0], stream, o.warmup, o.node_flags, &lcm, &error)) {
       std::fprintf(stderr, "keepless_latency: --lcm: %s\n", error.c_str());
     } else {
       std::printf("over LCM (keepless_node on loopback, published -> decision received): %u decisions,"
@@ -760,7 +788,8 @@ int main(int argc, char** argv) {
   // survive a JSON number as a double).
   std::printf(
       "\"keep_budget\":\"%s\",\"keep_budget_value\":%.4f,\"keep_budget_share_p50\":%s,\"keep_budget_share_p99\":%s,"
-      "\"scope\":\"%s\",\"coverage_floor\":%u,\"cost_model\":\"%s\",\"intrinsics_and_depths\":%s,"
+      "\"use\":\"%s\",\"scope\":\"%s\",\"maturity_keyframes\":%u,\"defer_keyframes\":%u,\"track_share\":%.3f,"
+      "\"coverage_floor\":%u,\"cost_model\":\"%s\",\"intrinsics_and_depths\":%s,"
       "\"unmapped_per_kf\":%u,\"floor_bound_decisions\":%u,\"floor_promoted\":%llu,\"out_of_scope_mean\":%.1f,"
       "\"decisions_digest\":\"%016llx\",\"reference\":\"%s\",\"reference_e2e_p50_ms\":%.4f,"
       "\"reference_e2e_p99_ms\":%.4f,\"reference_budget_exhausted\":%u,"
@@ -771,8 +800,9 @@ int main(int argc, char** argv) {
       core::to_string(o.params.budget.kind),
       o.params.budget.kind == core::BudgetKind::kFraction ? o.params.budget.fraction
                                                           : static_cast<double>(o.params.budget.count),
-      json_or_null(budget_share_p50).c_str(), json_or_null(budget_share_p99).c_str(),
-      core::to_string(o.params.scope), o.params.coverage_floor, core::to_string(o.params.cost_model),
+      json_or_null(budget_share_p50).c_str(), json_or_null(budget_share_p99).c_str(), o.use.c_str(),
+      core::to_string(o.params.scope), o.params.maturity_keyframes, o.params.defer_keyframes,
+      o.params.budget.track_share, o.params.coverage_floor, core::to_string(o.params.cost_model),
       camera ? "true" : "false", unmapped_per_kf, r.floor_bound,
       static_cast<unsigned long long>(r.floor_promoted),
       r.decisions > 0 ? static_cast<double>(r.out_of_scope) / r.decisions : 0.0,
