@@ -137,11 +137,9 @@ bool parse_limit(const char* text, std::uint32_t* out) {
 int parse_args(int argc, char** argv, Options* opt, bool* help, bool* version) {
   // --use first, wherever it stands, so the other flags refine it.
   core::Use use = core::Use::kPaper;
-  for (int i = 1; i + 1 < argc; ++i) {
-    if (std::strcmp(argv[i], "--use") != 0) continue;
-    if (!core::parse_use(argv[i + 1], &use)) {
-      return usage_error(std::string("bad value for --use: '") + argv[i + 1] +
-                         "' (paper, monocular, monocular-deferred, rgbd or offline)");
+  if (const char* name = keepless::cli::last_value(argc, argv, "--use")) {
+    if (!core::parse_use(name, &use)) {
+      return usage_error(std::string("bad value for --use: '") + name + "' (" + core::kUseNames + ")");
     }
     core::apply_use(use, &opt->params);
   }

@@ -151,7 +151,7 @@ bool apply_early_flag(const char* flag, const std::string& name, NodeConfig& con
   }
   core::Use use{};
   if (!core::parse_use(name.c_str(), &use)) {
-    error = "--use '" + name + "': expected paper, monocular, monocular-deferred, rgbd or offline";
+    error = "--use '" + name + "': expected " + core::kUseNames;
     return false;
   }
   core::apply_use(use, &config.params);

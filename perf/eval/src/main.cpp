@@ -206,7 +206,7 @@ void apply_use(const std::string& name, Args* a) {
   namespace kc = keepless::core;
   kc::Use use{};
   if (!kc::parse_use(name.c_str(), &use)) {
-    fail("--use: expected paper, monocular, monocular-deferred, rgbd or offline, got '" + name + "'");
+    fail(std::string("--use: expected ") + kc::kUseNames + ", got '" + name + "'");
   }
   kc::apply_use(use, &a->policy);
   if (use == kc::Use::kMonocular || use == kc::Use::kMonocularDeferred) {
@@ -218,9 +218,7 @@ void apply_use(const std::string& name, Args* a) {
 Args parse(int argc, char** argv) {
   Args a;
   bool by_M = false, by_fraction = false, tracks_last = false;
-  for (int i = 1; i + 1 < argc; ++i) {
-    if (std::string(argv[i]) == "--use") apply_use(argv[i + 1], &a);
-  }
+  if (const char* name = cli::last_value(argc, argv, "--use")) apply_use(name, &a);
   for (int i = 1; i < argc; ++i) {
     const cli::Flag* flag = nullptr;
     const char* value = nullptr;

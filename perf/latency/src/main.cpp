@@ -127,15 +127,13 @@ std::string usage() {
 // Returns -1 to go on, else the exit status.
 int parse(int argc, char** argv, Options* o) {
   const std::string help = usage();
-  for (int i = 1; i + 1 < argc; ++i) {
-    if (std::string(argv[i]) != "--use") continue;
+  if (const char* name = cli::last_value(argc, argv, "--use")) {
     core::Use use{};
-    if (!core::parse_use(argv[i + 1], &use)) {
-      return cli::usage_error(kTool, std::string("bad value for --use: '") + argv[i + 1] +
-                                         "' (paper, monocular, monocular-deferred, rgbd or offline)");
+    if (!core::parse_use(name, &use)) {
+      return cli::usage_error(kTool, std::string("bad value for --use: '") + name + "' (" + core::kUseNames + ")");
     }
     core::apply_use(use, &o->params);
-    o->use = argv[i + 1];
+    o->use = name;
   }
   for (int i = 1; i < argc; ++i) {
     const cli::Flag* flag = nullptr;

@@ -62,6 +62,14 @@ const Flag* find(const std::vector<Flag>& flags, std::string_view name) {
   return nullptr;
 }
 
+const char* last_value(int argc, char** argv, std::string_view flag) {
+  const char* value = nullptr;
+  for (int i = 1; i + 1 < argc; ++i) {
+    if (flag == argv[i]) value = argv[++i];
+  }
+  return value;
+}
+
 bool documents(std::string_view text, std::string_view flag) {
   for (std::size_t at = 0; at < text.size();) {
     std::size_t end = text.find('\n', at);

@@ -25,6 +25,10 @@ std::string usage(std::string_view synopsis, const std::vector<Flag>& flags, std
 
 const Flag* find(const std::vector<Flag>& flags, std::string_view name);
 
+// The value of the last "`flag` VALUE" in argv, or nullptr: for a flag
+// applied before the others wherever it stands (--use), so they refine it.
+const char* last_value(int argc, char** argv, std::string_view flag);
+
 // A usage text documents `flag` when a line starts with two blanks and the
 // flag, followed by a blank, a comma or the line's end.
 bool documents(std::string_view usage_text, std::string_view flag);

@@ -40,7 +40,9 @@ enum class Use : std::uint8_t {
 void apply_use(Use use, Params* params);
 
 // "paper", "monocular", "monocular-deferred", "rgbd", "offline"; parse_use
-// returns false (and leaves *out alone) for any other text.
+// returns false (and leaves *out alone) for any other text, which an error
+// message answers with kUseNames.
+inline constexpr const char* kUseNames = "paper, monocular, monocular-deferred, rgbd or offline";
 const char* to_string(Use use);
 bool parse_use(const char* text, Use* out);
 
