@@ -157,6 +157,7 @@ TEST(RealVoQuick, DeferredCullingTracksExcludedPointsAndDeletesThemByTheRule) {
   }
   struct Counts {
     long long culled = -1, deleted = -1, matched = -1, violations = -1;
+    double refine_cpu = -1;  // the excluded points' refinement, outside the local BA's CPU
   };
   // The "ours" line's counts.
   const auto run = [&](const std::string& extra, Counts* out) {
@@ -174,6 +175,9 @@ TEST(RealVoQuick, DeferredCullingTracksExcludedPointsAndDeletesThemByTheRule) {
       count("deleted ", &out->deleted);
       count("excluded matched ", &out->matched);
       count("rule violations ", &out->violations);
+      const std::size_t at = line.find("refine cpu ");
+      ASSERT_NE(at, std::string::npos) << line;
+      out->refine_cpu = std::atof(line.c_str() + at + 11);
     }
     ASSERT_EQ(o.status, 0) << o.all;
     ASSERT_GE(out->culled, 0) << "no 'ours' line:\n" << o.all;
@@ -184,6 +188,7 @@ TEST(RealVoQuick, DeferredCullingTracksExcludedPointsAndDeletesThemByTheRule) {
   EXPECT_EQ(c.deleted, 0);
   EXPECT_EQ(c.matched, 0);
   EXPECT_EQ(c.violations, 0);
+  EXPECT_EQ(c.refine_cpu, 0.0);  // nothing excluded, nothing refined
   for (const std::string extra : {"--defer 1", "--defer 3 --defer-refine"}) {
     SCOPED_TRACE(extra);
     run(extra, &c);

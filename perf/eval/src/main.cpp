@@ -108,6 +108,9 @@ const std::vector<cli::Flag> kFlags = {
     {"--defer-refine", nullptr, "with --defer: each excluded point's re-triangulation is refined with the\n"
                                 "poses held (robust, as local BA refines a point) and its outlier\n"
                                 "observations are erased"},
+    {"--defer-alternate", nullptr, "with --defer: then each local keyframe's pose is refined (motion-only)\n"
+                                   "against all its points, excluded ones included, and the excluded\n"
+                                   "points re-triangulated again (one round of resection-intersection)"},
     {"--decide", "newest|window", "which points every selector of the real VO decides at a keyframe:\n"
                                   "newest, the new keyframe's (the authors' integration; default), or\n"
                                   "window, every point of the local window, so a point kept before\n"
@@ -167,6 +170,7 @@ struct Args {
   bool tracked_flags = false;     // --tracked-flags (the real VO)
   bool defer_fixed = false;       // --defer-fixed (the real VO)
   bool defer_refine = false;      // --defer-refine (the real VO)
+  bool defer_alternate = false;   // --defer-alternate (the real VO)
   bool decide_window = false;     // --decide window (the real VO)
   bool hashed_ids = false;        // --tie-order hash (the real VO)
   ke::vo::KeyframeCulling keyframe_culling{};  // --keyframe-culling (the real VO)
@@ -301,6 +305,7 @@ Args parse(int argc, char** argv) {
     else if (f == "--defer") a.policy.defer_keyframes = static_cast<std::uint32_t>(parse_int(f, val(), 1, 1000));
     else if (f == "--defer-fixed") a.defer_fixed = true;
     else if (f == "--defer-refine") a.defer_refine = true;
+    else if (f == "--defer-alternate") a.defer_alternate = true;
     else if (f == "--no-keyframe-culling") a.keyframe_culling = ke::vo::KeyframeCulling::kOff;
     else if (f == "--keyframe-culling") {
       const std::string v = val();
@@ -564,6 +569,7 @@ int main(int argc, char** argv) {
   if (a.policy.defer_keyframes > 0) summary.settings += ", defer " + std::to_string(a.policy.defer_keyframes);
   if (a.defer_fixed) summary.settings += ", excluded points fixed in BA";
   if (a.defer_refine) summary.settings += ", excluded points refined";
+  if (a.defer_alternate) summary.settings += ", local poses refined against them";
   if (a.decide_window) summary.settings += ", the window's points decided";
   if (a.hashed_ids) summary.settings += ", ties by hashed id";
   if (a.policy.spatial_weight != 1) summary.settings += ", spatial weight " + std::to_string(a.policy.spatial_weight);
@@ -676,6 +682,7 @@ int main(int argc, char** argv) {
     vo.tracked_flags = a.tracked_flags;
     vo.defer_fixed = a.defer_fixed;
     vo.defer_refine = a.defer_refine;
+    vo.defer_alternate = a.defer_alternate;
     vo.decide_window = a.decide_window;
     vo.hashed_ids = a.hashed_ids;
     vo.keyframe_culling = a.keyframe_culling;

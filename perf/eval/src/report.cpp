@@ -15,7 +15,7 @@ namespace {
 constexpr const char* kCsvHeader =
     "input,name,group,kind,alignment,variant,seed,M,target_fraction,compared_M,mps,kfs,observations,ba_s,total_s,"
     "ate_m,ate_r_deg,C,F,S,frames,frames_tracked,windows,floor_keyframes,floor_promoted,floor_short,ba_cpu_s,"
-    "diverged,failed";
+    "diverged,failed,refine_cpu_s";
 
 std::string f(double v, int prec) {
   if (!std::isfinite(v)) return "–";
@@ -574,7 +574,8 @@ bool write_outputs(const EvalSummary& s, const std::string& out_dir, std::string
             << json_number(r.ate_r_deg, 6) << "," << json_number(r.C, 4) << "," << json_number(r.F, 4) << ","
             << json_number(r.S, 4) << "," << r.frames << "," << r.frames_tracked << "," << r.selector.windows << ","
             << r.selector.floor_keyframes << "," << r.selector.floor_promoted << "," << r.selector.floor_short << ","
-            << json_number(r.ba_cpu_s, 4) << "," << (r.diverged ? 1 : 0) << "," << (r.failed() ? 1 : 0) << "\n";
+            << json_number(r.ba_cpu_s, 4) << "," << (r.diverged ? 1 : 0) << "," << (r.failed() ? 1 : 0) << ","
+            << json_number(r.refine_cpu_s, 4) << "\n";
   bool ok = write("runs.csv", csv.str());
   std::string meta = s.command + "\n" + s.mode + "\n" + s.settings + "\n" + json_number(s.elapsed_s, 1) + "\n";
   for (const std::string& i : s.settings_inputs) meta += i + "\n";
@@ -717,6 +718,7 @@ bool read_outputs(const std::string& out_dir, EvalSummary* s, std::string* error
     r.selector.floor_promoted = count("floor_promoted");
     r.selector.floor_short = count("floor_short");
     r.ba_cpu_s = col("ba_cpu_s") < 0 ? NAN : num("ba_cpu_s");
+    r.refine_cpu_s = col("refine_cpu_s") < 0 ? NAN : num("refine_cpu_s");  // absent in older files
     r.diverged = count("diverged") != 0;
     // One comparison per input and operating point (compared_M tells --M points apart).
     const std::int64_t compared_m = col("compared_M") < 0 ? 0 : static_cast<std::int64_t>(num("compared_M"));

@@ -55,6 +55,7 @@ struct RunRecord {
   int frames = 0, frames_tracked = 0;  // real VO (kind images / rgbd): frames given and tracked; 0 elsewhere
   SelectorCounts selector;
   double ba_cpu_s = NAN;  // local BAs' thread CPU time (real VO), unmoved by the machine's load
+  double refine_cpu_s = NAN;  // deferred culling: the excluded points' refinement after local BA (real VO)
   bool diverged = false;  // a BA that did not converge (BAL)
   // A failure: tracking lost (frames tracked < frames) or a BA diverged.
   // Its ATE still counts every frame (untracked ones at the last tracked pose).

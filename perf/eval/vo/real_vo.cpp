@@ -201,6 +201,7 @@ class Vo {
   bool deferring() const { return opt_.params.defer_keyframes > 0 && opt_.selector != Selector::kOriginal; }
   void note_matches(int kf);
   void retriangulate_excluded(const std::vector<int>& local);
+  void refine_local_poses(const std::vector<int>& local);
   void keyframe_culling(int kf);
   Eigen::Isometry3d final_pose(int kf) const;
   bool features_of(int i, Frame* out);
@@ -1021,6 +1022,31 @@ void Vo::retriangulate_excluded(const std::vector<int>& local) {
   }
 }
 
+// defer_alternate: each local keyframe but the first of the map, motion-only
+// against every point it observes (kept and excluded), as tracking refines a
+// frame; a solution with fewer than 15 inliers leaves the pose as it was.
+void Vo::refine_local_poses(const std::vector<int>& local) {
+  std::vector<Eigen::Vector3d> X;
+  std::vector<BaObservation> obs;
+  std::vector<bool> outlier;
+  for (int k : local) {
+    KeyFrame& f = map_.kfs[static_cast<std::size_t>(k)];
+    if (k == 0 || f.bad) continue;
+    X.clear();
+    obs.clear();
+    for (std::size_t i = 0; i < f.mp.size(); ++i) {
+      const int p = f.mp[i] >= 0 ? map_.resolve(f.mp[i]) : -1;
+      if (p < 0 || map_.points[static_cast<std::size_t>(p)].bad) continue;
+      X.push_back(map_.points[static_cast<std::size_t>(p)].X);
+      const cv::KeyPoint& kp = f.f.keys[i];
+      obs.push_back({0, static_cast<int>(X.size()) - 1, kp.pt.x, kp.pt.y, f.f.ur[i], kp.octave});
+    }
+    if (obs.size() < 15) continue;
+    Eigen::Isometry3d T = f.Tcw;
+    if (optimize_pose(cam_, X, obs, &T, &outlier) >= 15) f.Tcw = T;
+  }
+}
+
 void Vo::keyframe_culling(int kf) {
   for (const auto& [k, w] : map_.covisibles(kf, 15)) {
     if (k != 0 && k != kf && map_.redundant(k, seq_.rgbd ? cam_.close_depth : 0)) map_.cull_keyframe(k);
@@ -1036,7 +1062,15 @@ void Vo::local_mapping(int kf) {
   if (deferring()) note_matches(kf);
   if (opt_.selector != Selector::kOriginal) remove_culls(select_points(kf, local));
   local_ba(local, false);
-  if (deferring()) retriangulate_excluded(local);
+  if (deferring()) {
+    const double cpu0 = thread_cpu_seconds();
+    retriangulate_excluded(local);
+    if (opt_.defer_alternate) {
+      refine_local_poses(local);
+      retriangulate_excluded(local);
+    }
+    result_.refine_cpu_seconds += thread_cpu_seconds() - cpu0;
+  }
   if (opt_.keyframe_culling != KeyframeCulling::kOff) keyframe_culling(kf);
 }
 

@@ -41,6 +41,11 @@ struct RealVoOptions {
   // refined with the poses held (robust, as local BA would) and its outlier
   // observations are erased, instead of the DLT alone.
   bool defer_refine = false;
+  // Deferred culling: after that, each local keyframe's pose is refined
+  // (motion-only) against every point it observes, excluded ones included,
+  // and the excluded points are re-triangulated again: one round of
+  // resection-intersection over what local BA left out.
+  bool defer_alternate = false;
   // Which points every selector decides at a keyframe: false, the new
   // keyframe's (the authors' integration; with params.maturity_keyframes the
   // keyframe that just matured); true, every evaluated point of the local
@@ -93,6 +98,10 @@ struct RealRunResult {
   double local_ba_seconds = 0, selector_seconds = 0, total_seconds = 0;
   std::int64_t local_ba_observations = 0;  // residuals over every local BA
   double local_ba_cpu_seconds = 0;          // the local BAs' thread CPU time
+  // Deferred culling: the thread CPU time of re-triangulating (and with
+  // defer_refine refining) the excluded points after each local BA, which
+  // local_ba_cpu_seconds does not count.
+  double refine_cpu_seconds = 0;
   // The local BAs' point blocks (excluded points aside), summed over every
   // local BA, with their map track lengths and triangulation angles (degrees).
   std::int64_t ba_points = 0;

@@ -20,6 +20,7 @@ RunRecord record_of(const RealRunResult& r, const char* variant, std::uint64_t s
   x.observations = static_cast<std::uint64_t>(r.local_ba_observations);
   x.ba_s = r.local_ba_seconds;
   x.ba_cpu_s = r.local_ba_cpu_seconds;
+  x.refine_cpu_s = r.refine_cpu_seconds;
   x.total_s = r.total_seconds;
   x.ate_m = r.ate_m;
   x.ate_r_deg = r.ate_r_deg;
@@ -35,7 +36,7 @@ void log_run(const RealSequence& s, const RunRecord& r, const RealRunResult& x) 
                "excluded matched %lld rule violations %lld culled outside the keyframe %lld (windows %llu, refused %d) "
                "kept %.1f%% (of evaluated, map %.1f%%) floor kfs %llu promoted %llu "
                "short %llu, ate %.4f m, "
-               "local BA %.2f s (%d, cpu %.2f s, %lld obs), total %.1f s, "
+               "local BA %.2f s (%d, cpu %.2f s, %lld obs), refine cpu %.2f s, total %.1f s, "
                "BA points %lld (mean track %.2f, angle %.2f deg)\n",
                s.name.c_str(), static_cast<unsigned long long>(r.seed), r.variant.c_str(),
                static_cast<long long>(r.M), x.frames_tracked, x.frames, x.tracking_losses, x.map_points, x.keyframes,
@@ -50,7 +51,7 @@ void log_run(const RealSequence& s, const RunRecord& r, const RealRunResult& x) 
                static_cast<unsigned long long>(x.selector.floor_promoted),
                static_cast<unsigned long long>(x.selector.floor_short), x.ate_m,
                x.local_ba_seconds, x.local_bas, x.local_ba_cpu_seconds,
-               static_cast<long long>(x.local_ba_observations), x.total_seconds,
+               static_cast<long long>(x.local_ba_observations), x.refine_cpu_seconds, x.total_seconds,
                static_cast<long long>(x.ba_points), x.ba_points > 0 ? x.ba_point_track_sum / double(x.ba_points) : 0.0,
                x.ba_points > 0 ? x.ba_point_angle_sum / double(x.ba_points) : 0.0);
 }
@@ -92,6 +93,7 @@ bool evaluate_real_vo(const VoInput& in, const VoEvalOptions& o, std::vector<Com
     vo.tracked_flags = o.tracked_flags;
     vo.defer_fixed = o.defer_fixed;
     vo.defer_refine = o.defer_refine;
+    vo.defer_alternate = o.defer_alternate;
     vo.decide_window = o.decide_window;
     vo.hashed_ids = o.hashed_ids;
     vo.keyframe_culling = o.keyframe_culling;

@@ -35,6 +35,7 @@ struct VoEvalOptions {
   bool tracked_flags = false;  // RealVoOptions::tracked_flags
   bool defer_fixed = false;    // RealVoOptions::defer_fixed
   bool defer_refine = false;   // RealVoOptions::defer_refine
+  bool defer_alternate = false;  // RealVoOptions::defer_alternate
   bool decide_window = false;  // RealVoOptions::decide_window (keepless with scope window)
   bool hashed_ids = false;     // RealVoOptions::hashed_ids
   KeyframeCulling keyframe_culling = KeyframeCulling::kOn;  // RealVoOptions::keyframe_culling
