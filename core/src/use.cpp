@@ -13,13 +13,13 @@ void apply_use(Use use, Params* params) {
   params->budget.track_share = paper.budget.track_share;
   switch (use) {
     case Use::kMonocular:
+    case Use::kRgbd:
       params->scope = Scope::kNewest;
       params->maturity_keyframes = 2;
       break;
     case Use::kMonocularDeferred: params->defer_keyframes = 2; break;
     case Use::kOffline: params->budget.track_share = 0.5; break;
-    case Use::kPaper:
-    case Use::kRgbd: break;
+    case Use::kPaper: break;
   }
 }
 

@@ -63,8 +63,8 @@ const std::vector<keepless::cli::Flag> kFlags = {
                            "those unmatched keypoints' positions, and 2D point indices no longer\n"
                            "match the feature database (default: keep every 2D point)"},
     {"--use", "NAME", "settings per use from the budget sweep, applied before the other flags\n"
-                      "(they refine it): paper (the default), monocular (--scope newest\n"
-                      "--maturity 2), monocular-deferred and rgbd (the paper's here), offline\n"
+                      "(they refine it): paper (the default), monocular and rgbd (--scope\n"
+                      "newest --maturity 2), monocular-deferred (the paper's here), offline\n"
                       "(--mode whole --track-share 0.5; needs --keep-points or --keep-fraction)"},
     {"--mode", "replay|whole", "replay: the onboard node's sliding window; whole: one window\n"
                                "(default: replay for maps, whole for --window)"},

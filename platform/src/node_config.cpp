@@ -70,7 +70,7 @@ std::string node_usage() {
          "  --use NAME                settings per use, from the budget sweep, applied before the other flags\n"
          "                            (they set --scope, --maturity, --defer and --track-share): paper (the\n"
          "                            default), monocular (--scope newest --maturity 2), monocular-deferred\n"
-         "                            (--defer 2), rgbd (the paper's), offline (--track-share 0.5)\n"
+         "                            (--defer 2), rgbd (as monocular), offline (--track-share 0.5)\n"
          "  --max-points N            distinct points the window holds (default 6600; 0: K*N)\n"
          "  --max-window-observations N  observations the window holds (default 19100; 0: K*N)\n"
          "  --max-pair-arcs N         point -> pair arcs of the window's network, sum of n(n-1)/2 over its points\n"

@@ -58,19 +58,20 @@ TEST(Use, SetsThePolicyAndLeavesTheRest) {
       EXPECT_EQ(p.track_terms, kTrackAngle);
       EXPECT_EQ(p.budget.kind, BudgetKind::kFraction);
       EXPECT_EQ(p.budget.fraction, 0.2);
-      EXPECT_EQ(p.scope, u == Use::kMonocular ? Scope::kNewest : Scope::kWindow);
-      EXPECT_EQ(p.maturity_keyframes, u == Use::kMonocular ? 2u : 0u);
+      const bool guarded = u == Use::kMonocular || u == Use::kRgbd;
+      EXPECT_EQ(p.scope, guarded ? Scope::kNewest : Scope::kWindow);
+      EXPECT_EQ(p.maturity_keyframes, guarded ? 2u : 0u);
       EXPECT_EQ(p.defer_keyframes, u == Use::kMonocularDeferred ? 2u : 0u);
       EXPECT_EQ(p.budget.track_share, u == Use::kOffline ? 0.5 : 0.0);
     }
   }
-  // The paper's and RGB-D's are Params' defaults.
-  for (Use u : {Use::kPaper, Use::kRgbd}) {
+  // The paper's are Params' defaults.
+  {
     Params p;
     p.scope = Scope::kNewest;
     p.maturity_keyframes = 3;
     p.defer_keyframes = 4;
-    apply_use(u, &p);
+    apply_use(Use::kPaper, &p);
     const Params defaults;
     EXPECT_EQ(p.scope, defaults.scope);
     EXPECT_EQ(p.maturity_keyframes, defaults.maturity_keyframes);

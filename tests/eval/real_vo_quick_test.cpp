@@ -361,6 +361,7 @@ TEST(RealVoQuick, UsesRunTheFlagsTheyName) {
   const std::string monocular = ours("--use monocular");
   EXPECT_EQ(ours("--maturity 2 --scope newest --keyframe-culling count-culled"), monocular);
   EXPECT_NE(monocular, paper);
+  EXPECT_EQ(ours("--use rgbd"), monocular);  // the same settings, chosen on RGB-D for accuracy
   const std::string deferred = ours("--use monocular-deferred");
   EXPECT_EQ(ours("--defer 2 --defer-refine --decide window --keyframe-culling count-culled"), deferred);
   EXPECT_NE(deferred, paper);

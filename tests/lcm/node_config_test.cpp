@@ -335,8 +335,8 @@ TEST(NodeConfig, ParsesTheUses) {
   EXPECT_EQ(deferred.params.scope, Scope::kWindow);
   NodeConfig rgbd;
   ASSERT_EQ(parse({"--use", "rgbd"}, rgbd, error), ParseResult::kOk) << error;
-  EXPECT_EQ(rgbd.params.scope, defaults.params.scope);
-  EXPECT_EQ(rgbd.params.maturity_keyframes, 0u);
+  EXPECT_EQ(rgbd.params.scope, Scope::kNewest);  // the monocular use's settings
+  EXPECT_EQ(rgbd.params.maturity_keyframes, 2u);
   EXPECT_EQ(rgbd.params.defer_keyframes, 0u);
   // --profile and --use together, each applied first.
   NodeConfig both;

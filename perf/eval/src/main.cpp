@@ -78,7 +78,7 @@ const std::vector<cli::Flag> kFlags = {
                       "the other flags, which refine it: monocular (--scope newest --maturity 2\n"
                       "--keyframe-culling count-culled), monocular-deferred (--defer 2\n"
                       "--defer-refine --decide window --keyframe-culling count-culled),\n"
-                      "offline (--track-share 0.5), paper and rgbd (the defaults)"},
+                      "rgbd (as monocular), offline (--track-share 0.5), paper (the defaults)"},
     {"--scope", "window|newest", "keepless's decision scope (core::Params scope)"},
     {"--floor", "L", "keepless's coverage floor (core::Params coverage_floor)"},
     {"--theta", "T", "keepless's keep threshold theta_f in [0, 1] (core::Params theta; default 0.5)"},
@@ -213,7 +213,7 @@ void apply_use(const std::string& name, Args* a) {
     fail(std::string("--use: expected ") + kc::kUseNames + ", got '" + name + "'");
   }
   kc::apply_use(use, &a->policy);
-  if (use == kc::Use::kMonocular || use == kc::Use::kMonocularDeferred) {
+  if (use != kc::Use::kPaper && use != kc::Use::kOffline) {
     a->keyframe_culling = ke::vo::KeyframeCulling::kCountCulled;
   }
   a->defer_refine = a->decide_window = use == kc::Use::kMonocularDeferred;
