@@ -364,6 +364,19 @@ std::uint32_t track_share_count(double share, std::uint32_t take) {
   return static_cast<std::uint32_t>(std::floor(share * take + 0.5));
 }
 
+double track_share_at(const KeepBudget& budget, std::uint64_t take, std::uint64_t candidates) {
+  const double from = budget.track_share_from;
+  bool applies = true;
+  if (from > 0.0) {
+    switch (budget.kind) {
+      case BudgetKind::kFraction: applies = budget.fraction >= from; break;
+      case BudgetKind::kPoints: applies = static_cast<double>(take) >= from * static_cast<double>(candidates); break;
+      default: applies = false; break;
+    }
+  }
+  return applies ? budget.track_share : 0.0;
+}
+
 void take_longest_tracks(std::uint32_t* ranked, std::uint32_t candidates, std::uint32_t take, double share,
                          const std::uint32_t* views, std::uint32_t max_views, std::uint32_t* histogram,
                          std::uint32_t* scratch) {

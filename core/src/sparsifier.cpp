@@ -277,8 +277,8 @@ struct Sparsifier::Impl {
       }
     }
     if (!views_histogram.empty()) {  // cursor is free again: the scratch
-      take_longest_tracks(ranked.data(), candidates, take, b.track_share, views_of.data(), caps.max_keyframes,
-                          views_histogram.data(), cursor.data());
+      take_longest_tracks(ranked.data(), candidates, take, track_share_at(b, take, candidates), views_of.data(),
+                          caps.max_keyframes, views_histogram.data(), cursor.data());
     }
     observations = 0;
     std::uint32_t kept_top = 0;
@@ -486,7 +486,11 @@ Status Sparsifier::validate(const Params& p) {
   // A track share takes part of a count (kPoints, kFraction) by track length.
   const double share = p.budget.track_share;
   if (!std::isfinite(share) || share < 0.0 || share > 1.0) return Status::kInvalidArgument;
-  if (share > 0.0 && p.budget.kind != BudgetKind::kPoints && p.budget.kind != BudgetKind::kFraction) {
+  // A share that applies at every budget needs a count; one from a
+  // threshold (a use's) just never applies without one.
+  const double from = p.budget.track_share_from;
+  if (!std::isfinite(from) || from < 0.0 || from > 1.0) return Status::kInvalidArgument;
+  if (share > 0.0 && from == 0.0 && p.budget.kind != BudgetKind::kPoints && p.budget.kind != BudgetKind::kFraction) {
     return Status::kInvalidArgument;
   }
   switch (p.cost_model) {

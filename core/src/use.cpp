@@ -11,8 +11,12 @@ void apply_use(Use use, Params* params) {
   params->maturity_keyframes = paper.maturity_keyframes;
   params->defer_keyframes = paper.defer_keyframes;
   params->budget.track_share = paper.budget.track_share;
+  params->budget.track_share_from = paper.budget.track_share_from;
   switch (use) {
     case Use::kMonocular:
+      params->budget.track_share = 0.5;
+      params->budget.track_share_from = 0.3;
+      [[fallthrough]];
     case Use::kRgbd:
       params->scope = Scope::kNewest;
       params->maturity_keyframes = 2;

@@ -63,9 +63,11 @@ const std::vector<keepless::cli::Flag> kFlags = {
                            "those unmatched keypoints' positions, and 2D point indices no longer\n"
                            "match the feature database (default: keep every 2D point)"},
     {"--use", "NAME", "settings per use from the budget sweep, applied before the other flags\n"
-                      "(they refine it): paper (the default), monocular and rgbd (--scope\n"
-                      "newest --maturity 2), monocular-deferred (the paper's here), offline\n"
-                      "(--mode whole --track-share 0.5; needs --keep-points or --keep-fraction)"},
+                      "(they refine it): paper (the default), monocular (--scope newest\n"
+                      "--maturity 2, and --track-share 0.5 where the budget keeps >= 0.3 of\n"
+                      "the points), rgbd (--scope newest --maturity 2), monocular-deferred\n"
+                      "(the paper's here), offline (--mode whole --track-share 0.5; needs\n"
+                      "--keep-points or --keep-fraction)"},
     {"--mode", "replay|whole", "replay: the onboard node's sliding window; whole: one window\n"
                                "(default: replay for maps, whole for --window)"},
     {"--K", "N", "replay window in keyframes (default 20)"},
@@ -84,7 +86,7 @@ const std::vector<keepless::cli::Flag> kFlags = {
     {"--keep-observations", "B", "instead of --M: keep points while their observations sum to <= B"},
     {"--track-share", "S", "with --keep-points or --keep-fraction: take the share S in [0, 1] of the\n"
                            "count by track length (most keyframes of the window first) instead of\n"
-                           "the network's order (default 0)"},
+                           "the network's order (default 0), at every budget"},
     {"--theta", "X", "keep iff flow > X * n(n-1)/2, in [0, 1] (default 0.5)"},
     {"--box", "WxH", "spatial-diversity box in pixels (default 64x48)"},
     {"--scope", "window|newest", "decide every point, or only the newest keyframe's (default window)"},
@@ -144,7 +146,9 @@ int parse_args(int argc, char** argv, Options* opt, bool* help, bool* version) {
     core::apply_use(use, &opt->params);
   }
   bool m_given = false;  // --M and a keep budget exclude each other
+  // Set on the budget once it is known (the use's unless given; a given share applies at every budget).
   double track_share = opt->params.budget.track_share;
+  double track_share_from = opt->params.budget.track_share_from;
   for (int i = 1; i < argc; ++i) {
     const keepless::cli::Flag* entry = nullptr;
     const char* value = nullptr;
@@ -204,6 +208,7 @@ int parse_args(int argc, char** argv, Options* opt, bool* help, bool* version) {
       if (!core::parse_finite_double(value, &track_share) || !(track_share >= 0.0 && track_share <= 1.0)) {
         return usage_error(bad + " (a number in [0, 1])");
       }
+      track_share_from = 0.0;
     } else if (flag == "--theta") {
       double theta = 0;
       if (!core::parse_finite_double(value, &theta) || !(theta >= 0.0 && theta <= 1.0)) {
@@ -270,12 +275,13 @@ int parse_args(int argc, char** argv, Options* opt, bool* help, bool* version) {
     return usage_error(std::string("--M and --keep-") + core::to_string(opt->params.budget.kind) +
                        " exclude each other: a keep budget replaces M");
   }
-  if (track_share > 0.0 && opt->params.budget.kind != core::BudgetKind::kPoints &&
+  if (track_share > 0.0 && track_share_from == 0.0 && opt->params.budget.kind != core::BudgetKind::kPoints &&
       opt->params.budget.kind != core::BudgetKind::kFraction) {
     return usage_error(std::string("--track-share needs --keep-points or --keep-fraction: it is a share of their count") +
                        (use == core::Use::kOffline ? " (--use offline sets it to 0.5)" : ""));
   }
   opt->params.budget.track_share = track_share;
+  opt->params.budget.track_share_from = track_share_from;
   if (use == core::Use::kOffline && !opt->model.mode_given) {
     opt->model.mode = keepless::sparsify::Mode::kWhole;
     opt->model.mode_given = true;
@@ -425,14 +431,15 @@ int decide_window_unguarded(const Options& opt, const core::WindowFile& file, co
       "\"scope\":\"%s\",\"floor\":%u,\"cost\":\"%s\",\"out_of_scope\":%u,"
       "\"floor_keyframes\":%u,\"floor_promoted\":%u,\"floor_short\":%u,"
       "\"budget\":\"%s\",\"budget_value\":%s,\"budget_m\":%" PRId64 ",\"budget_observations\":%" PRIu64 ","
-      "\"maturity\":%u,\"guarded\":%u,\"track_fallback\":%u,\"track_share\":%g}\n",
+      "\"maturity\":%u,\"guarded\":%u,\"track_fallback\":%u,\"track_share_from\":%g,\"track_share\":%g}\n",
       sum.keyframes, sum.points, sum.evaluated, sum.kept, sum.culled, sum.skipped, sum.pairs,
       sum.arcs, sum.max_flow, sum.total_cost, opt.params.pair_capacity, theta, opt.params.box_width,
       opt.params.box_height, parse_ms, build_ms, solve_ms, memory, core::to_string(opt.params.scope),
       opt.params.coverage_floor, core::to_string(opt.params.cost_model), sum.out_of_scope,
       sum.floor_keyframes, sum.floor_promoted, sum.floor_short,
       core::to_string(opt.params.budget.kind), budget_value, sum.budget_m, sum.budget_observations,
-      opt.params.maturity_keyframes, sum.guarded, sum.track_fallback, opt.params.budget.track_share);
+      opt.params.maturity_keyframes, sum.guarded, sum.track_fallback, opt.params.budget.track_share_from,
+      opt.params.budget.track_share);
   return std::fflush(stdout) == 0 ? 0 : kExitInternal;
 }
 

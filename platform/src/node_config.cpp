@@ -69,8 +69,10 @@ std::string node_usage() {
          "                            large (K 40, N 2000, 8100, 37000, 117000; 28.7 MB)\n"
          "  --use NAME                settings per use, from the budget sweep, applied before the other flags\n"
          "                            (they set --scope, --maturity, --defer and --track-share): paper (the\n"
-         "                            default), monocular (--scope newest --maturity 2), monocular-deferred\n"
-         "                            (--defer 2), rgbd (as monocular), offline (--track-share 0.5)\n"
+         "                            default), monocular (--scope newest --maturity 2, and --track-share 0.5\n"
+         "                            where the budget keeps >= 0.3 of the points), monocular-deferred\n"
+         "                            (--defer 2), rgbd (--scope newest --maturity 2), offline\n"
+         "                            (--track-share 0.5)\n"
          "  --max-points N            distinct points the window holds (default 6600; 0: K*N)\n"
          "  --max-window-observations N  observations the window holds (default 19100; 0: K*N)\n"
          "  --max-pair-arcs N         point -> pair arcs of the window's network, sum of n(n-1)/2 over its points\n"
@@ -100,7 +102,7 @@ std::string node_usage() {
          "                            observations sum to <= B\n"
          "  --track-share S           with --keep-points or --keep-fraction: take the share S in [0, 1] of\n"
          "                            the count by track length (most window keyframes first) instead of\n"
-         "                            the network's order (default 0)\n"
+         "                            the network's order (default 0), at every budget\n"
          "  --theta X                 keep iff flow > X * n(n-1)/2 (default 0.5)\n"
          "  --box WxH                 spatial-diversity box in pixels (default 64x48)\n"
          "  --scope window|newest     decide every window point, or only the newest keyframe's (default window)\n"
@@ -210,8 +212,10 @@ ParseResult parse_node_arguments(int argc, const char* const* argv, NodeConfig& 
                                  std::string& error) {
   if (ParseResult r = parse_early_flags(argc, argv, config, error); r != ParseResult::kOk) return r;
   bool m_given = false;  // --M and a keep budget exclude each other
-  // Set on the budget once it is known, whatever the flags' order (--use offline's 0.5 unless given).
+  // Set on the budget once it is known, whatever the flags' order (the use's unless given;
+  // a given share applies at every budget).
   double track_share = config.params.budget.track_share;
+  double track_share_from = config.params.budget.track_share_from;
   const bool share_from_use = track_share > 0;
   for (int i = 1; i < argc; ++i) {
     std::string flag = argv[i];
@@ -329,6 +333,7 @@ ParseResult parse_node_arguments(int argc, const char* const* argv, NodeConfig& 
       if (!parse_double(value, track_share) || !(track_share >= 0 && track_share <= 1)) {
         return bad("expected a number in [0, 1]");
       }
+      track_share_from = 0;
     } else if (flag == "--theta") {
       double t = 0;
       if (!parse_double(value, t) || t < 0 || t > 1) return bad("expected a number in [0, 1]");
@@ -400,13 +405,14 @@ ParseResult parse_node_arguments(int argc, const char* const* argv, NodeConfig& 
             " exclude each other: a keep budget replaces M";
     return ParseResult::kError;
   }
-  if (track_share > 0 && config.params.budget.kind != core::BudgetKind::kPoints &&
+  if (track_share > 0 && track_share_from == 0 && config.params.budget.kind != core::BudgetKind::kPoints &&
       config.params.budget.kind != core::BudgetKind::kFraction) {
     error = "--track-share needs --keep-points or --keep-fraction: it is a share of their count";
     if (share_from_use) error += " (--use offline sets it to 0.5)";
     return ParseResult::kError;
   }
   config.params.budget.track_share = track_share;
+  config.params.budget.track_share_from = track_share_from;
   // The worst-case window must stay addressable by the solver's int32 arc ids.
   const std::uint64_t arcs = static_cast<std::uint64_t>(config.window) * config.max_observations *
                              (config.window - 1) / 2;

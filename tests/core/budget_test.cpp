@@ -530,6 +530,12 @@ TEST(KeepBudgets, TrackShareTakesTheLongestTracksAfterTheOrder) {
         Sparsifier ordered(kCaps, plain);
         ASSERT_EQ(ordered.run(window), Status::kOk);
         differs += kept_of(ordered) != kept;
+        // From a share of the candidates on: the share where K >= 0.3 x candidates, the order below.
+        Params from = p;
+        from.budget.track_share_from = 0.3;
+        Sparsifier gated(kCaps, from);
+        ASSERT_EQ(gated.run(window), Status::kOk);
+        ASSERT_EQ(kept_of(gated), take >= 0.3 * e ? kept : kept_of(ordered)) << "seed " << seed << " K " << k;
       }
     }
     // A fraction's count is unchanged by the share.
@@ -564,6 +570,20 @@ TEST(KeepBudgets, InvalidBudgets) {
   EXPECT_EQ(Sparsifier::validate(p), Status::kInvalidArgument);
   p.budget = KeepBudget{BudgetKind::kFraction, 0, 0.2, 1.0};
   EXPECT_EQ(Sparsifier::validate(p), Status::kOk);
+  for (double from : {-0.1, 1.5, std::nan("")}) {
+    p.budget = KeepBudget{BudgetKind::kFraction, 0, 0.2, 0.5, from};
+    EXPECT_EQ(Sparsifier::validate(p), Status::kInvalidArgument) << from;
+  }
+  // A share from a threshold needs no count: without one it never applies.
+  for (BudgetKind kind : {BudgetKind::kNone, BudgetKind::kObservations}) {
+    p.budget = KeepBudget{kind, 10, 0.0, 0.5, 0.3};
+    EXPECT_EQ(Sparsifier::validate(p), Status::kOk);
+    EXPECT_EQ(track_share_at(p.budget, 10, 10), 0.0);
+  }
+  p.budget = KeepBudget{BudgetKind::kFraction, 0, 0.3, 0.5, 0.3};
+  EXPECT_EQ(track_share_at(p.budget, 0, 100), 0.5);  // F itself decides, not the decision's take
+  p.budget.fraction = 0.29;
+  EXPECT_EQ(track_share_at(p.budget, 100, 100), 0.0);
   EXPECT_STREQ(to_string(BudgetKind::kObservations), "observations");
 }
 

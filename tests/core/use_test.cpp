@@ -31,7 +31,7 @@ TEST(Use, NamesRoundTripAndOthersAreRefused) {
   }
 }
 
-// A use sets the four policy fields, whatever an earlier use or the caller
+// A use sets the policy fields, whatever an earlier use or the caller
 // had there, and leaves everything else as the caller set it.
 TEST(Use, SetsThePolicyAndLeavesTheRest) {
   Params caller;
@@ -42,7 +42,7 @@ TEST(Use, SetsThePolicyAndLeavesTheRest) {
   caller.coverage_floor = 5;
   caller.cost_model = CostModel::kTrack;
   caller.track_terms = kTrackAngle;
-  caller.budget = KeepBudget{BudgetKind::kFraction, 0, 0.2, 0.0};
+  caller.budget = KeepBudget{BudgetKind::kFraction, 0, 0.2, 0.0, 0.7};
   for (Use first : kUses) {
     for (Use u : kUses) {
       Params p = caller;
@@ -62,7 +62,8 @@ TEST(Use, SetsThePolicyAndLeavesTheRest) {
       EXPECT_EQ(p.scope, guarded ? Scope::kNewest : Scope::kWindow);
       EXPECT_EQ(p.maturity_keyframes, guarded ? 2u : 0u);
       EXPECT_EQ(p.defer_keyframes, u == Use::kMonocularDeferred ? 2u : 0u);
-      EXPECT_EQ(p.budget.track_share, u == Use::kOffline ? 0.5 : 0.0);
+      EXPECT_EQ(p.budget.track_share, u == Use::kOffline || u == Use::kMonocular ? 0.5 : 0.0);
+      EXPECT_EQ(p.budget.track_share_from, u == Use::kMonocular ? 0.3 : 0.0);
     }
   }
   // The paper's are Params' defaults.
@@ -129,6 +130,37 @@ TEST(Use, MonocularDecidesOnlyPointsTwoKeyframesOld) {
   EXPECT_GT(decided, 200u);
   EXPECT_GT(culled, 50u);
   EXPECT_GT(young_culled_by_paper, 100u);
+}
+
+// Monocular from F = 0.3: over a sequence of windows, the decisions of the
+// same settings with the share at every budget; below, those without it.
+TEST(Use, MonocularTakesHalfByTrackLengthFromAKeptFractionOf03) {
+  std::uint32_t differ = 0;
+  for (double f : {0.1, 0.2, 0.29, 0.3, 0.4, 0.6}) {
+    Params mono;
+    mono.budget = KeepBudget{BudgetKind::kFraction, 0, f};
+    apply_use(Use::kMonocular, &mono);
+    Params always = mono;
+    always.budget.track_share_from = 0.0;
+    Params never = mono;
+    never.budget.track_share = 0.0;
+    Sparsifier used(kCaps, mono), with(kCaps, always), without(kCaps, never);
+    Window window(kCaps);
+    for (std::uint64_t seed = 1; seed <= 60 && !HasFailure(); ++seed) {
+      test::RandomCase c = test::random_case(seed);
+      ASSERT_TRUE(test::load(window, c.frames)) << "seed " << seed;
+      ASSERT_EQ(used.run(window), Status::kOk);
+      ASSERT_EQ(with.run(window), Status::kOk);
+      ASSERT_EQ(without.run(window), Status::kOk);
+      const Sparsifier& expected = f >= 0.3 ? with : without;
+      ASSERT_EQ(used.decision_count(), expected.decision_count());
+      for (std::uint32_t i = 0; i < used.decision_count(); ++i) {
+        ASSERT_EQ(used.decisions()[i].verdict, expected.decisions()[i].verdict) << "F " << f << " seed " << seed;
+        differ += with.decisions()[i].verdict != without.decisions()[i].verdict;
+      }
+    }
+  }
+  EXPECT_GT(differ, 50u);  // the share changes decisions
 }
 
 // Offline: a share of a count, so it needs one; with one it keeps exactly

@@ -299,13 +299,13 @@ TEST(RealVoQuick, NoKeyframeCullingKeepsEveryKeyframeMade) {
 }
 
 // keepless's run line on the first 20 frames of KITTI 06 (monocular) at a
-// kept fraction of 0.2, keepless only, from its "culled" count to its ATE:
+// kept fraction (0.2 unless given), keepless only, from its "culled" count to its ATE:
 // what follows from the decisions, no timings. Empty (and a failure) when
 // the run does not print one.
-std::string ours_on_kitti06(const std::string& data, const std::string& flags) {
+std::string ours_on_kitti06(const std::string& data, const std::string& flags, const std::string& fraction = "0.2") {
   const EvalOutput o = run_eval("--images '" + data + "/image_l' --calib '" + data + "/calib.txt' --poses '" + data +
-                                "/poses.txt' --frames 0:20 --seeds 1 --kept-fraction 0.2 --no-ablation --no-baselines " +
-                                flags);
+                                "/poses.txt' --frames 0:20 --seeds 1 --kept-fraction " + fraction +
+                                " --no-ablation --no-baselines " + flags);
   EXPECT_EQ(o.status, 0) << o.all;
   std::string line;
   for (const std::string& l : o.runs) {
@@ -347,7 +347,7 @@ TEST(RealVoQuick, TieOrderAndCostTermsChangeThePointsNotTheBudget) {
 
 // --use NAME runs the flag set the docs name for it, VO side included: the
 // same keepless run line as the flags spelled out, and another than the
-// paper's settings.
+// paper's settings; monocular's track share only from F = 0.3.
 TEST(RealVoQuick, UsesRunTheFlagsTheyName) {
   const std::string bin = KEEPLESS_EVAL_BIN;
   const std::string data = std::string(KEEPLESS_EVAL_DATA) + "/kitti06_first51_niconielsen";
@@ -355,13 +355,20 @@ TEST(RealVoQuick, UsesRunTheFlagsTheyName) {
   if (!std::filesystem::exists(data + "/image_l/000020.png")) {
     GTEST_SKIP() << "no KITTI 06 data at " << data << " (set KEEPLESS_EVAL_DATA_DIR)";
   }
-  const auto ours = [&](const std::string& flags) { return ours_on_kitti06(data, flags); };
+  const auto ours = [&](const std::string& flags, const std::string& fraction = "0.2") {
+    return ours_on_kitti06(data, flags, fraction);
+  };
   const std::string paper = ours("");
   EXPECT_EQ(ours("--use paper"), paper);
   const std::string monocular = ours("--use monocular");
   EXPECT_EQ(ours("--maturity 2 --scope newest --keyframe-culling count-culled"), monocular);
   EXPECT_NE(monocular, paper);
   EXPECT_EQ(ours("--use rgbd"), monocular);  // the same settings, chosen on RGB-D for accuracy
+  // From a kept fraction of 0.3 on, monocular takes half the count by track length (0.2 above: not).
+  const std::string share = ours("--use monocular", "0.3");
+  EXPECT_EQ(ours("--maturity 2 --scope newest --keyframe-culling count-culled --track-share 0.5", "0.3"), share);
+  EXPECT_NE(ours("--use monocular --track-share 0", "0.3"), share);
+  EXPECT_EQ(ours("--use rgbd --track-share 0", "0.3"), ours("--use rgbd", "0.3"));
   const std::string deferred = ours("--use monocular-deferred");
   EXPECT_EQ(ours("--defer 2 --defer-refine --decide window --keyframe-culling count-culled"), deferred);
   EXPECT_NE(deferred, paper);

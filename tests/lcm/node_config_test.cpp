@@ -324,7 +324,21 @@ TEST(NodeConfig, ParsesTheUses) {
     EXPECT_EQ(m.params.maturity_keyframes, 2u);
     EXPECT_EQ(m.params.defer_keyframes, 0u);
     EXPECT_EQ(m.params.budget.fraction, 0.2);
+    EXPECT_EQ(m.params.budget.track_share, 0.5);  // from F = 0.3 on
+    EXPECT_EQ(m.params.budget.track_share_from, 0.3);
   }
+  // Monocular's share needs no count (without one it never applies); a given one applies at every budget.
+  NodeConfig by_m;
+  ASSERT_EQ(parse({"--use", "monocular", "--M", "50"}, by_m, error), ParseResult::kOk) << error;
+  EXPECT_EQ(keepless::core::Sparsifier::validate(by_m.params), keepless::core::Status::kOk);
+  NodeConfig given;
+  ASSERT_EQ(parse({"--track-share", "0.5", "--use", "monocular", "--keep-fraction", "0.2"}, given, error),
+            ParseResult::kOk) << error;
+  EXPECT_EQ(given.params.budget.track_share, 0.5);
+  EXPECT_EQ(given.params.budget.track_share_from, 0.0);
+  NodeConfig off;
+  ASSERT_EQ(parse({"--use", "monocular", "--keep-fraction", "0.4", "--track-share", "0"}, off, error), ParseResult::kOk);
+  EXPECT_EQ(off.params.budget.track_share, 0.0);
   NodeConfig refined;
   ASSERT_EQ(parse({"--scope", "window", "--use", "monocular", "--maturity", "1"}, refined, error), ParseResult::kOk);
   EXPECT_EQ(refined.params.scope, Scope::kWindow);
@@ -338,6 +352,7 @@ TEST(NodeConfig, ParsesTheUses) {
   EXPECT_EQ(rgbd.params.scope, Scope::kNewest);  // the monocular use's settings
   EXPECT_EQ(rgbd.params.maturity_keyframes, 2u);
   EXPECT_EQ(rgbd.params.defer_keyframes, 0u);
+  EXPECT_EQ(rgbd.params.budget.track_share, 0.0);
   // --profile and --use together, each applied first.
   NodeConfig both;
   ASSERT_EQ(parse({"--use", "offline", "--profile", "small", "--keep-points", "300"}, both, error),

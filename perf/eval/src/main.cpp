@@ -76,14 +76,15 @@ const std::vector<cli::Flag> kFlags = {
     {"--ablation-all", nullptr, "every ablation variant"},
     {"--use", "NAME", "a use (core::apply_use) and what it asks of the real VO, applied before\n"
                       "the other flags, which refine it: monocular (--scope newest --maturity 2\n"
-                      "--keyframe-culling count-culled), monocular-deferred (--defer 2\n"
-                      "--defer-refine --decide window --keyframe-culling count-culled),\n"
-                      "rgbd (as monocular), offline (--track-share 0.5), paper (the defaults)"},
+                      "--keyframe-culling count-culled, and --track-share 0.5 from a kept\n"
+                      "fraction of 0.3), monocular-deferred (--defer 2 --defer-refine --decide\n"
+                      "window --keyframe-culling count-culled), rgbd (as monocular without\n"
+                      "the share), offline (--track-share 0.5), paper (the defaults)"},
     {"--scope", "window|newest", "keepless's decision scope (core::Params scope)"},
     {"--floor", "L", "keepless's coverage floor (core::Params coverage_floor)"},
     {"--theta", "T", "keepless's keep threshold theta_f in [0, 1] (core::Params theta; default 0.5)"},
     {"--track-share", "S", "with --kept-fraction: keepless takes the share S in [0, 1] of its count by\n"
-                           "track length (core::KeepBudget track_share; default 0)"},
+                           "track length (core::KeepBudget track_share; default 0), at every fraction"},
     {"--cost", "paper|authors|information|track", "keepless's cost model; with --kept-fraction the real VO\n"
                                                   "decides the new keyframe's points; track: the real VO\n"
                                                   "sends each point's map observations, age, reprojection\n"
@@ -299,7 +300,10 @@ Args parse(int argc, char** argv) {
       if (!keepless::core::parse_scope(v.c_str(), &a.policy.scope)) fail("--scope: expected window or newest, got '" + v + "'");
     } else if (f == "--floor") a.policy.coverage_floor = static_cast<std::uint32_t>(parse_int(f, val(), 0, 100000));
     else if (f == "--theta") a.policy.theta = parse_double(f, val(), 0, 1);
-    else if (f == "--track-share") a.policy.budget.track_share = parse_double(f, val(), 0, 1);
+    else if (f == "--track-share") {
+      a.policy.budget.track_share = parse_double(f, val(), 0, 1);
+      a.policy.budget.track_share_from = 0;  // a given share applies at every fraction
+    }
     else if (f == "--maturity") a.policy.maturity_keyframes = static_cast<std::uint32_t>(parse_int(f, val(), 0, 1000));
     else if (f == "--tracked-flags") a.tracked_flags = true;
     else if (f == "--defer") a.policy.defer_keyframes = static_cast<std::uint32_t>(parse_int(f, val(), 1, 1000));
@@ -344,7 +348,7 @@ Args parse(int argc, char** argv) {
     else std::exit(cli::usage_error(kTool, cli::unknown_option(f)));
   }
   if (by_M && by_fraction) fail("--M and --kept-fraction exclude each other");
-  if (a.policy.budget.track_share > 0 && !by_fraction) fail("--track-share needs --kept-fraction: it is a share of its count");
+  if (a.policy.budget.track_share > 0 && a.policy.budget.track_share_from == 0 && !by_fraction) fail("--track-share needs --kept-fraction: it is a share of its count");
   if (!a.images.empty() && (a.calib.empty() || a.poses.empty())) fail("--image-tracks needs --calib and --poses");
   for (const auto& v : a.vo)
     if (!v.rgbd && (v.calib.empty() || v.poses.empty())) fail("--images " + v.dir + " needs --calib and --poses");
@@ -445,7 +449,9 @@ ke::VariantSpec variant(const keepless::core::Params& policy, const std::string&
   v.params.maturity_keyframes = policy.maturity_keyframes;
   v.params.pair_capacity = std::isfinite(fraction) ? keepless::core::Params{}.pair_capacity : M;
   if (std::isfinite(fraction)) {
-    v.params.budget = {keepless::core::BudgetKind::kFraction, 0, fraction, policy.budget.track_share};
+    v.params.budget = policy.budget;  // its track share
+    v.params.budget.kind = keepless::core::BudgetKind::kFraction;
+    v.params.budget.fraction = fraction;
   }
   v.params.cost_terms = costs;
   v.params.spatial_weight = policy.spatial_weight;
@@ -564,6 +570,8 @@ int main(int argc, char** argv) {
                       std::to_string(summary.coverage_floor) + ", cost " + summary.cost_model;
   if (a.policy.theta != keepless::core::Params{}.theta) summary.settings += ", theta " + std::to_string(a.policy.theta);
   if (a.policy.budget.track_share > 0) summary.settings += ", track share " + std::to_string(a.policy.budget.track_share);
+  if (a.policy.budget.track_share > 0 && a.policy.budget.track_share_from > 0)
+    summary.settings += " from F " + std::to_string(a.policy.budget.track_share_from);
   if (a.policy.maturity_keyframes > 0) summary.settings += ", maturity " + std::to_string(a.policy.maturity_keyframes);
   if (a.tracked_flags) summary.settings += ", tracked flags";
   if (a.policy.defer_keyframes > 0) summary.settings += ", defer " + std::to_string(a.policy.defer_keyframes);

@@ -112,7 +112,9 @@ bool evaluate_real_vo(const VoInput& in, const VoEvalOptions& o, std::vector<Com
       // new keyframe's, or with decide_window the window's): exact per
       // window, no M. Deciding the window is keepless's scope window.
       if (std::isfinite(c.target_fraction)) {
-        vo.params.budget = core::KeepBudget{core::BudgetKind::kFraction, 0, c.target_fraction, o.policy.budget.track_share};
+        vo.params.budget = o.policy.budget;  // its track share
+        vo.params.budget.kind = core::BudgetKind::kFraction;
+        vo.params.budget.fraction = c.target_fraction;
         vo.params.scope = o.decide_window ? core::Scope::kWindow : core::Scope::kNewest;
       } else {
         vo.params.budget = core::KeepBudget{};

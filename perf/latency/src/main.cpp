@@ -630,10 +630,11 @@ int main(int argc, char** argv) {
   if (o.params.budget.kind == core::BudgetKind::kPoints || o.params.budget.kind == core::BudgetKind::kObservations)
     std::printf(" %llu", static_cast<unsigned long long>(o.params.budget.count));
   std::printf("\n");
-  std::printf("policy: use %s, scope %s, maturity %u, floor %u, cost %s, track share %.2f; stream: intrinsics and"
-              " depths %s, %u unmapped keypoints per keyframe; reference: %s\n",
+  std::printf("policy: use %s, scope %s, maturity %u, floor %u, cost %s, track share %.2f from %.2f; stream:"
+              " intrinsics and depths %s, %u unmapped keypoints per keyframe; reference: %s\n",
               o.use.empty() ? "-" : o.use.c_str(), core::to_string(o.params.scope), o.params.maturity_keyframes,
               o.params.coverage_floor, core::to_string(o.params.cost_model), o.params.budget.track_share,
+              o.params.budget.track_share_from,
               camera ? "yes" : "no", unmapped_per_kf,
               with_reference ? "the paper's defaults on the same stream, replayed after" : "this run");
 
@@ -786,7 +787,7 @@ int main(int argc, char** argv) {
   // survive a JSON number as a double).
   std::printf(
       "\"keep_budget\":\"%s\",\"keep_budget_value\":%.4f,\"keep_budget_share_p50\":%s,\"keep_budget_share_p99\":%s,"
-      "\"use\":\"%s\",\"scope\":\"%s\",\"maturity_keyframes\":%u,\"defer_keyframes\":%u,\"track_share\":%.3f,"
+      "\"use\":\"%s\",\"scope\":\"%s\",\"maturity_keyframes\":%u,\"defer_keyframes\":%u,\"track_share\":%.3f,\"track_share_from\":%.3f,"
       "\"coverage_floor\":%u,\"cost_model\":\"%s\",\"intrinsics_and_depths\":%s,"
       "\"unmapped_per_kf\":%u,\"floor_bound_decisions\":%u,\"floor_promoted\":%llu,\"out_of_scope_mean\":%.1f,"
       "\"decisions_digest\":\"%016llx\",\"reference\":\"%s\",\"reference_e2e_p50_ms\":%.4f,"
@@ -800,8 +801,8 @@ int main(int argc, char** argv) {
                                                           : static_cast<double>(o.params.budget.count),
       json_or_null(budget_share_p50).c_str(), json_or_null(budget_share_p99).c_str(), o.use.c_str(),
       core::to_string(o.params.scope), o.params.maturity_keyframes, o.params.defer_keyframes,
-      o.params.budget.track_share, o.params.coverage_floor, core::to_string(o.params.cost_model),
-      camera ? "true" : "false", unmapped_per_kf, r.floor_bound,
+      o.params.budget.track_share, o.params.budget.track_share_from, o.params.coverage_floor,
+      core::to_string(o.params.cost_model), camera ? "true" : "false", unmapped_per_kf, r.floor_bound,
       static_cast<unsigned long long>(r.floor_promoted),
       r.decisions > 0 ? static_cast<double>(r.out_of_scope) / r.decisions : 0.0,
       static_cast<unsigned long long>(r.digest), with_reference ? "paper" : "self", ref.e2e.p(0.5), ref.e2e.p(0.99),

@@ -8,6 +8,7 @@
 #include <new>
 #include <numeric>
 
+#include "keepless/core/keep_thresholds.hpp"
 #include "keepless/io/atomic_file.hpp"
 #include "keepless/io/bal_problem.hpp"
 #include "keepless/io/colmap_model.hpp"
@@ -426,7 +427,8 @@ int run_model(const ModelOptions& opt) {
   bool floor_fits = true;
   const core::BudgetKind kind = params.budget.kind;
   if (restored > 0 && mode == Mode::kWhole && (kind == core::BudgetKind::kPoints || kind == core::BudgetKind::kFraction)) {
-    const ExactCount e = keep_exactly(m.images, floor, count, r.thresholds, &r.decisions, params.budget.track_share);
+    const ExactCount e = keep_exactly(m.images, floor, count, r.thresholds, &r.decisions,
+                                        core::track_share_at(params.budget, count, r.decisions.size()));
     restored = e.restored;
     floor_fits = e.floor_fits;
   }
@@ -501,7 +503,7 @@ int run_model(const ModelOptions& opt) {
       "\"scope\":\"%s\",\"floor\":%u,\"cost\":\"%s\",\"out_of_scope\":%u,"
       "\"floor_keyframes\":%u,\"floor_promoted\":%u,\"floor_short\":%u,"
       "\"input_bytes\":%" PRIu64 ",\"output_bytes\":%" PRIu64 ",\"points2D_dropped\":%" PRIu64 ","
-      "\"maturity\":%u,\"guarded\":%u,\"track_fallback\":%u,\"track_share\":%g}\n",
+      "\"maturity\":%u,\"guarded\":%u,\"track_fallback\":%u,\"track_share_from\":%g,\"track_share\":%g}\n",
       t.keyframes, t.points, t.evaluated, points_kept, culled, t.skipped, t.pairs, t.arcs, t.max_flow, t.total_cost,
       opt.params.pair_capacity, theta, opt.params.box_width, opt.params.box_height, parse_ms, solve_ms,
       r.memory_bytes, input_name(opt.input),
@@ -512,7 +514,8 @@ int run_model(const ModelOptions& opt) {
       med_obs, floor, restored, m.keyframes.duplicates, time_ms, core::to_string(opt.params.scope),
       opt.params.coverage_floor, core::to_string(opt.params.cost_model), t.out_of_scope, t.floor_keyframes,
       t.floor_promoted, t.floor_short, input_bytes, output_bytes, m.compacted,
-      opt.params.maturity_keyframes, t.guarded, t.track_fallback, opt.params.budget.track_share);
+      opt.params.maturity_keyframes, t.guarded, t.track_fallback, opt.params.budget.track_share_from,
+      opt.params.budget.track_share);
   return std::fflush(stdout) == 0 ? 0 : kExitInternal;
 }
 

@@ -108,7 +108,12 @@ enum TrackTerm : std::uint8_t {
 // above, then the other candidates with the most window observations n,
 // ties in that order (take_longest_tracks). The network's order spreads
 // points evenly over the keyframe pairs; camera accuracy after BA follows
-// long tracks more (docs/evaluation/budget-sweep.md, offline).
+// long tracks more (docs/evaluation/budget-sweep.md, offline). With
+// track_share_from > 0 the share applies only where the budget keeps at
+// least that share of the candidates (kFraction: F >= it, so the whole
+// sequence alike; kPoints: K >= it x candidates, per decision; never for
+// the other kinds): on monocular KITTI a share helped from F = 0.3 and cost
+// tracking at F = 0.2 (Use::kMonocular).
 enum class BudgetKind : std::uint8_t { kNone, kPoints, kFraction, kObservations };
 
 struct KeepBudget {
@@ -116,6 +121,7 @@ struct KeepBudget {
   std::uint64_t count = 0;   // kPoints: K; kObservations: B
   double fraction = 0.0;     // kFraction: F
   double track_share = 0.0;  // S in [0, 1]; 0: every point by the network's order
+  double track_share_from = 0.0;  // in [0, 1]; 0: S applies at every budget
 };
 
 // "none", "points", "fraction", "observations".

@@ -2,8 +2,8 @@
 // Settings per use, chosen from the budget sweep on real sequences
 // (docs/evaluation/budget-sweep.md#which-settings-per-use). A use sets the
 // decision policy only: the scope, the maturity guard, deferred culling and
-// the track share. M, theta, the costs and the budget's kind and count stay
-// the caller's, so they refine it.
+// the track share with the budget it starts from. M, theta, the costs and
+// the budget's kind and count stay the caller's, so they refine it.
 
 #include <cstdint>
 
@@ -16,10 +16,12 @@ enum class Use : std::uint8_t {
   // deleted at once, the network's order for a whole count).
   kPaper,
   // A monocular VO that deletes what it culls: decide the newest keyframe's
-  // points once two newer keyframes follow it (Scope::kNewest, maturity 2).
-  // The only immediate setting that tracked every seed of both KITTI
-  // sequences at F = 0.2; random, ANMS and longest-track-first under the
-  // same guard did not.
+  // points once two newer keyframes follow it (Scope::kNewest, maturity 2),
+  // and from F = 0.3 take half the count by track length (track share 0.5
+  // from 0.3). The only immediate setting that tracked every seed of both
+  // KITTI sequences at F = 0.2; random, ANMS and longest-track-first under
+  // the same guard did not. The share took F = 0.3-0.4 from 1.02-1.18x the
+  // original's ATE to 0.95-1.08x (20 seeds) and lost tracking at F = 0.2.
   kMonocular,
   // A monocular VO that implements both verdicts (decision_t's excluded and
   // deleted lists) and keeps excluded points' structure refined: the whole
@@ -39,8 +41,9 @@ enum class Use : std::uint8_t {
   kOffline,
 };
 
-// Sets scope, maturity_keyframes, defer_keyframes and budget.track_share to
-// the use's values; every other field of *params is left as it was.
+// Sets scope, maturity_keyframes, defer_keyframes, budget.track_share and
+// budget.track_share_from to the use's values; every other field of *params
+// is left as it was.
 void apply_use(Use use, Params* params);
 
 // "paper", "monocular", "monocular-deferred", "rgbd", "offline"; parse_use
