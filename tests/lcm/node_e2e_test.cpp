@@ -17,6 +17,7 @@
 #include <set>
 #include <string>
 #include <thread>
+#include <utility>
 #include <vector>
 
 #include "child_process.hpp"
@@ -223,7 +224,8 @@ TEST(NodeEndToEnd, TheDefaultConfigurationDecidesEveryKeyframe) {
 }
 
 // The node's default configuration with each monocular use and a kept
-// fraction, as a VO would start it, fed a forward-moving stream: keyframe i
+// fraction (monocular also at 0.4, where its track share applies), as a VO
+// would start it, fed a forward-moving stream: keyframe i
 // sees points 10i .. 10i+59, so a point is first seen at keyframe
 // ceil((p - 59) / 10) and last seen at floor(p / 10). The VO waits for each
 // decision. Monocular decides only the points of the keyframe two before the
@@ -231,8 +233,10 @@ TEST(NodeEndToEnd, TheDefaultConfigurationDecidesEveryKeyframe) {
 // excludes what it culls and deletes each excluded point once the two newest
 // keyframes do not see it.
 TEST(NodeEndToEnd, TheMonocularUsesKeepTheirRulesUnderTheDefaultConfiguration) {
-  for (const char* use : {"monocular", "monocular-deferred"}) {
-    SCOPED_TRACE(use);
+  const std::pair<const char*, const char*> runs[] = {
+      {"monocular", "0.2"}, {"monocular", "0.4"}, {"monocular-deferred", "0.2"}};
+  for (const auto& [use, fraction] : runs) {
+    SCOPED_TRACE(std::string(use) + " at " + fraction);
     const bool deferred = std::string(use) == "monocular-deferred";
     TempDir tmp;
     const std::string url = udpm(unique_port(3));
@@ -240,7 +244,7 @@ TEST(NodeEndToEnd, TheMonocularUsesKeepTheirRulesUnderTheDefaultConfiguration) {
     ASSERT_TRUE(bus.good());
     Recorder rec;
     bus.subscribeFunction("KEEPLESS_(DECISION|STATUS)", &Recorder::on_message, &rec);
-    kt::ChildProcess node(target_argv({KEEPLESS_NODE_BIN, "--url", url, "--use", use, "--keep-fraction", "0.2",
+    kt::ChildProcess node(target_argv({KEEPLESS_NODE_BIN, "--url", url, "--use", use, "--keep-fraction", fraction,
                                        "--status-period-ms", "100"}),
                           tmp.file("node.log"));
     ASSERT_TRUE(node.started());
