@@ -28,12 +28,13 @@ enum class Use : std::uint8_t {
   // window decided, culls deleted once 2 keyframes in a row miss them. It
   // tracked every seed down to F = 0.05.
   kMonocularDeferred,
-  // RGB-D: the monocular use's settings, for accuracy rather than
+  // RGB-D: the monocular use's scope and guard, for accuracy rather than
   // tracking (depth makes new points usable at once; every selector
   // tracked down to F = 0.1). On 7-Scenes, 20 seeds, F = 0.2-0.4: 0.98-0.99x
   // the original's ATE against the paper's settings' 1.03-1.04x, at
   // 1.4-1.6x their local BA (at F = 0.2 still 0.98x against the paper's
-  // 1.04x at F = 0.4, with about the same local BA).
+  // 1.04x at F = 0.4, with about the same local BA). No track share: it
+  // cost 0.9-1.2 mm at F = 0.3-0.4 there.
   kRgbd,
   // A finished model, with a point count: half the count by track length,
   // half by the network's order (within 1.2x of COLMAP's point_filtering in
