@@ -298,6 +298,24 @@ TEST(RealVoQuick, NoKeyframeCullingKeepsEveryKeyframeMade) {
   }
 }
 
+// At frame 25 of KITTI 00 (seed 13) solvePnPRansac reports hundreds of
+// inliers and returns a pose the refinement keeps no match from; the VO then
+// refines from the motion model's pose instead of losing the frame (it lost
+// it, and with it the sequence, before).
+TEST(RealVoQuick, ABadPnpPoseDoesNotLoseTheFrame) {
+  const std::string bin = KEEPLESS_EVAL_BIN;
+  const std::string data = std::string(KEEPLESS_EVAL_DATA) + "/kitti00_first200_vamr";
+  ASSERT_TRUE(std::filesystem::exists(bin)) << bin << " is missing: build target keepless_eval";
+  if (!std::filesystem::exists(data + "/image_0/000030.png")) {
+    GTEST_SKIP() << "no KITTI 00 data at " << data << " (set KEEPLESS_EVAL_DATA_DIR)";
+  }
+  const EvalOutput o = run_eval("--images '" + data + "/image_0' --calib '" + data + "/K.txt' --poses '" + data +
+                                "/poses.txt' --frames 0:30 --seed 13 --seeds 1 --M 100 --no-baselines --no-ablation");
+  ASSERT_EQ(o.status, 0) << o.all;
+  ASSERT_FALSE(o.runs.empty()) << o.all;
+  EXPECT_NE(o.runs.front().find("original M=0: tracked 31/31 (losses 0)"), std::string::npos) << o.runs.front();
+}
+
 // keepless's run line on the first 20 frames of KITTI 06 (monocular) at a
 // kept fraction (0.2 unless given), keepless only, from its "culled" count to its ATE:
 // what follows from the decisions, no timings. Empty (and a failure) when

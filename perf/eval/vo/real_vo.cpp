@@ -280,13 +280,16 @@ bool Vo::estimate_pose(TrackedFrame& cur, bool guess) {
     image.push_back(cur.f.keys[static_cast<std::size_t>(i)].pt);
     keypoint.push_back(i);
   }
+  const Eigen::Isometry3d start = cur.Tcw;
+  const std::vector<int> matched = cur.mp;
   const PoseBlock b = to_block(cur.Tcw);
   cv::Mat rvec = (cv::Mat_<double>(3, 1) << b[0], b[1], b[2]);
   cv::Mat tvec = (cv::Mat_<double>(3, 1) << b[3], b[4], b[5]);
   std::vector<int> inliers;
   const bool ok = cv::solvePnPRansac(object, image, Kcv_, cv::noArray(), rvec, tvec, guess, guess ? 100 : 300,
                                      4.0f, 0.99, inliers, cv::SOLVEPNP_EPNP);
-  if (ok && inliers.size() >= 10) {
+  const bool from_pnp = ok && inliers.size() >= 10;
+  if (from_pnp) {
     cur.Tcw = pose_from_cv(rvec, tvec);
     std::vector<bool> in(keypoint.size(), false);
     for (int k : inliers) in[static_cast<std::size_t>(k)] = true;
@@ -296,6 +299,15 @@ bool Vo::estimate_pose(TrackedFrame& cur, bool guess) {
   } else if (!guess) {
     return false;
   }
+  if (optimize(cur) >= 10) return true;
+  if (!from_pnp) return false;
+  // solvePnPRansac can report hundreds of inliers and still return a pose far
+  // off (EPnP re-solved over them: seen 9e8 away, or turned by 180 degrees),
+  // from which the refinement keeps no match. Refine again from where we
+  // started, with the matches before PnP, before calling the frame lost
+  // (KITTI 00: the original's losses at frames 25 and 41 of seeds 13 and 14).
+  cur.Tcw = start;
+  cur.mp = matched;
   return optimize(cur) >= 10;
 }
 
