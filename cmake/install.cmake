@@ -1,9 +1,17 @@
 include(CMakePackageConfigHelpers)
-# The package config looks for OpenCV only when the adapter is in it.
+# The OpenCV adapter is an optional component with its own targets file, so
+# that a consumer of the rest needs neither OpenCV nor Eigen.
 if(TARGET keepless::opencv)
   set(KEEPLESS_PACKAGE_HAS_OPENCV TRUE)
+  install(EXPORT keeplessOpencvTargets NAMESPACE keepless:: FILE keeplessOpencvTargets.cmake
+          DESTINATION ${CMAKE_INSTALL_LIBDIR}/cmake/keepless)
 else()
   set(KEEPLESS_PACKAGE_HAS_OPENCV FALSE)
+endif()
+if(TARGET keepless::lcm_types)
+  set(KEEPLESS_PACKAGE_HAS_LCM TRUE)
+else()
+  set(KEEPLESS_PACKAGE_HAS_LCM FALSE)
 endif()
 install(EXPORT keeplessTargets NAMESPACE keepless:: FILE keeplessTargets.cmake
         DESTINATION ${CMAKE_INSTALL_LIBDIR}/cmake/keepless)

@@ -570,6 +570,23 @@ struct IncrementalNetwork::Impl {
             std::memcmp(pool.data() + f.begin, obs, count * sizeof(Observation)) == 0);
   }
 
+  // Under the track cost a keyframe's N values come from its quality, which
+  // is not kept here (a VO re-sends a keyframe with older, longer tracks):
+  // the same keyframe must also give the N its points' entries hold.
+  bool same_levels(std::uint32_t f, const Keyframe& kf, const Observation* obs, std::uint32_t count) {
+    if (params.cost_model != CostModel::kTrack) return true;
+    scorer.score(kf, obs, count, params, counts.data());
+    const std::uint32_t* slots = pool_point.data() + frames[f].begin;
+    for (std::uint32_t i = 0; i < count; ++i) {
+      const Point& pt = points[slots[i]];
+      const std::uint32_t* e = entries(pt.block);
+      std::uint32_t j = 0;
+      while (j < pt.listed && e[2 * j] != f) ++j;
+      if (j == pt.listed || e[2 * j + 1] != counts[i]) return false;
+    }
+    return true;
+  }
+
   // Forgets everything (an update may have stopped half-way).
   void reset_state() {
     for (Frame& f : frames) f = Frame{};
@@ -628,8 +645,9 @@ void IncrementalNetwork::Impl::match_frames(const Window& window) {
     for (std::uint32_t f = 0; f < frame_slots; ++f) {
       Frame& fr = frames[f];
       if (!fr.live || fr.id != kf.id) continue;
-      if (fr.stamp == stamp ||
-          same_content(fr, kf, window.observations(s), window.observation_count(s))) {
+      const Observation* obs = window.observations(s);
+      const std::uint32_t count = window.observation_count(s);
+      if (fr.stamp == stamp || (same_content(fr, kf, obs, count) && same_levels(f, kf, obs, count))) {
         fr.stamp = stamp;
         frame_of[s] = static_cast<std::int32_t>(f);
         matched[f] = 1;

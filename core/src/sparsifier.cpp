@@ -668,10 +668,12 @@ std::size_t Sparsifier::memory_bytes() const {
   const Impl& s = *impl_;
   return sizeof(Sparsifier) + sizeof(Impl) + (s.network ? s.network->memory_bytes() : 0) +
          (s.incremental ? s.incremental->memory_bytes() : 0) + s.solver.memory_bytes() +
-         s.pairwise.memory_bytes() + (s.thresholds ? s.thresholds->memory_bytes() : 0) +
+         s.pairwise.memory_bytes() +
+         (s.thresholds ? sizeof(KeepThresholds) + s.thresholds->memory_bytes() : 0) +
          (s.fraction ? s.fraction->memory_bytes() : 0) +
          (s.threshold_of.capacity() + s.curve.capacity() + s.cursor.capacity() +
-          s.ranked.capacity() + s.views_of.capacity()) * sizeof(std::uint32_t) +
+          s.ranked.capacity() + s.views_of.capacity() + s.views_histogram.capacity()) *
+             sizeof(std::uint32_t) +
          s.rank_of.capacity() * sizeof(std::int32_t) +
          s.decisions.capacity() * sizeof(PointDecision) +
          s.in_scope.capacity() +

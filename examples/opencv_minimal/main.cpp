@@ -71,9 +71,10 @@ int main() {
   kl::platform::SlidingWindow window(caps, kPointsPerKeyframe, /*max_event_ids=*/0);
   kl::core::Sparsifier sparsifier(caps, params, kl::core::SolveMode::kIncremental);
   kl::opencv::KeyframeAdapter adapter(caps);
-  kl::opencv::KeyframeRecord record;
+  kl::opencv::KeyframeRecord record(caps);
   kl::opencv::CameraPose pose;
   std::vector<kl::core::PointId> culled;
+  culled.reserve(caps.max_points);
   for (std::uint32_t k = 0; k < kKeyframes; ++k) {
     const TrackedKeyframe kf = track(k, deleted);  // your tracker's new keyframe
     if (kl::opencv::pose_from_tcw(kf.Tcw, &pose) != kl::opencv::Status::kOk ||

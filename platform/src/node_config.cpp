@@ -65,7 +65,7 @@ std::string node_usage() {
          "                            counts them)\n"
          "  --profile NAME            a set of the capacities above and below, applied before the other flags:\n"
          "                            small (K 10, N 1000, 2000 points, 4500 observations, 7000 pair arcs;\n"
-         "                            3.4 MB), default (K 20, N 2000, 6600, 19100, 51000; 15.5 MB),\n"
+         "                            3.5 MB), default (K 20, N 2000, 6600, 19100, 51000; 15.5 MB),\n"
          "                            large (K 40, N 2000, 8100, 37000, 117000; 28.7 MB)\n"
          "  --use NAME                settings per use, from the budget sweep, applied before the other flags\n"
          "                            (they set --scope, --maturity, --defer and --track-share): paper (the\n"

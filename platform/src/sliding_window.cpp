@@ -132,6 +132,15 @@ core::Status SlidingWindow::rebuild(std::uint32_t skip_front, const core::Keyfra
   for (std::uint32_t slot = skip_front; slot < keyframes; ++slot) {
     core::Keyframe kf = from.keyframe(slot);
     if (std::find(removed, removed + removed_count, kf.id) != removed + removed_count) continue;
+    // Unchanged keyframes keep their stamps, so that the incremental network
+    // knows them without comparing their observations.
+    if (drop_count == 0 && merge_count == 0) {
+      if (const core::Status s = to.copy_keyframe(from, slot); s != core::Status::kOk) {
+        to.clear();
+        return s;
+      }
+      continue;
+    }
     const core::Observation* obs = from.observations(slot);
     const std::uint32_t n = from.observation_count(slot);
     if (n > obs_scratch_.size()) {
@@ -187,7 +196,8 @@ core::Status SlidingWindow::rebuild(std::uint32_t skip_front, const core::Keyfra
     }
     if (tracked != nullptr) kf.tracked = tracked_out;
     if (quality != nullptr) kf.quality = quality_out;
-    const core::Status s = to.add_keyframe(kf, obs_scratch_.data(), kept);
+    const core::Status s = kept == n && !merged ? to.copy_keyframe(from, slot)
+                                                : to.add_keyframe(kf, obs_scratch_.data(), kept);
     if (s != core::Status::kOk) {
       to.clear();
       return s;

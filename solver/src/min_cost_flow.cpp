@@ -154,6 +154,6 @@ bool MinCostFlow::balanced() const { return impl_->is_balanced; }
 Cost MinCostFlow::potential(NodeId v) const { return impl_->pot_ext[v]; }
 const SolveStats& MinCostFlow::stats() const { return impl_->stats; }
 const Capacity& MinCostFlow::capacity_limits() const { return impl_->limits; }
-std::size_t MinCostFlow::memory_bytes() const { return impl_->bytes(); }
+std::size_t MinCostFlow::memory_bytes() const { return sizeof(Impl) + impl_->bytes(); }
 
 }  // namespace keepless::solver

@@ -60,8 +60,10 @@ class RadixHeap {
     return item;
   }
 
+  // Its buffers (the object itself, head_ included, is its owner's).
   std::size_t memory_bytes() const {
-    return key_.size() * (sizeof(std::uint64_t) + 3 * sizeof(std::int32_t)) + sizeof(head_);
+    return key_.capacity() * sizeof(std::uint64_t) +
+           (next_.capacity() + prev_.capacity() + bucket_.capacity()) * sizeof(std::int32_t);
   }
 
  private:

@@ -44,3 +44,19 @@ if(EXISTS ${PREFIX}/include/keepless/opencv/keyframe_adapter.hpp AND
    NOT out MATCHES "keepless::opencv: [1-9][0-9]* culled ids, the same decisions")
   message(FATAL_ERROR "onboard_module did not use keepless::opencv although the package has it")
 endif()
+
+# keepless::core needs neither OpenCV nor Eigen: with both hidden from
+# find_package the package still loads (without keepless::opencv) and the
+# module builds and runs on the rest.
+if(NOT TOOLCHAIN)
+  set(bare ${CONSUMER_BUILD}-without-opencv)
+  file(REMOVE_RECURSE ${bare})
+  run(${CMAKE_COMMAND} -S ${CONSUMER_SOURCE} -B ${bare} -G ${GENERATOR} -DCMAKE_BUILD_TYPE=${BUILD_TYPE}
+      -DCMAKE_PREFIX_PATH=${PREFIX} -DCMAKE_CXX_COMPILER=${CXX_COMPILER}
+      -DCMAKE_DISABLE_FIND_PACKAGE_OpenCV=ON -DCMAKE_DISABLE_FIND_PACKAGE_Eigen3=ON)
+  run(${CMAKE_COMMAND} --build ${bare})
+  execute_process(COMMAND ${bare}/onboard_module RESULT_VARIABLE rc OUTPUT_VARIABLE out)
+  if(NOT rc EQUAL 0 OR NOT out MATCHES "kept [1-9][0-9]*, culled [1-9][0-9]*" OR out MATCHES "keepless::opencv")
+    message(FATAL_ERROR "without OpenCV and Eigen the consumer did not run on keepless::core alone:\n${out}")
+  endif()
+endif()

@@ -305,6 +305,47 @@ TEST(TrackCost, UpdateMatchesRunAndReference) {
   EXPECT_GT(windows, 300u);
 }
 
+// A VO that rebuilds its window per keyframe re-sends each keyframe with the
+// same observations and its points' quality as the map now knows it (older,
+// longer tracks): the incremental network must take the new quality, not keep
+// the levels it first saw (it compared only the observations once).
+TEST(TrackCost, UpdateTakesTheQualityOfAKeyframeSentAgain) {
+  std::uint32_t windows = 0, requalified = 0;
+  for (std::uint64_t seed = 1; seed <= 60 && !HasFailure(); ++seed) {
+    test::RandomCase c = test::random_case(8100 + seed, 12, 200);
+    test::random_policies(c, 8100 + seed);
+    test::random_quality(c, 8100 + seed);
+    c.params.track_terms = kTrackLength | kTrackAge;  // the terms that change as a map ages
+    const std::size_t size = 3 + seed % 4;
+    Sparsifier closed(kCaps, c.params, SolveMode::kIncremental, Start::kClosedForm);
+    Sparsifier zero(kCaps, c.params, SolveMode::kIncremental, Start::kZeroFlow);
+    for (std::size_t last = 0; last < c.frames.size(); ++last) {
+      const std::size_t first = last + 1 > size ? last + 1 - size : 0;
+      std::vector<test::RefKeyframe> frames;
+      for (std::size_t k = first; k <= last; ++k) {
+        test::RefKeyframe f = c.frames[k];
+        const auto since = static_cast<std::uint32_t>(last - k);  // keyframes made since this one
+        for (PointQuality& q : f.quality) {
+          q.track_length += 3 * since;
+          if (q.age >= 0) q.age += static_cast<std::int32_t>(since);
+        }
+        requalified += since > 0 && !f.quality.empty();
+        frames.push_back(std::move(f));
+      }
+      Window window(kCaps);  // a new window: no stamp vouches for an unchanged keyframe
+      ASSERT_TRUE(test::load(window, frames)) << "seed " << seed;
+      ASSERT_EQ(closed.update(window), Status::kOk);
+      ASSERT_EQ(zero.update(window), Status::kOk);
+      const test::RefResult ref = test::reference_decide(frames, c.params);
+      ASSERT_TRUE(agrees(closed, ref)) << "seed " << seed << " keyframe " << last;
+      ASSERT_TRUE(agrees(zero, ref)) << "seed " << seed << " keyframe " << last;
+      ++windows;
+    }
+  }
+  EXPECT_GT(windows, 300u);
+  EXPECT_GT(requalified, 300u);
+}
+
 // A keep budget with the track cost: the K smallest keep thresholds, which
 // the closed form's M sweep confirms (kept_at(M) = the points kept at M).
 TEST(TrackCost, BudgetKeepsWhatSomeMKeeps) {

@@ -205,6 +205,37 @@ TEST(ZeroAllocation, PoliciesAndCostModelsAllocateNothing) {
   EXPECT_GT(c.tally, 0u) << "the floor should have promoted points";
 }
 
+// memory_bytes() is what a Sparsifier holds: every byte its construction
+// allocates, for each solve mode, start and policy (the node sizes and
+// reports its memory from it).
+TEST(ZeroAllocation, MemoryBytesCountsWhatConstructionAllocates) {
+  const Capacities caps{12, 2048, 8192, 32768, 2048};
+  const KeepBudget budgets[] = {{}, {BudgetKind::kPoints, 40, 0.0}, {BudgetKind::kFraction, 0, 0.3},
+                                {BudgetKind::kObservations, 150, 0.0}, {BudgetKind::kFraction, 0, 0.3, 0.5}};
+  std::uint32_t checked = 0;
+  for (const KeepBudget& budget : budgets) {
+    for (Scope scope : {Scope::kWindow, Scope::kNewest}) {
+      for (SolveMode mode : {SolveMode::kFromScratch, SolveMode::kIncremental}) {
+        for (Start start : {Start::kClosedForm, Start::kZeroFlow}) {
+          Params p;
+          p.scope = scope;
+          p.budget = budget;
+          p.coverage_floor = scope == Scope::kNewest ? 10 : 0;
+          test::AllocationCounter counter;
+          auto s = std::make_unique<Sparsifier>(caps, p, mode, start);
+          const std::uint64_t allocated = counter.stop();
+          EXPECT_EQ(s->memory_bytes(), counter.bytes())
+              << "budget " << static_cast<int>(budget.kind) << " share " << budget.track_share << " scope "
+              << static_cast<int>(scope) << " mode " << static_cast<int>(mode) << " start "
+              << static_cast<int>(start) << " (" << allocated << " allocations)";
+          ++checked;
+        }
+      }
+    }
+  }
+  EXPECT_EQ(checked, 40u);
+}
+
 // Tracking-safe culling on: a maturity guard with each scope and a floor,
 // and tracked flags on the keyframes; from-scratch and incremental.
 TEST(ZeroAllocation, TrackingGuardAllocatesNothing) {

@@ -19,6 +19,19 @@
 
 namespace {
 
+// Declares `var`, the sequence folder `name` under the data root. A missing
+// keepless_eval fails the test; a missing `probe` (the last frame the test
+// reads) skips it, naming the file. A macro: GTEST_SKIP must be in the body.
+#define DATA_OR_SKIP(var, name, probe)                                                             \
+  ASSERT_TRUE(std::filesystem::exists(KEEPLESS_EVAL_BIN))                                          \
+      << KEEPLESS_EVAL_BIN << " is missing: build target keepless_eval"                            \
+      << " (perf/eval; its VO needs Ceres, OpenCV, keepless::opencv)";                             \
+  const std::string var = std::string(KEEPLESS_EVAL_DATA) + "/" name;                              \
+  if (!std::filesystem::exists(var + "/" probe)) {                                                 \
+    GTEST_SKIP() << "no data: " << var << "/" probe << " is missing (set KEEPLESS_EVAL_DATA_DIR)"; \
+  }                                                                                                \
+  static_assert(true, "")
+
 constexpr double kAteBoundM = 0.05;
 constexpr double kTrackedFraction = 0.95;
 
@@ -62,13 +75,7 @@ EvalOutput run_eval(const std::string& args) {
 }
 
 TEST(RealVoQuick, SevenScenesSliceIsTrackedAccuratelyAndReportedInFull) {
-  const std::string bin = KEEPLESS_EVAL_BIN;
-  const std::string data = std::string(KEEPLESS_EVAL_DATA) + "/7scenes_redkitchen_first600";
-  ASSERT_TRUE(std::filesystem::exists(bin))
-      << bin << " is missing: build target keepless_eval (perf/eval; its VO needs Ceres, OpenCV, keepless::opencv)";
-  if (!std::filesystem::exists(data + "/frame-000059.color.jpg")) {
-    GTEST_SKIP() << "no 7-Scenes data at " << data << " (set KEEPLESS_EVAL_DATA_DIR)";
-  }
+  DATA_OR_SKIP(data, "7scenes_redkitchen_first600", "frame-000059.color.jpg");
   const std::string out = ::testing::TempDir() + "/real_vo_quick";
   std::filesystem::remove_all(out);
   const EvalOutput o = run_eval("--rgbd '" + data + "' --quick --frames 0:59 --out '" + out + "'");
@@ -108,12 +115,7 @@ TEST(RealVoQuick, SevenScenesSliceIsTrackedAccuratelyAndReportedInFull) {
 // --frames 600:619 runs 20 frames; 0:19 selects none and says so.
 TEST(RealVoQuick, FramesAreSelectedByNumberWhereverTheSequenceStarts) {
   namespace fs = std::filesystem;
-  const std::string bin = KEEPLESS_EVAL_BIN;
-  const std::string data = std::string(KEEPLESS_EVAL_DATA) + "/7scenes_redkitchen_first600";
-  ASSERT_TRUE(fs::exists(bin)) << bin << " is missing: build target keepless_eval";
-  if (!fs::exists(data + "/frame-000029.color.jpg")) {
-    GTEST_SKIP() << "no 7-Scenes data at " << data << " (set KEEPLESS_EVAL_DATA_DIR)";
-  }
+  DATA_OR_SKIP(data, "7scenes_redkitchen_first600", "frame-000029.color.jpg");
   const std::string dir = ::testing::TempDir() + "/rgbd_from_600";
   fs::remove_all(dir);
   fs::create_directories(dir);
@@ -149,12 +151,7 @@ TEST(RealVoQuick, FramesAreSelectedByNumberWhereverTheSequenceStarts) {
 // row that did not match it; without --defer none is deleted or excluded.
 // (How well it tracks is evidence, in docs/design/policies.md, not asserted.)
 TEST(RealVoQuick, DeferredCullingTracksExcludedPointsAndDeletesThemByTheRule) {
-  const std::string bin = KEEPLESS_EVAL_BIN;
-  const std::string data = std::string(KEEPLESS_EVAL_DATA) + "/kitti06_first51_niconielsen";
-  ASSERT_TRUE(std::filesystem::exists(bin)) << bin << " is missing: build target keepless_eval";
-  if (!std::filesystem::exists(data + "/image_l/000020.png")) {
-    GTEST_SKIP() << "no KITTI 06 data at " << data << " (set KEEPLESS_EVAL_DATA_DIR)";
-  }
+  DATA_OR_SKIP(data, "kitti06_first51_niconielsen", "image_l/000020.png");
   struct Counts {
     long long culled = -1, deleted = -1, matched = -1, violations = -1;
     double refine_cpu = -1;  // the excluded points' refinement, outside the local BA's CPU
@@ -207,12 +204,7 @@ TEST(RealVoQuick, DeferredCullingTracksExcludedPointsAndDeletesThemByTheRule) {
 // and the budget still holds: the selector's points stay F of those it
 // evaluated (the "map" share the VO logs, within its 0.1 % print).
 TEST(RealVoQuick, DecidingTheWindowCullsOlderPointsAtTheSameKeptFraction) {
-  const std::string bin = KEEPLESS_EVAL_BIN;
-  const std::string data = std::string(KEEPLESS_EVAL_DATA) + "/kitti06_first51_niconielsen";
-  ASSERT_TRUE(std::filesystem::exists(bin)) << bin << " is missing: build target keepless_eval";
-  if (!std::filesystem::exists(data + "/image_l/000020.png")) {
-    GTEST_SKIP() << "no KITTI 06 data at " << data << " (set KEEPLESS_EVAL_DATA_DIR)";
-  }
+  DATA_OR_SKIP(data, "kitti06_first51_niconielsen", "image_l/000020.png");
   struct Line {
     std::string selector;
     long long culled = -1, elsewhere = -1;
@@ -264,12 +256,7 @@ TEST(RealVoQuick, DecidingTheWindowCullsOlderPointsAtTheSameKeptFraction) {
 // culls a keyframe by default; with the option no line ends with fewer
 // keyframes than it made.
 TEST(RealVoQuick, NoKeyframeCullingKeepsEveryKeyframeMade) {
-  const std::string bin = KEEPLESS_EVAL_BIN;
-  const std::string data = std::string(KEEPLESS_EVAL_DATA) + "/kitti00_first200_vamr";
-  ASSERT_TRUE(std::filesystem::exists(bin)) << bin << " is missing: build target keepless_eval";
-  if (!std::filesystem::exists(data + "/image_0/000060.png")) {
-    GTEST_SKIP() << "no KITTI 00 data at " << data << " (set KEEPLESS_EVAL_DATA_DIR)";
-  }
+  DATA_OR_SKIP(data, "kitti00_first200_vamr", "image_0/000060.png");
   // Per run line (original and the four selectors): keyframes alive at the end, and made.
   const auto run = [&](const std::string& extra, std::vector<std::pair<int, int>>* out) {
     const EvalOutput o = run_eval("--images '" + data + "/image_0' --calib '" + data + "/K.txt' --poses '" + data +
@@ -303,12 +290,7 @@ TEST(RealVoQuick, NoKeyframeCullingKeepsEveryKeyframeMade) {
 // refines from the motion model's pose instead of losing the frame (it lost
 // it, and with it the sequence, before).
 TEST(RealVoQuick, ABadPnpPoseDoesNotLoseTheFrame) {
-  const std::string bin = KEEPLESS_EVAL_BIN;
-  const std::string data = std::string(KEEPLESS_EVAL_DATA) + "/kitti00_first200_vamr";
-  ASSERT_TRUE(std::filesystem::exists(bin)) << bin << " is missing: build target keepless_eval";
-  if (!std::filesystem::exists(data + "/image_0/000030.png")) {
-    GTEST_SKIP() << "no KITTI 00 data at " << data << " (set KEEPLESS_EVAL_DATA_DIR)";
-  }
+  DATA_OR_SKIP(data, "kitti00_first200_vamr", "image_0/000030.png");
   const EvalOutput o = run_eval("--images '" + data + "/image_0' --calib '" + data + "/K.txt' --poses '" + data +
                                 "/poses.txt' --frames 0:30 --seed 13 --seeds 1 --M 100 --no-baselines --no-ablation");
   ASSERT_EQ(o.status, 0) << o.all;
@@ -341,12 +323,7 @@ std::string ours_on_kitti06(const std::string& data, const std::string& flags, c
 // still keeps F of the points it evaluated; each changes which points it
 // keeps, so its run differs from the default's.
 TEST(RealVoQuick, TieOrderAndCostTermsChangeThePointsNotTheBudget) {
-  const std::string bin = KEEPLESS_EVAL_BIN;
-  const std::string data = std::string(KEEPLESS_EVAL_DATA) + "/kitti06_first51_niconielsen";
-  ASSERT_TRUE(std::filesystem::exists(bin)) << bin << " is missing: build target keepless_eval";
-  if (!std::filesystem::exists(data + "/image_l/000020.png")) {
-    GTEST_SKIP() << "no KITTI 06 data at " << data << " (set KEEPLESS_EVAL_DATA_DIR)";
-  }
+  DATA_OR_SKIP(data, "kitti06_first51_niconielsen", "image_l/000020.png");
   const auto ours = [&](const std::string& extra) {
     const std::string line = ours_on_kitti06(data, "--defer 2 --defer-refine --decide window " + extra);
     const std::size_t at = line.find(" map ");
@@ -367,12 +344,7 @@ TEST(RealVoQuick, TieOrderAndCostTermsChangeThePointsNotTheBudget) {
 // same keepless run line as the flags spelled out, and another than the
 // paper's settings; monocular's track share only from F = 0.3.
 TEST(RealVoQuick, UsesRunTheFlagsTheyName) {
-  const std::string bin = KEEPLESS_EVAL_BIN;
-  const std::string data = std::string(KEEPLESS_EVAL_DATA) + "/kitti06_first51_niconielsen";
-  ASSERT_TRUE(std::filesystem::exists(bin)) << bin << " is missing: build target keepless_eval";
-  if (!std::filesystem::exists(data + "/image_l/000020.png")) {
-    GTEST_SKIP() << "no KITTI 06 data at " << data << " (set KEEPLESS_EVAL_DATA_DIR)";
-  }
+  DATA_OR_SKIP(data, "kitti06_first51_niconielsen", "image_l/000020.png");
   const auto ours = [&](const std::string& flags, const std::string& fraction = "0.2") {
     return ours_on_kitti06(data, flags, fraction);
   };

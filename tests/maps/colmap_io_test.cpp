@@ -544,6 +544,10 @@ TEST(ColmapText, AnImageNameWithABlankIsRefusedInTextAndKeptInBinary) {
                          "format cannot hold; write the binary format");
   EXPECT_FALSE(fs::exists(dir + "/t"));
   EXPECT_TRUE(io::write_colmap_model(dir + "/b", m, io::ColmapFormat::kBinary, &error)) << error;
+  // A missing parent folder is named as the model's, not the staging folder's.
+  EXPECT_FALSE(io::write_colmap_model(dir + "/none/b", m, io::ColmapFormat::kBinary, &error));
+  EXPECT_EQ(error, dir + "/none/b:0: cannot write model: its parent folder does not exist (create it first)");
+  EXPECT_FALSE(fs::exists(dir + "/none"));
   io::ColmapFormat format;
   ASSERT_TRUE(io::read_colmap_model(dir + "/b", &back, &format, &error)) << error;
   EXPECT_EQ(back.images[0].name, "left camera/b.png");

@@ -1,5 +1,6 @@
 // keepless::opencv: poses from cv::Mat / Eigen, keyframes into a window,
-// input validation, unmapped keypoints in N(p, f) (reserved ids and core's
+// input validation, capacities checked before any buffer grows, no
+// allocation per keyframe, unmapped keypoints in N(p, f) (reserved ids and core's
 // native list), intrinsics and depths, decisions back to ids.
 
 #include <gtest/gtest.h>
@@ -9,6 +10,7 @@
 #include <limits>
 #include <vector>
 
+#include "counting_new.hpp"  // this binary's only inclusion
 #include "keepless/opencv/keyframe_adapter.hpp"
 
 namespace keepless::opencv {
@@ -191,6 +193,82 @@ TEST(OpencvKeyframes, CapacityRefusalIsReportedWithTheWindowsReason) {
   EXPECT_EQ(adapter.add_keyframe(window, 2, centre_at(1), f.keypoints, f.ids), Status::kWindowRejected);
   EXPECT_EQ(adapter.window_status(), core::Status::kCapacityExceeded);
   EXPECT_EQ(window.keyframe_count(), 1u);
+}
+
+// A keyframe beyond the adapter's capacities is refused before any buffer
+// grows (mapped plus reserved-id unmapped keypoints against
+// max_observations, a listed unmapped set against max_unmapped_keypoints),
+// leaving the record as it was.
+TEST(OpencvKeyframes, OverCapacityKeyframesAreRefusedBeforeAnyBufferGrows) {
+  core::Capacities caps = small_capacities();
+  caps.max_observations = 40;
+  caps.max_unmapped_keypoints = 5;
+  KeyframeAdapter adapter(caps);
+  KeyframeRecord record(caps);
+  const Frame fits = frame(0, 0, 30);
+  ASSERT_EQ(adapter.convert(1, centre_at(0), fits.keypoints, fits.ids, nullptr, &record), Status::kOk);
+  const Frame big = frame(1, 0, 41);
+  const std::vector<cv::KeyPoint> eleven(11, cv::KeyPoint(cv::Point2f(3, 4), 31.f));
+  const std::vector<cv::KeyPoint> six(6, cv::KeyPoint(cv::Point2f(3, 4), 31.f));
+  KeyframeExtras listed;
+  listed.unmapped = &six;
+  listed.unmapped_as = UnmappedAs::kKeypointList;
+  test::AllocationCounter allocations;
+  EXPECT_EQ(adapter.convert(2, centre_at(1), big.keypoints, big.ids, nullptr, &record), Status::kCapacityExceeded);
+  EXPECT_EQ(adapter.convert(2, centre_at(1), fits.keypoints, fits.ids, &eleven, &record), Status::kCapacityExceeded);
+  EXPECT_EQ(adapter.convert(2, centre_at(1), fits.keypoints, fits.ids, listed, &record), Status::kCapacityExceeded);
+  EXPECT_EQ(allocations.stop(), 0u);
+  EXPECT_EQ(record.keyframe.id, 1u);
+  EXPECT_EQ(record.observations.size(), 30u);
+  // At the limits it converts.
+  const std::vector<cv::KeyPoint> five(5, cv::KeyPoint(cv::Point2f(3, 4), 31.f));
+  listed.unmapped = &five;
+  EXPECT_EQ(adapter.convert(3, centre_at(1), fits.keypoints, fits.ids, listed, &record), Status::kOk);
+  const std::vector<cv::KeyPoint> ten(10, cv::KeyPoint(cv::Point2f(3, 4), 31.f));
+  EXPECT_EQ(adapter.convert(4, centre_at(1), fits.keypoints, fits.ids, &ten, &record), Status::kOk);
+  EXPECT_EQ(record.observations.size(), 40u);
+}
+
+// The integration's per-keyframe calls (a cv::Mat pose, conversion into a
+// record constructed from the capacities, the window, the decision, the
+// culled ids into a reserved vector) allocate nothing once set up.
+TEST(OpencvKeyframes, NothingAllocatesPerKeyframe) {
+  const core::Capacities caps = small_capacities();
+  core::Window window(caps);
+  core::Params params;
+  params.pair_capacity = 8;  // tight enough to cull
+  core::Sparsifier sparsifier(caps, params, core::SolveMode::kIncremental);
+  KeyframeAdapter adapter(caps);
+  KeyframeRecord record(caps);
+  std::vector<core::PointId> culled;
+  culled.reserve(caps.max_points);
+  std::vector<Frame> frames;
+  std::vector<cv::Mat> poses;
+  for (int k = 0; k < 12; ++k) {
+    frames.push_back(frame(k, 12 * k, 40));
+    poses.push_back(to_mat(twc(0.01 * k, {0, 1, 0}, {0.3 * k, 0, 0}).inverse(), k % 2 == 0 ? 4 : 3,
+                           k % 3 == 0 ? CV_32F : CV_64F));
+  }
+  test::AllocationCounter allocations;
+  std::uint32_t culled_total = 0;
+  for (int k = 0; k < 12; ++k) {
+    CameraPose pose;
+    ASSERT_EQ(pose_from_tcw(poses[k], &pose), Status::kOk);
+    ASSERT_EQ(adapter.convert(static_cast<core::KeyframeId>(k), pose, frames[k].keypoints, frames[k].ids, nullptr,
+                              &record),
+              Status::kOk);
+    if (window.keyframe_count() == 5) {
+      ASSERT_EQ(window.remove_keyframe(window.keyframe(0).id), core::Status::kOk);
+    }
+    ASSERT_EQ(window.add_keyframe(record.keyframe, record.observations.data(),
+                                  static_cast<std::uint32_t>(record.observations.size())),
+              core::Status::kOk);
+    ASSERT_EQ(sparsifier.update(window), core::Status::kOk);
+    culled_points(sparsifier, &culled);
+    culled_total += static_cast<std::uint32_t>(culled.size());
+  }
+  EXPECT_EQ(allocations.stop(), 0u);
+  EXPECT_GT(culled_total, 0u);  // the decisions did something
 }
 
 // Fills a window of `keyframes` overlapping keyframes, with `per` unmapped
@@ -419,7 +497,7 @@ TEST(OpencvKeyframes, NativeUnmappedListCountsUnderAuthorsButNotInThePapersBox) 
   EXPECT_EQ(cn, cp);
   EXPECT_GT(sr.total_cost, sp.total_cost);
 
-  // Beyond max_unmapped_keypoints the window refuses the keyframe, and says so.
+  // Beyond max_unmapped_keypoints the adapter refuses the keyframe, and says so.
   core::Capacities none = small_capacities();  // max_unmapped_keypoints = 0
   core::Window w(none);
   KeyframeAdapter d(none);
@@ -428,8 +506,7 @@ TEST(OpencvKeyframes, NativeUnmappedListCountsUnderAuthorsButNotInThePapersBox) 
   KeyframeExtras extras;
   extras.unmapped = &extra;
   extras.unmapped_as = UnmappedAs::kKeypointList;
-  EXPECT_EQ(d.add_keyframe(w, 1, centre_at(0), f.keypoints, f.ids, extras), Status::kWindowRejected);
-  EXPECT_EQ(d.window_status(), core::Status::kCapacityExceeded);
+  EXPECT_EQ(d.add_keyframe(w, 1, centre_at(0), f.keypoints, f.ids, extras), Status::kCapacityExceeded);
   EXPECT_EQ(w.keyframe_count(), 0u);
 }
 

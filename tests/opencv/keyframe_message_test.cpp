@@ -12,6 +12,7 @@ namespace {
 
 TEST(OpencvKeyframeMessage, CarriesPoseAndObservationsAndRoundTrips) {
   core::Capacities caps;
+  caps.max_unmapped_keypoints = 8;  // the listed unmapped keypoints below
   KeyframeAdapter adapter(caps);
   CameraPose pose;
   ASSERT_EQ(pose_from_orientation(Eigen::Quaterniond(Eigen::AngleAxisd(0.4, Eigen::Vector3d::UnitY())),

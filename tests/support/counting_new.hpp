@@ -27,6 +27,7 @@ class AllocationCounter {
  public:
   AllocationCounter() {
     count_.store(0, std::memory_order_relaxed);
+    bytes_.store(0, std::memory_order_relaxed);
     resume();
   }
   ~AllocationCounter() { pause(); }
@@ -43,21 +44,28 @@ class AllocationCounter {
     return count();
   }
 
+  // Bytes requested by those allocations (to check a memory_bytes() report).
+  std::uint64_t bytes() const { return bytes_.load(std::memory_order_relaxed); }
+
   // For the replacement operators below only.
-  static void note_allocation() {
-    if (armed_.load(std::memory_order_relaxed)) count_.fetch_add(1, std::memory_order_relaxed);
+  static void note_allocation(std::size_t size) {
+    if (armed_.load(std::memory_order_relaxed)) {
+      count_.fetch_add(1, std::memory_order_relaxed);
+      bytes_.fetch_add(size, std::memory_order_relaxed);
+    }
   }
 
  private:
   // Atomic: allocations may come from other threads (LCM, the node).
   static inline std::atomic<bool> armed_{false};
   static inline std::atomic<std::uint64_t> count_{0};
+  static inline std::atomic<std::uint64_t> bytes_{0};
 };
 
 namespace counting_new_detail {
 
 inline void* allocate(std::size_t size) {
-  AllocationCounter::note_allocation();
+  AllocationCounter::note_allocation(size);
   if (void* p = std::malloc(size == 0 ? 1 : size)) return p;
   throw std::bad_alloc();
 }
@@ -65,7 +73,7 @@ inline void* allocate(std::size_t size) {
 // posix_memalign rather than aligned_alloc: it needs no size rounding and
 // accepts any power-of-two alignment once raised to sizeof(void*).
 inline void* allocate_aligned(std::size_t size, std::align_val_t align) {
-  AllocationCounter::note_allocation();
+  AllocationCounter::note_allocation(size);
   const auto alignment = static_cast<std::size_t>(align);
   void* p = nullptr;
   if (posix_memalign(&p, alignment < sizeof(void*) ? sizeof(void*) : alignment,

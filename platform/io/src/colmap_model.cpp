@@ -252,7 +252,14 @@ bool write_colmap_model(const std::string& dir, const ColmapModel& model, Colmap
       return false;
     }
   }
-  if (::mkdir(tmp.c_str(), 0777) != 0) return io_error(tmp, errno);
+  if (::mkdir(tmp.c_str(), 0777) != 0) {
+    // The staging folder is ours; what the user can act on is the model's.
+    if (errno == ENOENT) {
+      *error = dir + ":0: cannot write model: its parent folder does not exist (create it first)";
+      return false;
+    }
+    return io_error(tmp, errno);
+  }
   const std::pair<const std::string*, const std::string*> parts[] = {
       {&staged.cameras, &files.cameras}, {&staged.images, &files.images}, {&staged.points3D, &files.points3D}};
   for (const auto& [path, contents] : parts) {

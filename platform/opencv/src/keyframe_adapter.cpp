@@ -15,6 +15,7 @@ const char* to_string(Status s) {
     case Status::kDuplicatePoint: return "map point id given twice";
     case Status::kReservedPointId: return "map point id uses the reserved top bit";
     case Status::kWindowRejected: return "window rejected the keyframe";
+    case Status::kCapacityExceeded: return "more observations or unmapped keypoints than the capacities";
   }
   return "unknown";
 }
@@ -41,19 +42,18 @@ Status pose_from_tcw(const cv::Mat& Tcw, CameraPose* out) {
       (Tcw.depth() != CV_32F && Tcw.depth() != CV_64F)) {
     return Status::kBadMatrix;
   }
-  cv::Mat T;
-  Tcw.convertTo(T, CV_64F);
+  // Read in place (a converted copy would allocate per keyframe).
+  const bool single = Tcw.depth() == CV_32F;
+  const auto at = [&](int r, int c) { return single ? double{Tcw.at<float>(r, c)} : Tcw.at<double>(r, c); };
   Eigen::Matrix3d R;
   Eigen::Vector3d t;
   for (int r = 0; r < 3; ++r) {
-    for (int c = 0; c < 3; ++c) R(r, c) = T.at<double>(r, c);
-    t(r) = T.at<double>(r, 3);
+    for (int c = 0; c < 3; ++c) R(r, c) = at(r, c);
+    t(r) = at(r, 3);
   }
   if (!R.allFinite() || !t.allFinite()) return Status::kNonFinite;
-  if (T.rows == 4) {
-    const bool last_row = T.at<double>(3, 0) == 0 && T.at<double>(3, 1) == 0 &&
-                          T.at<double>(3, 2) == 0 && T.at<double>(3, 3) == 1;
-    if (!last_row) return Status::kBadMatrix;
+  if (Tcw.rows == 4 && (at(3, 0) != 0 || at(3, 1) != 0 || at(3, 2) != 0 || at(3, 3) != 1)) {
+    return Status::kBadMatrix;
   }
   return pose_from_rotation(R, t, out);
 }
@@ -81,11 +81,17 @@ Status pose_from_orientation(const Eigen::Quaterniond& q_wc, const Eigen::Vector
   return Status::kOk;
 }
 
-KeyframeAdapter::KeyframeAdapter(const core::Capacities& capacities) {
-  record_.observations.reserve(capacities.max_observations);
-  record_.unmapped.reserve(capacities.max_unmapped_keypoints);
-  record_.tracked.reserve(capacities.max_observations);
-  record_.quality.reserve(capacities.max_observations);
+KeyframeRecord::KeyframeRecord(const core::Capacities& capacities) {
+  observations.reserve(capacities.max_observations);
+  unmapped.reserve(capacities.max_unmapped_keypoints);
+  tracked.reserve(capacities.max_observations);
+  quality.reserve(capacities.max_observations);
+}
+
+KeyframeAdapter::KeyframeAdapter(const core::Capacities& capacities)
+    : max_observations_(capacities.max_observations),
+      max_unmapped_(capacities.max_unmapped_keypoints),
+      record_(capacities) {
   sorted_.reserve(capacities.max_observations);
 }
 
@@ -96,6 +102,12 @@ Status KeyframeAdapter::convert(core::KeyframeId id, const CameraPose& pose,
   const std::vector<cv::KeyPoint>* unmapped = extras.unmapped;
   const std::vector<double>* depths = extras.depths;
   if (keypoints.size() != point_ids.size()) return Status::kSizeMismatch;
+  const bool as_list = unmapped != nullptr && extras.unmapped_as == UnmappedAs::kKeypointList;
+  const std::size_t listed = as_list ? unmapped->size() : 0;
+  const std::size_t reserved_ids = unmapped != nullptr ? unmapped->size() - listed : 0;
+  if (keypoints.size() + reserved_ids > max_observations_ || listed > max_unmapped_) {
+    return Status::kCapacityExceeded;
+  }
   if (depths != nullptr && depths->size() != point_ids.size()) return Status::kSizeMismatch;
   if (extras.tracked != nullptr && extras.tracked->size() != point_ids.size()) return Status::kSizeMismatch;
   if (extras.quality != nullptr) {

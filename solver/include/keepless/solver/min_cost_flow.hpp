@@ -191,7 +191,7 @@ class MinCostFlow {
   const SolveStats& stats() const;
 
   const Capacity& capacity_limits() const;
-  // Bytes held by the preallocated workspace.
+  // Bytes held on the heap: the preallocated workspace and its bookkeeping.
   std::size_t memory_bytes() const;
 
  private:

@@ -42,6 +42,7 @@ enum class [[nodiscard]] Status : std::uint8_t {
   kDuplicatePoint,   // a map point id given twice for one keyframe
   kReservedPointId,  // a map point id with kUnmappedBit set
   kWindowRejected,   // core::Window::add_keyframe refused it (see window_status())
+  kCapacityExceeded,  // more observations or unmapped keypoints than the adapter's capacities
 };
 
 const char* to_string(Status s);
@@ -103,7 +104,11 @@ struct KeyframeExtras {
 };
 
 // A keyframe converted for the window: what add_keyframe and keyframe_t take.
+// Constructed from the capacities it holds room for every keyframe that fits
+// them, so that convert() never allocates.
 struct KeyframeRecord {
+  KeyframeRecord() = default;
+  explicit KeyframeRecord(const core::Capacities& capacities);
   core::Keyframe keyframe;  // keyframe.unmapped/.tracked/.quality point into the vectors below (re-point them after a copy)
   std::vector<core::Observation> observations;  // mapped first, then reserved-id unmapped
   std::uint32_t mapped = 0;                     // observations[0, mapped) are map points
@@ -113,12 +118,16 @@ struct KeyframeRecord {
 };
 
 // Converts keyframes into a window. Its buffers are reserved once from the
-// capacities (a keyframe never holds more than max_observations).
+// capacities: a keyframe with more observations (mapped keypoints plus
+// reserved-id unmapped ones) than max_observations, or more listed unmapped
+// keypoints than max_unmapped_keypoints, is kCapacityExceeded before any
+// buffer grows.
 class KeyframeAdapter {
  public:
   explicit KeyframeAdapter(const core::Capacities& capacities);
 
-  // keypoints[i] observes map point point_ids[i]. Validates, then fills `out`.
+  // keypoints[i] observes map point point_ids[i]. Validates, then fills `out`
+  // (allocation-free when `out` was constructed from the same capacities).
   [[nodiscard]] Status convert(core::KeyframeId id, const CameraPose& pose,
                                const std::vector<cv::KeyPoint>& keypoints,
                                const std::vector<core::PointId>& point_ids, const KeyframeExtras& extras,
@@ -151,6 +160,8 @@ class KeyframeAdapter {
     e.unmapped = unmapped;
     return e;
   }
+  std::uint32_t max_observations_;
+  std::uint32_t max_unmapped_;
   KeyframeRecord record_;
   std::vector<core::PointId> sorted_;    // duplicate check
   std::uint64_t next_unmapped_ = 0;      // unique reserved ids across keyframes

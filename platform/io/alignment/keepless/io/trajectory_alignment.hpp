@@ -1,9 +1,9 @@
 #pragma once
 // Comparing camera centres up to a similarity (bundle adjustment leaves the
 // gauge, scale included, free): Umeyama's least-squares alignment, then the
-// residual distances. Header-only and the one Eigen user of keepless::io, so
-// the io library itself needs nothing beyond core; include it only where
-// Eigen3 is linked (tests, perf).
+// residual distances. Header-only, for the maps bench and tests through the
+// build-tree target keepless_io_alignment (Eigen): not installed, so the io
+// library needs nothing beyond core.
 
 #include <Eigen/Geometry>
 #include <algorithm>
