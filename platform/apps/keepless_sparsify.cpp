@@ -41,6 +41,7 @@
 #include "keepless/platform/memory_estimate.hpp"
 #include "keepless/platform/monotonic_clock.hpp"
 #include "sparsify/model_run.hpp"
+#include "sparsify/modes.hpp"
 #include "keepless/platform/window_file_io.hpp"
 
 namespace {
@@ -414,14 +415,6 @@ int decide_window_unguarded(const Options& opt, const core::WindowFile& file, co
   const std::size_t memory = window.memory_bytes() + sparsifier.memory_bytes();
   char theta[32];
   *std::to_chars(theta, theta + sizeof theta - 1, opt.params.theta).ptr = '\0';  // shortest exact
-  // The budget's value: K or B, or F (shortest exact); 0 without a budget.
-  char budget_value[32];
-  const core::KeepBudget& kb = opt.params.budget;
-  if (kb.kind == core::BudgetKind::kFraction) {
-    *std::to_chars(budget_value, budget_value + sizeof budget_value - 1, kb.fraction).ptr = '\0';
-  } else {
-    *std::to_chars(budget_value, budget_value + sizeof budget_value - 1, kb.count).ptr = '\0';
-  }
   std::printf(
       "{\"keyframes\":%u,\"points\":%u,\"evaluated\":%u,\"kept\":%u,\"culled\":%u,"
       "\"skipped\":%u,\"pairs\":%u,\"arcs\":%u,\"max_flow\":%" PRId64 ",\"total_cost\":%" PRId64
@@ -437,7 +430,8 @@ int decide_window_unguarded(const Options& opt, const core::WindowFile& file, co
       opt.params.box_height, parse_ms, build_ms, solve_ms, memory, core::to_string(opt.params.scope),
       opt.params.coverage_floor, core::to_string(opt.params.cost_model), sum.out_of_scope,
       sum.floor_keyframes, sum.floor_promoted, sum.floor_short,
-      core::to_string(opt.params.budget.kind), budget_value, sum.budget_m, sum.budget_observations,
+      core::to_string(opt.params.budget.kind), keepless::sparsify::budget_value(opt.params.budget).c_str(), sum.budget_m,
+      sum.budget_observations,
       opt.params.maturity_keyframes, sum.guarded, sum.track_fallback, opt.params.budget.track_share_from,
       opt.params.budget.track_share);
   return std::fflush(stdout) == 0 ? 0 : kExitInternal;

@@ -241,7 +241,8 @@ TEST_F(SparsifyMaps, UseOfflineIsTheWholeModeWithHalfByTrackLength) {
   ASSERT_EQ(flags.status, 0) << flags.err;
   const std::string json = last_line(use.out);
   EXPECT_NE(json.find("\"mode\":\"whole\""), std::string::npos) << json;
-  EXPECT_NE(json.find("\"track_share\":0.5}"), std::string::npos) << json;
+  EXPECT_NE(json.find("\"track_share\":0.5,"), std::string::npos) << json;
+  EXPECT_NE(json.find("\"budget\":\"points\",\"budget_value\":710}"), std::string::npos) << json;
   EXPECT_EQ(json_number(json, "points_kept"), 710);
   EXPECT_EQ(maps_test::read_all(path("use.d")), maps_test::read_all(path("flags.d")));
   for (const char* f : {"cameras.bin", "images.bin", "points3D.bin"}) {
@@ -251,6 +252,8 @@ TEST_F(SparsifyMaps, UseOfflineIsTheWholeModeWithHalfByTrackLength) {
                                              "--keep-fraction", "0.1"});
   ASSERT_EQ(replay.status, 0) << replay.err;
   EXPECT_NE(last_line(replay.out).find("\"mode\":\"replay\""), std::string::npos);
+  EXPECT_NE(last_line(replay.out).find("\"budget\":\"fraction\",\"budget_value\":0.1}"), std::string::npos)
+      << last_line(replay.out);
   const maps_test::Result no_count = sparsify({"--colmap", fixture("sparse"), "--use", "offline"});
   EXPECT_EQ(no_count.status, 2);
   EXPECT_NE(no_count.err.find("--use offline sets it to 0.5"), std::string::npos) << no_count.err;
@@ -267,7 +270,7 @@ TEST_F(SparsifyMaps, AWholeTrackShareKeepsTheLongestTracks) {
                                         "--track-share", "1", "--min-obs-per-image", "0", "--out", out});
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_EQ(json_number(last_line(r.out), "points_kept"), 1420);
-  EXPECT_NE(last_line(r.out).find("\"track_share\":1}"), std::string::npos);
+  EXPECT_NE(last_line(r.out).find("\"track_share\":1,"), std::string::npos);
   io::ColmapModel original, kept;
   io::ColmapFormat format;
   std::string error;

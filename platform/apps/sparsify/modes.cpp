@@ -1,6 +1,7 @@
 #include "modes.hpp"
 
 #include <algorithm>
+#include <charconv>
 #include <deque>
 #include <numeric>
 #include <unordered_map>
@@ -10,6 +11,14 @@
 #include "keepless/platform/memory_estimate.hpp"
 
 namespace keepless::sparsify {
+
+std::string budget_value(const core::KeepBudget& budget) {
+  char text[32];
+  const auto end = budget.kind == core::BudgetKind::kFraction
+                       ? std::to_chars(text, text + sizeof text, budget.fraction).ptr
+                       : std::to_chars(text, text + sizeof text, budget.count).ptr;
+  return std::string(text, end);
+}
 
 namespace {
 

@@ -11,6 +11,7 @@
 // Then, optionally, a floor: every image keeps at least F observations.
 
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "keepless/core/config.hpp"
@@ -22,6 +23,10 @@ namespace keepless::sparsify {
 
 enum class Mode { kReplay, kWhole };
 const char* to_string(Mode mode);
+
+// A keep budget's value for the JSON summaries: K or B, or F (shortest
+// exact); "0" without a budget.
+std::string budget_value(const core::KeepBudget& budget);
 
 struct ModeResult {
   // One per distinct point of the keyframes, ascending id: the final verdict
