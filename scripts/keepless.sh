@@ -20,7 +20,7 @@ DEMO_PACKAGES=(
 # Java for the LCM types' Java check, Doxygen and Python for the docs check.
 TEST_PACKAGES=(
   "${DEMO_PACKAGES[@]}"
-  libeigen3-dev liblcm-java
+  libeigen3-dev liblcm-java default-jdk-headless  # lcm.jar and javac: the Java message classes' check
   libopencv-core-dev libopencv-features2d-dev libopencv-imgproc-dev libopencv-imgcodecs-dev
   libopencv-dev  # the only package with OpenCV's CMake config (keepless::opencv, keepless_eval)
   libgtest-dev libgmock-dev libbenchmark-dev liblemon-dev libceres-dev

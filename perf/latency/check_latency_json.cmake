@@ -1,6 +1,8 @@
 # Runs keepless_latency on the small workload and checks its last stdout line
 # (a JSON object): every documented key is present, identical_decisions is
-# true and allocations_after_warmup is 0. Timings are not asserted.
+# true and allocations_after_warmup is 0, the run was pinned to CPUs 0 and 1
+# (the perf rule: two cores) and LEMON, the reference, was timed. Timings are
+# not asserted.
 #
 # With -DKEEP=F it also runs --keep-fraction F, alone and with each --use (see below).
 #
@@ -13,7 +15,7 @@ cmake_minimum_required(VERSION 3.20)  # quoted if() arguments are strings (CMP00
 
 function(run_latency last_var)
   execute_process(
-    COMMAND ${BIN} --workload small --keyframes 40 --compare 3 --reps 1 --budget-ms 0 ${ARGN}
+    COMMAND ${BIN} --workload small --keyframes 40 --compare 3 --reps 1 --budget-ms 0 --cpus 0,1 ${ARGN}
     OUTPUT_VARIABLE out ERROR_VARIABLE err RESULT_VARIABLE rc)
   if(NOT rc EQUAL 0)
     message(FATAL_ERROR "keepless_latency ${ARGN} exited with ${rc}\n${out}\n${err}")
@@ -48,6 +50,11 @@ function(run_latency last_var)
   endif()
   if(NOT decisions EQUAL 40 OR NOT workload STREQUAL "small" OR NOT exhausted EQUAL 0)
     message(FATAL_ERROR "unexpected run: ${last}")
+  endif()
+  string(JSON cpus GET "${last}" cpus)
+  string(JSON lemon GET "${last}" lemon_ns_median_ms)
+  if(NOT cpus STREQUAL "0,1" OR NOT lemon GREATER 0)
+    message(FATAL_ERROR "expected a run pinned to CPUs 0,1 with LEMON timed: ${last}")
   endif()
   set(${last_var} "${last}" PARENT_SCOPE)
 endfunction()

@@ -35,6 +35,7 @@
 #include <algorithm>
 #include <array>
 #include <cerrno>
+#include <charconv>
 #include <cinttypes>
 #include <cmath>
 #include <cstdio>
@@ -46,6 +47,7 @@
 #include <random>
 #include <sstream>
 #include <string>
+#include <system_error>
 #include <vector>
 
 #include "cli/cli.hpp"
@@ -224,11 +226,18 @@ std::string join(const std::vector<double>& v) {
   return out;
 }
 
+// Comma-separated integers, each whole (a stray character, e.g. "30x", makes
+// the list empty: the caller reports the bad value).
 std::vector<std::int64_t> parse_list(const char* s) {
   std::vector<std::int64_t> v;
   std::stringstream in(s);
   std::string item;
-  while (std::getline(in, item, ',')) v.push_back(std::atoll(item.c_str()));
+  while (std::getline(in, item, ',')) {
+    std::int64_t n = 0;
+    const auto [end, ec] = std::from_chars(item.data(), item.data() + item.size(), n);
+    if (ec != std::errc() || end != item.data() + item.size() || item.empty()) return {};
+    v.push_back(n);
+  }
   return v;
 }
 
@@ -418,6 +427,7 @@ int main(int argc, char** argv) {
     else if (f == "--colmap") opt.colmap = value;
     else if (f == "--M") {
       opt.Ms = parse_list(value);
+      if (opt.Ms.empty()) opt.Ms.push_back(0);  // refused below
       for (const std::int64_t m : opt.Ms) {
         if (m < 1) std::exit(cli::usage_error(kTool, std::string("bad value for --M: '") + value + "' (integers >= 1)"));
       }
@@ -510,15 +520,22 @@ int main(int argc, char** argv) {
   // A row of the summary; the *_sd_m are 0 but for the rows over seeds.
   const auto add_json = [&](const std::string& method, std::int64_t M, std::uint64_t points, double min_obs,
                             double ba_s, Stat dev_max, Stat dev_rms, Stat ate_m, int converged, int failed) {
+    // A number, or null where it is not finite (a failed BA's figures): valid JSON either way.
+    const auto num = [](double v, const char* format) {
+      char text[48] = "null";
+      if (std::isfinite(v)) std::snprintf(text, sizeof text, format, v);
+      return std::string(text);
+    };
     char line[768];
     std::snprintf(line, sizeof line,
                   "%s{\"method\":\"%s\",\"M\":%" PRId64 ",\"points\":%" PRIu64
-                  ",\"min_obs\":%.1f,\"ba_s\":%.3f,\"dev_max_m\":%.5f,\"dev_rms_m\":%.5f,\"ate_m\":%.5f,"
-                  "\"ate_sd_m\":%.5f,\"dev_max_sd_m\":%.5f,\"dev_rms_sd_m\":%.5f,\"converged\":%d,\"failed\":%d,"
+                  ",\"min_obs\":%s,\"ba_s\":%s,\"dev_max_m\":%s,\"dev_rms_m\":%s,\"ate_m\":%s,"
+                  "\"ate_sd_m\":%s,\"dev_max_sd_m\":%s,\"dev_rms_sd_m\":%s,\"converged\":%d,\"failed\":%d,"
                   "\"keep_fraction\":%s}",
-                  json.back() == '[' ? "" : ",", method.c_str(), M, points, min_obs, ba_s, dev_max.mean, dev_rms.mean,
-                  ate_m.mean, ate_m.sd, dev_max.sd, dev_rms.sd, converged, failed,
-                  std::isfinite(fraction) ? std::to_string(fraction).c_str() : "null");
+                  json.back() == '[' ? "" : ",", method.c_str(), M, points, num(min_obs, "%.1f").c_str(),
+                  num(ba_s, "%.3f").c_str(), num(dev_max.mean, "%.5f").c_str(), num(dev_rms.mean, "%.5f").c_str(),
+                  num(ate_m.mean, "%.5f").c_str(), num(ate_m.sd, "%.5f").c_str(), num(dev_max.sd, "%.5f").c_str(),
+                  num(dev_rms.sd, "%.5f").c_str(), converged, failed, num(fraction, "%f").c_str());
     json += line;
     not_converged += failed;
   };

@@ -150,4 +150,23 @@ TEST_P(ToolCli, UnknownOptionIsNamedOnStderrWithExit2) {
 INSTANTIATE_TEST_SUITE_P(Tools, ToolCli, ::testing::ValuesIn(tools()),
                          [](const ::testing::TestParamInfo<Tool>& info) { return info.param.name; });
 
+// A malformed number is refused whole, never read as its prefix ("30x" as 30),
+// by each tool that takes --M.
+TEST(ToolNumbers, AMalformedNumberIsRefusedWithExit2) {
+  std::string dir = ::testing::TempDir() + "keepless_tools_numbers_XXXXXX";
+  ASSERT_NE(::mkdtemp(dir.data()), nullptr);
+  int checked = 0;
+  for (const Tool& tool : tools()) {
+    if (tool.name != "keepless_maps_bench" && tool.name != "keepless_sparsify" && tool.name != "keepless_node") {
+      continue;
+    }
+    const auto r = keepless::test::run_child(tool.path, {"--M", "30x"}, dir + "/out.txt", dir + "/err.txt");
+    EXPECT_EQ(r.status, 2) << tool.name;
+    EXPECT_NE(r.err.find("30x"), std::string::npos) << tool.name << ": " << r.err;
+    ++checked;
+  }
+  fs::remove_all(dir);
+  EXPECT_EQ(checked, 3);
+}
+
 }  // namespace

@@ -42,6 +42,7 @@ for variant in paper authors information floor; do
   fractions=$(awk -F, 'NR > 1 && $2 == "fr1_xyz" { print $9 }' "$out/$variant/runs.csv" | sort -u | tr '\n' ' ')
   [ "$fractions" = "0.400 " ] || fail "$variant: fr1_xyz at F = '$fractions', want 0.400 only"
 done
+[ -f "$out/track/runs.csv" ] || fail "track: no runs.csv"
 if grep -q ",fr1_xyz," "$out/track/runs.csv"; then fail "track: ran the synthetic back end"; fi
 # The paper variant runs every baseline; the others here run keepless only.
 for method in random "longest track" "ANMS (SSC)"; do

@@ -128,6 +128,7 @@ TEST(EvalLocalBa, TheSecondStageReportsTheChiSquareOutlier) {
     }
   in.observations[2 * 40 + 5].v += 25;  // one wrong match in the free keyframe
   const ke::BaResult r = ke::solve_local_ba(cam, in, 5, 10);
+  ASSERT_EQ(r.outlier.size(), in.observations.size());
   for (std::size_t i = 0; i < r.outlier.size(); ++i) EXPECT_EQ(r.outlier[i], i == 2 * 40 + 5) << i;
   EXPECT_LT((ke::from_block(blocks[2].data()).t - truth[2].t).norm(), 1e-4);
 }

@@ -1,5 +1,6 @@
 # The .lcm files also generate Java (for LCM's Java tools, lcm-spy), and the
-# Java compiles against lcm.jar when both javac and liblcm-java are present.
+# Java must compile against lcm.jar (javac: default-jdk-headless; lcm.jar:
+# liblcm-java; a missing one fails the check).
 #   cmake -DLCM_GEN=... -DJAVAC=... -DLCM_JAR=... -DOUT=... -DSOURCES="a.lcm;b.lcm" -P lcm_java_check.cmake
 file(REMOVE_RECURSE ${OUT})
 file(MAKE_DIRECTORY ${OUT})
@@ -21,5 +22,6 @@ if(JAVAC AND EXISTS "${LCM_JAR}")
   endif()
   message(STATUS "compiled ${n} Java message classes against ${LCM_JAR}")
 else()
-  message(STATUS "generated ${n} Java files; javac or lcm.jar (liblcm-java) missing, not compiled")
+  message(FATAL_ERROR "generated ${n} Java files but cannot compile them: javac '${JAVAC}' (default-jdk-headless) "
+                      "or lcm.jar '${LCM_JAR}' (liblcm-java) is missing")
 endif()

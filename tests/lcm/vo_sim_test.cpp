@@ -16,7 +16,7 @@ using namespace keepless::vo_sim;
 
 namespace {
 
-const std::string kData = "/work/shared/data/";
+const std::string kData = KEEPLESS_VO_SIM_DATA;
 
 bool exists(const std::string& path) { return std::ifstream(path).good(); }
 
@@ -29,7 +29,7 @@ std::vector<Pose> load(const std::string& path, TrajectoryFormat f) {
 
 TEST(VoSimTrajectory, KittiPosesAreCameraPosesInAZUpFrame) {
   const std::string path = kData + "kitti_odom_eval/gt_poses/06.txt";
-  if (!exists(path)) GTEST_SKIP() << path << " not present";
+  if (!exists(path)) GTEST_SKIP() << "no data: " << path << " is missing";
   const std::vector<Pose> poses = load(path, TrajectoryFormat::kKitti);
   ASSERT_EQ(poses.size(), 1101u);
   EXPECT_NEAR(norm(poses[0].centre), 0.0, 1e-9);
@@ -43,7 +43,7 @@ TEST(VoSimTrajectory, KittiPosesAreCameraPosesInAZUpFrame) {
 
 TEST(VoSimTrajectory, TumGroundTruth) {
   const std::string path = kData + "evo/freiburg1_xyz-groundtruth.txt";
-  if (!exists(path)) GTEST_SKIP() << path << " not present";
+  if (!exists(path)) GTEST_SKIP() << "no data: " << path << " is missing";
   const std::vector<Pose> poses = load(path, TrajectoryFormat::kTum);
   ASSERT_EQ(poses.size(), 3000u);
   for (const Pose& p : {poses.front(), poses.back()}) {
@@ -59,7 +59,7 @@ TEST(VoSimTrajectory, TumGroundTruth) {
 TEST(VoSimTrajectory, EurocBodyAndLeftCameraFilesAgree) {
   const std::string raw = kData + "evo/V102_groundtruth.csv";
   const std::string cam = kData + "orbslam3_euroc_left_cam_gt/V102_GT.txt";
-  if (!exists(raw) || !exists(cam)) GTEST_SKIP() << "EuRoC files not present";
+  if (!exists(raw) || !exists(cam)) GTEST_SKIP() << "no data: " << raw << " or " << cam << " is missing";
   const std::vector<Pose> body = load(raw, TrajectoryFormat::kEuroc);
   const std::vector<Pose> left = load(cam, TrajectoryFormat::kEurocCam);
   ASSERT_EQ(body.size(), 16702u);
@@ -158,6 +158,7 @@ TEST(VoSimScene, AboutAThousandKeypointsInViewAndCullsStick) {
   for (const SimObservation& o : obs) {
     if (o.mapped) culled.push_back(w.points()[o.point].landmark);
   }
+  ASSERT_FALSE(culled.empty()) << "keyframe 9 maps no point";
   for (std::int64_t id : culled) EXPECT_TRUE(w.cull(id, 9));
   EXPECT_FALSE(w.cull(culled.front(), 9)) << "a map point is culled once";
   w.observe(path[10], 10, obs);

@@ -1,6 +1,5 @@
 #include "compare.hpp"
 
-#ifdef KEEPLESS_HAVE_LEMON
 // LEMON's SmartDigraph pushes default-constructed PODs with uninitialised
 // fields; GCC 12 reports that where it is inlined (here), not in the header.
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
@@ -8,7 +7,6 @@
 #include <lemon/network_simplex.h>
 #include <lemon/preflow.h>
 #include <lemon/smart_graph.h>
-#endif
 
 #include <limits>
 
@@ -64,8 +62,6 @@ std::uint64_t time_ours_zero_flow(const ArcList& net, const solver::Clock& clock
   return t1 - t0;
 }
 
-#ifdef KEEPLESS_HAVE_LEMON
-
 namespace {
 
 using Graph = lemon::SmartDigraph;
@@ -113,7 +109,6 @@ std::uint64_t time_lemon(const ArcList& net, const solver::Clock& clock, solver:
 
 }  // namespace
 
-bool have_lemon() { return true; }
 
 std::uint64_t time_lemon_network_simplex(const ArcList& net, const solver::Clock& clock,
                                          solver::Flow* value, solver::Cost* cost) {
@@ -155,21 +150,5 @@ bool lemon_canonical_flows(const ArcList& net, solver::Flow max_flow,
   return true;
 }
 
-#else
-
-bool have_lemon() { return false; }
-std::uint64_t time_lemon_network_simplex(const ArcList&, const solver::Clock&, solver::Flow* value,
-                                         solver::Cost* cost) {
-  *value = *cost = -1;
-  return 0;
-}
-std::uint64_t time_lemon_cost_scaling(const ArcList&, const solver::Clock&, solver::Flow* value,
-                                      solver::Cost* cost) {
-  *value = *cost = -1;
-  return 0;
-}
-bool lemon_canonical_flows(const ArcList&, solver::Flow, std::vector<solver::Flow>*) { return false; }
-
-#endif
 
 }  // namespace keepless::perf

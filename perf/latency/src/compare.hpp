@@ -42,7 +42,6 @@ std::uint64_t time_ours(const ArcList& net, const solver::Clock& clock, solver::
 std::uint64_t time_ours_zero_flow(const ArcList& net, const solver::Clock& clock,
                                   solver::MinCostFlow& mcf, solver::Flow* value, solver::Cost* cost);
 
-bool have_lemon();
 std::uint64_t time_lemon_network_simplex(const ArcList& net, const solver::Clock& clock,
                                          solver::Flow* value, solver::Cost* cost);
 std::uint64_t time_lemon_cost_scaling(const ArcList& net, const solver::Clock& clock,
@@ -51,8 +50,7 @@ std::uint64_t time_lemon_cost_scaling(const ArcList& net, const solver::Clock& c
 // LEMON's network simplex with each point -> pair arc's cost raised to
 // cost * W + (point rank), W above any sum of ranks: the optimum becomes
 // unique and is the canonical one (ties to the smaller point id). Writes the
-// source-arc flows, ascending point id. False when W would overflow or
-// LEMON is absent.
+// source-arc flows, ascending point id. False when W would overflow.
 bool lemon_canonical_flows(const ArcList& net, solver::Flow max_flow,
                            std::vector<solver::Flow>* source_flows);
 

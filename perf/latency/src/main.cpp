@@ -347,28 +347,26 @@ void compare_window(const core::Sparsifier& scratch, const core::Capacities& cap
   if (v2 != value || c2 != expected) ++r->cost_mismatches;
   r->ours.push_back(best);
   r->ours_zero_flow.push_back(best_zero);
-  if (have_lemon()) {
-    for (std::uint32_t k = 0; k < std::max(o.reps, 1u); ++k) {
-      best_ns = std::min(best_ns, time_lemon_network_simplex(net, clock, &v2, &c2));
-    }
-    if (v2 != value || c2 != expected) ++r->cost_mismatches;
-    r->lemon_ns.push_back(best_ns);
-    r->lemon_cs.push_back(time_lemon_cost_scaling(net, clock, &v2, &c2));
-    if (v2 != value || c2 != expected) ++r->cost_mismatches;
-    std::vector<solver::Flow> flows;
-    if (lemon_canonical_flows(net, value, &flows)) {
-      ++r->lemon_checked;
-      std::uint32_t e = 0;
-      for (std::uint32_t i = 0; i < scratch.decision_count(); ++i) {
-        const core::PointDecision& d = scratch.decisions()[i];
-        if (d.verdict == core::Verdict::kSkip) continue;
-        const core::Verdict lemon = core::decide(flows[e], d.capacity, scratch.params().theta);
-        if (flows[e] != d.flow || lemon != d.verdict) {
-          ++r->lemon_decision_mismatches;
-          break;
-        }
-        ++e;
+  for (std::uint32_t k = 0; k < std::max(o.reps, 1u); ++k) {
+    best_ns = std::min(best_ns, time_lemon_network_simplex(net, clock, &v2, &c2));
+  }
+  if (v2 != value || c2 != expected) ++r->cost_mismatches;
+  r->lemon_ns.push_back(best_ns);
+  r->lemon_cs.push_back(time_lemon_cost_scaling(net, clock, &v2, &c2));
+  if (v2 != value || c2 != expected) ++r->cost_mismatches;
+  std::vector<solver::Flow> flows;
+  if (lemon_canonical_flows(net, value, &flows)) {
+    ++r->lemon_checked;
+    std::uint32_t e = 0;
+    for (std::uint32_t i = 0; i < scratch.decision_count(); ++i) {
+      const core::PointDecision& d = scratch.decisions()[i];
+      if (d.verdict == core::Verdict::kSkip) continue;
+      const core::Verdict lemon = core::decide(flows[e], d.capacity, scratch.params().theta);
+      if (flows[e] != d.flow || lemon != d.verdict) {
+        ++r->lemon_decision_mismatches;
+        break;
       }
+      ++e;
     }
   }
   core::ClosedForm closed(caps);
