@@ -362,8 +362,10 @@ TEST_F(ColmapBinaryErrors, BrokenIdsAndReferencesAreRefusedWhereTheyAre) {
       {2, "track_image", 77, "unknown image 77"},
   };
   for (const Case& c : cases) {
+    int spoilt_fields = 0;  // a renamed field kind would otherwise check nothing
     for (const Field& f : enc[c.file].fields) {
       if (f.kind != c.kind) continue;
+      ++spoilt_fields;
       io::ColmapFiles spoilt = files;
       std::memcpy(&part(spoilt, c.file)[f.offset], &c.value, f.size);
       const std::string error = error_of(spoilt, io::ColmapFormat::kBinary);
@@ -372,6 +374,7 @@ TEST_F(ColmapBinaryErrors, BrokenIdsAndReferencesAreRefusedWhereTheyAre) {
       EXPECT_EQ(error.rfind(want, 0), 0u) << c.kind << " at " << f.offset << ": " << error;
       EXPECT_NE(error.find(c.reason), std::string::npos) << error;
     }
+    EXPECT_GT(spoilt_fields, 0) << c.kind;
   }
   // An image naming a camera that does not exist: at the image's record.
   io::ColmapFiles spoilt = files;
@@ -384,6 +387,7 @@ TEST_F(ColmapBinaryErrors, BrokenIdsAndReferencesAreRefusedWhereTheyAre) {
       break;
     }
   }
+  ASSERT_TRUE(camera != nullptr && first != nullptr);
   const std::uint32_t unknown = 500;
   std::memcpy(&spoilt.images[camera->offset], &unknown, 4);
   EXPECT_EQ(error_of(spoilt, io::ColmapFormat::kBinary),
