@@ -430,9 +430,8 @@ int decide_window_unguarded(const Options& opt, const core::WindowFile& file, co
       opt.params.box_height, parse_ms, build_ms, solve_ms, memory, core::to_string(opt.params.scope),
       opt.params.coverage_floor, core::to_string(opt.params.cost_model), sum.out_of_scope,
       sum.floor_keyframes, sum.floor_promoted, sum.floor_short,
-      core::to_string(opt.params.budget.kind), keepless::sparsify::budget_value(opt.params.budget).c_str(), sum.budget_m,
-      sum.budget_observations,
-      opt.params.maturity_keyframes, sum.guarded, sum.track_fallback, opt.params.budget.track_share_from,
+      core::to_string(opt.params.budget.kind), keepless::sparsify::budget_value(opt.params.budget).c_str(),
+      sum.budget_m, sum.budget_observations, opt.params.maturity_keyframes, sum.guarded, sum.track_fallback, opt.params.budget.track_share_from,
       opt.params.budget.track_share);
   return std::fflush(stdout) == 0 ? 0 : kExitInternal;
 }

@@ -109,7 +109,6 @@ std::uint64_t time_lemon(const ArcList& net, const solver::Clock& clock, solver:
 
 }  // namespace
 
-
 std::uint64_t time_lemon_network_simplex(const ArcList& net, const solver::Clock& clock,
                                          solver::Flow* value, solver::Cost* cost) {
   return time_lemon<lemon::NetworkSimplex<Graph, std::int64_t, std::int64_t>>(net, clock, value, cost);
@@ -149,6 +148,5 @@ bool lemon_canonical_flows(const ArcList& net, solver::Flow max_flow,
   }
   return true;
 }
-
 
 }  // namespace keepless::perf

@@ -516,7 +516,8 @@ int run_model(const ModelOptions& opt) {
       opt.params.coverage_floor, core::to_string(opt.params.cost_model), t.out_of_scope, t.floor_keyframes,
       t.floor_promoted, t.floor_short, input_bytes, output_bytes, m.compacted,
       opt.params.maturity_keyframes, t.guarded, t.track_fallback, opt.params.budget.track_share_from,
-      opt.params.budget.track_share, core::to_string(opt.params.budget.kind), budget_value(opt.params.budget).c_str());
+      opt.params.budget.track_share, core::to_string(opt.params.budget.kind),
+      budget_value(opt.params.budget).c_str());
   return std::fflush(stdout) == 0 ? 0 : kExitInternal;
 }
 
