@@ -235,7 +235,7 @@ std::vector<std::int64_t> parse_list(const char* s) {
   while (std::getline(in, item, ',')) {
     std::int64_t n = 0;
     const auto [end, ec] = std::from_chars(item.data(), item.data() + item.size(), n);
-    if (ec != std::errc() || end != item.data() + item.size() || item.empty()) return {};
+    if (ec != std::errc() || end != item.data() + item.size()) return {};  // "" is invalid_argument too
     v.push_back(n);
   }
   return v;
@@ -427,9 +427,8 @@ int main(int argc, char** argv) {
     else if (f == "--colmap") opt.colmap = value;
     else if (f == "--M") {
       opt.Ms = parse_list(value);
-      if (opt.Ms.empty()) opt.Ms.push_back(0);  // refused below
-      for (const std::int64_t m : opt.Ms) {
-        if (m < 1) std::exit(cli::usage_error(kTool, std::string("bad value for --M: '") + value + "' (integers >= 1)"));
+      if (opt.Ms.empty() || std::any_of(opt.Ms.begin(), opt.Ms.end(), [](std::int64_t m) { return m < 1; })) {
+        std::exit(cli::usage_error(kTool, std::string("bad value for --M: '") + value + "' (integers >= 1)"));
       }
     } else if (f == "--keep-fraction" || f == "--track-share") {
       std::vector<double>& list = f == "--keep-fraction" ? opt.fractions : opt.track_shares;
