@@ -55,6 +55,7 @@
 #include "keepless/io/colmap_model.hpp"
 #include "keepless/io/keyframes.hpp"
 #include "keepless/io/trajectory_alignment.hpp"
+#include "keepless/platform/cpu_pinning.hpp"
 #include "keepless/platform/monotonic_clock.hpp"
 #include "sparsify/exact_count.hpp"
 #include "sparsify/modes.hpp"
@@ -65,6 +66,7 @@ namespace {
 namespace io = keepless::io;
 namespace core = keepless::core;
 namespace sp = keepless::sparsify;
+namespace platform = keepless::platform;
 
 struct Options {
   std::string data = "../shared/data";
@@ -82,6 +84,7 @@ struct Options {
   std::uint32_t exact_floor = sp::kDefaultFloor;   // observations per image the exact rows keep at least
   int tie_seeds = 0;                               // relabellings for the *_exact_ties rows
   std::vector<double> track_shares;                // --track-share: keepless_exact_share<S> rows
+  std::string cpus;                                // --cpus: pin this process and its colmap children
 };
 
 struct Ba {
@@ -135,9 +138,9 @@ Ba bundle_adjust(const Options& opt, const std::string& in, const std::string& o
                           " --BundleAdjustment.refine_extra_params 0 --BundleAdjustment.max_num_iterations " +
                           std::to_string(opt.ba_iterations) + " > " + quote(log) + " 2>&1";
   Ba ba;
-  const std::uint64_t t0 = keepless::platform::monotonic_ns();
+  const std::uint64_t t0 = platform::monotonic_ns();
   const int rc = std::system(cmd.c_str());
-  ba.seconds = static_cast<double>(keepless::platform::monotonic_ns() - t0) / 1e9;
+  ba.seconds = static_cast<double>(platform::monotonic_ns() - t0) / 1e9;
   std::string text, error;
   io::read_file(log, &text, &error);
   ba.converged = rc == 0 && text.find("Termination : Convergence") != std::string::npos;
@@ -383,6 +386,8 @@ int main(int argc, char** argv) {
       {"--data", "DIR", "the data folder holding colmap_kitti06_first51 and\n"
                         "kitti06_first51_niconielsen (default ../shared/data)"},
       {"--colmap", "BIN", "the colmap executable (default colmap, on PATH)"},
+      {"--cpus", "LIST", "pin to these CPUs, e.g. 0,1 or 2-3, colmap's runs too (the JSON's \"cpus\"\n"
+                         "says what was granted)"},
       {"--M", "LIST", "comma-separated pair capacities (default 30,100,200)"},
       {"--keep-fraction", "LIST", "comma-separated keep budgets F in [0, 1] instead of --M (keepless\n"
                                   "keeps F of the points its replay evaluates, every baseline as many)"},
@@ -425,6 +430,7 @@ int main(int argc, char** argv) {
     else if (f == "--model") opt.model = value;
     else if (f == "--poses") opt.poses = value;
     else if (f == "--colmap") opt.colmap = value;
+    else if (f == "--cpus") opt.cpus = value;
     else if (f == "--M") {
       opt.Ms = parse_list(value);
       if (opt.Ms.empty() || std::any_of(opt.Ms.begin(), opt.Ms.end(), [](std::int64_t m) { return m < 1; })) {
@@ -481,7 +487,13 @@ int main(int argc, char** argv) {
     b.sim = similarity_to_truth(b.original, b.gt);
   }
 
-  std::printf("work dir %s\n", opt.work.c_str());
+  std::string cpus = platform::current_cpus();
+  if (!opt.cpus.empty()) {  // colmap's runs inherit the affinity
+    const platform::PinResult pin = platform::pin_to_cpus(opt.cpus);
+    cpus = pin.granted;
+    if (!pin.ok) std::printf("cpus: pinning to %s refused: %s\n", opt.cpus.c_str(), pin.error.c_str());
+  }
+  std::printf("work dir %s; cpus %s\n", opt.work.c_str(), cpus.c_str());
   const Ba full = bundle_adjust(opt, model, opt.work + "/full_ba");
   b.full = full.model;
   const io::AlignedDeviation moved = deviation(b.full, b.sim, b.original);
@@ -643,7 +655,7 @@ int main(int argc, char** argv) {
           ",\"not_converged\":" + std::to_string(not_converged) +
           ",\"floor\":" + std::to_string(sp::kDefaultFloor) + ",\"exact_floor\":" + std::to_string(opt.exact_floor) +
           ",\"cost\":\"" + core::to_string(opt.cost) + "\",\"theta\":" + std::to_string(opt.theta) +
-          ",\"ba_iterations\":" + std::to_string(opt.ba_iterations) + ",\"model\":\"" + json_escaped(model) + "\"}";
+          ",\"ba_iterations\":" + std::to_string(opt.ba_iterations) + ",\"model\":\"" + json_escaped(model) + "\",\"cpus\":\"" + cpus + "\"}";
   std::printf("%s\n", json.c_str());
   return 0;
 }

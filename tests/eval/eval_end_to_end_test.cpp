@@ -163,7 +163,7 @@ TEST(KeeplessEval, QuickRunReportsTheContractForEveryInput) {
   SKIP_WITHOUT(data("SOURCES.md"));
   const std::string out = (std::filesystem::temp_directory_path() / "keepless_eval_test_quick").string();
   std::filesystem::remove_all(out);
-  const RunOutput r = run("--quick --data-root " + std::string(KEEPLESS_EVAL_DATA) + " --out " + out);
+  const RunOutput r = run("--quick --cpus 0,1 --data-root " + std::string(KEEPLESS_EVAL_DATA) + " --out " + out);
   ASSERT_EQ(r.status, 0);
   Json j;
   ASSERT_TRUE(Parser(r.last_line).parse(&j)) << r.last_line;
@@ -243,6 +243,8 @@ TEST(KeeplessEval, QuickRunReportsTheContractForEveryInput) {
   for (const char* h : {"Accuracy at equal kept fraction", "Baselines keeping the same count", "Per trajectory group",
                         "Cost ablation", "Which claims held"})
     EXPECT_NE(t.find(h), std::string::npos) << h;
+  // The settings say where it ran: the CPUs granted, or why pinning was refused.
+  EXPECT_TRUE(t.find("; cpus 0,1") != std::string::npos || t.find("(pinning to 0,1 refused: ") != std::string::npos);
   // --report regenerates the same contract from runs.csv, without running.
   const RunOutput again = run("--report " + out);
   ASSERT_EQ(again.status, 0);

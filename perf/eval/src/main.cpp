@@ -22,6 +22,7 @@
 #include "cli/cli.hpp"
 #include "keepless/core/config.hpp"
 #include "keepless/core/use.hpp"
+#include "keepless/platform/cpu_pinning.hpp"
 #include "keepless/platform/node_config.hpp"
 #include "kitti_images.hpp"
 #include "prng.hpp"
@@ -63,6 +64,7 @@ const std::vector<cli::Flag> kFlags = {
                                                "(default: the paper's published original ATE: tum=0.0183,\n"
                                                "euroc_mh=0.0658,euroc_v=0.0658,kitti=0.537)"},
     {"--out", "DIR", "write tables.md, runs.csv and SVG plots there"},
+    {"--cpus", "LIST", "pin to these CPUs, e.g. 0,1 or 2-3 (the settings say what was granted)"},
     {"--report", "DIR", "regenerate the tables and the JSON line from DIR's runs.csv (an earlier\n"
                         "--out; repeat to merge runs), without running anything"},
     {"--max-keyframes", "N", "keyframes per synthetic run (default 50, --quick 40)"},
@@ -163,6 +165,7 @@ struct Args {
   std::uint64_t first_seed = 1;
   std::map<std::string, double> error_floor{{"tum", 0.0183}, {"euroc_mh", 0.0658}, {"euroc_v", 0.0658}, {"kitti", 0.537}};
   std::string out;
+  std::string cpus;  // --cpus
   std::vector<std::string> report;
   int max_keyframes = -1, keypoints = -1, window = -1, ba_iterations = -1, image_frames = -1;
   bool window_sizes = false;
@@ -284,6 +287,7 @@ Args parse(int argc, char** argv) {
           a.error_floor[t.substr(0, eq)] = parse_double("--error-floor", t.substr(eq + 1), 0, 1e3);
         }
     } else if (f == "--out") a.out = val();
+    else if (f == "--cpus") a.cpus = val();
     else if (f == "--report") a.report.push_back(val());
     else if (f == "--max-keyframes") a.max_keyframes = static_cast<int>(parse_int(f, val(), 0, 1000000));
     else if (f == "--keypoints") a.keypoints = static_cast<int>(parse_int(f, val(), 10, 100000));
@@ -589,6 +593,10 @@ int main(int argc, char** argv) {
   }
   if (a.policy.cost_model == keepless::core::CostModel::kTrack) {
     summary.settings += ", track terms " + std::to_string(a.policy.track_terms);
+  }
+  if (!a.cpus.empty()) {  // the CPU times are per thread; pinning keeps other work off their cores
+    const keepless::platform::PinResult pin = keepless::platform::pin_to_cpus(a.cpus);
+    summary.settings += "; cpus " + pin.granted + (pin.ok ? "" : " (pinning to " + a.cpus + " refused: " + pin.error + ")");
   }
 
   std::vector<std::pair<std::string, ke::WindowSizes>> sizes;  // --window-sizes
