@@ -10,7 +10,8 @@
 // files are read (a FIFO or a device is refused, never waited on).
 // Users' scripts read the output, so its shape is a contract:
 //   --decisions OUT: "<point_id> <keep|cull|skip> <flow> <capacity>" a line, by
-//   point id, written to OUT.tmp and renamed (never a partial OUT);
+//   point id, written to a temporary name and renamed (never a partial OUT;
+//   an OUT that is the input is refused before anything is read);
 //   stdout: the last line is one JSON object (the summary; parse_ms reads and
 //   checks the file, build_ms sizes the Window and Sparsifier and ingests the
 //   keyframes, solve_ms is Sparsifier::run: network build, solve, decisions);
@@ -38,6 +39,7 @@
 #include "keepless/core/use.hpp"
 #include "keepless/core/window.hpp"
 #include "keepless/core/window_file.hpp"
+#include "keepless/io/atomic_file.hpp"
 #include "keepless/platform/memory_estimate.hpp"
 #include "keepless/platform/monotonic_clock.hpp"
 #include "sparsify/model_run.hpp"
@@ -288,7 +290,8 @@ int parse_args(int argc, char** argv, Options* opt, bool* help, bool* version) {
     opt->model.mode_given = true;
   }
   if (opt->window.empty() == opt->model.path.empty()) {
-    return usage_error("one of --window, --colmap, --bal is required");
+    return usage_error(opt->window.empty() ? "one of --window, --colmap, --bal is required"
+                                           : "give one of --window, --colmap, --bal, not two");
   }
   if (opt->model.path.empty()) {
     opt->model.input = keepless::sparsify::Input::kWindow;
@@ -304,35 +307,11 @@ double ms_since(std::uint64_t start_ns) {
   return static_cast<double>(keepless::platform::monotonic_ns() - start_ns) / 1e6;
 }
 
-// Writes OUT.tmp, then renames it over OUT; on any failure removes the tmp.
-bool write_decisions(const std::string& path, const core::Sparsifier& sparsifier,
-                     std::string* error) {
-  const std::string tmp = path + ".tmp";
-  std::FILE* f = std::fopen(tmp.c_str(), "wb");
-  if (f == nullptr) {
-    *error = path + ":0: cannot write decisions: " + std::strerror(errno);
-    return false;
-  }
+// Written whole to a temporary name, then renamed over OUT (never a partial OUT).
+bool write_decisions(const std::string& path, const core::Sparsifier& sparsifier, std::string* error) {
   const core::PointDecision* d = sparsifier.decisions();
-  bool ok = true;
-  for (std::uint32_t i = 0; ok && i < sparsifier.decision_count(); ++i) {
-    ok = std::fprintf(f, "%" PRIu64 " %s %" PRId64 " %" PRId64 "\n", d[i].point,
-                      core::to_string(d[i].verdict), d[i].flow, d[i].capacity) > 0;
-  }
-  int err = errno;
-  if (std::fclose(f) != 0 && ok) {
-    ok = false;
-    err = errno;
-  }
-  if (ok && std::rename(tmp.c_str(), path.c_str()) != 0) {
-    ok = false;
-    err = errno;
-  }
-  if (!ok) {
-    std::remove(tmp.c_str());
-    *error = path + ":0: cannot write decisions: " + std::strerror(err != 0 ? err : EIO);
-  }
-  return ok;
+  return keepless::io::write_file_atomically(path, keepless::sparsify::format_decisions(d, sparsifier.decision_count()),
+                                             error);
 }
 
 int decide_window(const Options& opt, const core::WindowFile& file, const core::Capacities& caps, double need,
@@ -344,6 +323,13 @@ int run(const Options& opt) {
   const std::uint64_t t_parse = keepless::platform::monotonic_ns();
   core::WindowFile file;
   std::string error;
+  std::vector<keepless::sparsify::NamedPath> in(1), out(1);
+  in[0] = {"--window", opt.window};
+  out[0] = {"--decisions", opt.decisions};
+  if (!opt.decisions.empty() && !keepless::sparsify::outputs_are_safe(in, out, &error)) {
+    std::fprintf(stderr, "%s\n", error.c_str());
+    return kExitInput;
+  }
   core::WindowFileLimits limits = opt.limits;
   limits.max_bytes = opt.max_memory_mb << 20;
   const keepless::platform::MemoryModel model =

@@ -4,11 +4,15 @@
 // format, bad models: exit 2, one FILE:OFFSET line, nothing written).
 
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 
 #include <algorithm>
 #include <deque>
+#include <map>
 #include <set>
+#include <string>
 #include <unordered_set>
+#include <vector>
 
 #include "keepless/core/sparsifier.hpp"
 #include "keepless/core/window.hpp"
@@ -451,6 +455,100 @@ TEST_F(SparsifyMaps, OutThatIsHoldsOrIsInsideTheInputIsRefused) {
   const maps_test::Result r = sparsify({"--bal", path("p.txt"), "--out", path("./p.txt")});
   EXPECT_EQ(r.status, 2);
   EXPECT_EQ(maps_test::read_all(path("p.txt")), maps_test::read_all(bal));
+}
+
+// No output may be an input or another output (the same path resolved, or a
+// hard link): refused before anything is read, every input left as it was.
+TEST_F(SparsifyMaps, AnOutputThatIsAnInputOrAnotherOutputIsRefused) {
+  KEEPLESS_MAPS_NEED(maps_test::bal_problem());
+  fs::create_directories(path("m"));
+  for (const char* f : {"cameras.bin", "images.bin", "points3D.bin"}) fs::copy_file(fixture("sparse/") + f, path("m/") + f);
+  const std::string bal = std::string(KEEPLESS_MAPS_DATA) + "/bal_zenslam/problem-49-7776-pre.txt";
+  fs::copy_file(bal, path("p.bal"));
+  fs::create_hard_link(path("p.bal"), path("hard.bal"));
+  maps_test::write_all(path("w.txt"), "kf 1 0 0 0\nkf 2 1 0 0\nobs 1 7 10 10\nobs 2 7 12 10\n");
+  maps_test::write_all(path("s.txt"), "1 1 0 0 0 1 0 0 0 1 0 0 0\n");
+  const std::map<std::string, std::string> before = {
+      {"m/points3D.bin", maps_test::read_all(path("m/points3D.bin"))},
+      {"p.bal", maps_test::read_all(path("p.bal"))},
+      {"w.txt", maps_test::read_all(path("w.txt"))},
+      {"s.txt", maps_test::read_all(path("s.txt"))}};
+  struct Case {
+    std::vector<std::string> args;
+    std::string err;
+  };
+  const std::vector<Case> cases = {
+      {{"--colmap", path("m"), "--decisions", path("m/points3D.bin")},
+       path("m/points3D.bin") + ": --decisions is the input --colmap " + path("m/points3D.bin") + "; write it elsewhere\n"},
+      {{"--bal", path("p.bal"), "--out", path("o.bal"), "--decisions", path("p.bal")},
+       path("p.bal") + ": --decisions is the input --bal " + path("p.bal") + "; write it elsewhere\n"},
+      {{"--bal", path("p.bal"), "--out", path("hard.bal")},
+       path("hard.bal") + ": --out is the input --bal " + path("p.bal") + "; write it elsewhere\n"},
+      {{"--bal", path("p.bal"), "--out", path("o.bal"), "--decisions", path("./o.bal")},
+       path("o.bal") + ": --out and --decisions name the same file\n"},
+      {{"--window", path("w.txt"), "--sim3", path("s.txt"), "--out", path("s.txt")},
+       path("s.txt") + ": --out is the input --sim3 " + path("s.txt") + "; write it elsewhere\n"},
+      {{"--window", path("w.txt"), "--decisions", path("w.txt")},
+       path("w.txt") + ": --decisions is the input --window " + path("w.txt") + "; write it elsewhere\n"},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.args.back());
+    const maps_test::Result r = sparsify(c.args);
+    EXPECT_EQ(r.status, 2);
+    EXPECT_EQ(r.err, c.err);
+    EXPECT_EQ(r.out, "");
+  }
+  for (const auto& [name, contents] : before) EXPECT_EQ(maps_test::read_all(path(name)), contents) << name;
+  EXPECT_FALSE(fs::exists(path("o.bal")));
+}
+
+// Outputs' folders are checked before anything is written: a missing --out
+// folder leaves no --decisions file behind. A trailing '/' names the folder,
+// and a model is written into an existing folder through a staging folder
+// inside it (so a mount point works) that does not stay.
+TEST_F(SparsifyMaps, OutputFoldersAreCheckedFirstAndAnExistingFolderIsWrittenInPlace) {
+  KEEPLESS_MAPS_NEED(maps_test::bal_problem());
+  const std::string bal = std::string(KEEPLESS_MAPS_DATA) + "/bal_zenslam/problem-49-7776-pre.txt";
+  maps_test::Result r = sparsify({"--bal", bal, "--M", "30", "--decisions", path("d.txt"), "--out", path("nodir/o.bal")});
+  EXPECT_EQ(r.status, 2);
+  EXPECT_EQ(r.err, path("nodir/o.bal") + ":0: cannot write: its folder " + path("nodir") +
+                       " does not exist (create it first)\n");
+  EXPECT_FALSE(fs::exists(path("d.txt")));
+
+  r = sparsify({"--colmap", fixture("sparse"), "--M", "30", "--out", path("new/")});
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_TRUE(fs::exists(path("new/points3D.bin")));
+  fs::create_directories(path("existing"));
+  r = sparsify({"--colmap", fixture("sparse"), "--M", "30", "--out", path("existing")});
+  ASSERT_EQ(r.status, 0) << r.err;
+  std::vector<std::string> names;
+  for (const auto& e : fs::directory_iterator(path("existing"))) names.push_back(e.path().filename().string());
+  std::sort(names.begin(), names.end());
+  EXPECT_EQ(names, (std::vector<std::string>{"cameras.bin", "images.bin", "points3D.bin"}));
+  EXPECT_EQ(maps_test::read_all(path("existing/points3D.bin")), maps_test::read_all(path("new/points3D.bin")));
+  maps_test::write_all(path("file"), "x");
+  r = sparsify({"--colmap", fixture("sparse"), "--M", "30", "--out", path("file")});
+  EXPECT_EQ(r.status, 2);
+  EXPECT_EQ(r.err, path("file") + ":0: cannot write model: it is a file, not a folder\n");
+}
+
+// Model inputs are read only from regular files: a FIFO or a device is
+// refused at once, never waited on or read without end.
+TEST_F(SparsifyMaps, NonRegularModelFilesAreRefusedWithoutBlocking) {
+  ASSERT_EQ(::mkfifo(path("fifo.bal").c_str(), 0600), 0);
+  maps_test::Result r = sparsify({"--bal", path("fifo.bal")});
+  EXPECT_EQ(r.status, 2);
+  EXPECT_EQ(r.err, path("fifo.bal") + ":0: not a regular file (refused: it may never end)\n");
+  fs::create_symlink("/dev/zero", path("zero.bal"));
+  r = sparsify({"--bal", path("zero.bal")});
+  EXPECT_EQ(r.status, 2);
+  EXPECT_EQ(r.err, path("zero.bal") + ":0: not a regular file (refused: it may never end)\n");
+  fs::create_directories(path("m"));
+  for (const char* f : {"cameras.bin", "images.bin"}) fs::copy_file(fixture("sparse/") + f, path("m/") + f);
+  ASSERT_EQ(::mkfifo(path("m/points3D.bin").c_str(), 0600), 0);
+  r = sparsify({"--colmap", path("m")});
+  EXPECT_EQ(r.status, 2);
+  EXPECT_EQ(r.err, path("m/points3D.bin") + ":0: not a regular file (refused: it may never end)\n");
 }
 
 // --max-memory-mb is estimated before allocating, on every input path:

@@ -121,17 +121,6 @@ bool check_limits(const ModelOptions& opt, const Loaded& m, std::string* error) 
            over(n.max_observations, opt.limits.max_observations, "observations", "--max-observations"));
 }
 
-std::string format_decisions(const std::vector<core::PointDecision>& decisions) {
-  std::string s;
-  char line[96];
-  for (const core::PointDecision& d : decisions) {
-    const int n = std::snprintf(line, sizeof line, "%" PRIu64 " %s %" PRId64 " %" PRId64 "\n", d.point,
-                                core::to_string(d.verdict), d.flow, d.capacity);
-    s.append(line, static_cast<std::size_t>(n));
-  }
-  return s;
-}
-
 bool is_culled(const std::vector<core::PointDecision>& decisions, core::PointId p) {
   const std::int64_t s = find_decision(decisions, p);
   return s >= 0 && decisions[s].verdict == core::Verdict::kCull;
@@ -229,6 +218,49 @@ bool out_is_safe(const ModelOptions& opt, std::string* error) {
   *error = opt.out + ": --out " + how + " the input " + opt.path + "; write the sparsified map elsewhere";
   return false;
 }
+
+// The same file: one resolved path, or one inode (a hard link).
+bool same_file(const std::string& a, const std::string& b) {
+  std::error_code ec;
+  const fs::path ra = fs::weakly_canonical(a, ec);
+  if (ec) return false;
+  const fs::path rb = fs::weakly_canonical(b, ec);
+  if (ec) return false;
+  return ra == rb || fs::equivalent(ra, rb, ec);
+}
+
+}  // namespace
+
+std::string format_decisions(const core::PointDecision* decisions, std::size_t n) {
+  std::string s;
+  char line[96];
+  for (std::size_t i = 0; i < n; ++i) {
+    const core::PointDecision& d = decisions[i];
+    const int len = std::snprintf(line, sizeof line, "%" PRIu64 " %s %" PRId64 " %" PRId64 "\n", d.point,
+                                core::to_string(d.verdict), d.flow, d.capacity);
+    s.append(line, static_cast<std::size_t>(len));
+  }
+  return s;
+}
+
+bool outputs_are_safe(const std::vector<NamedPath>& inputs, const std::vector<NamedPath>& outputs, std::string* error) {
+  for (std::size_t o = 0; o < outputs.size(); ++o) {
+    for (const NamedPath& in : inputs) {
+      if (!same_file(outputs[o].path, in.path)) continue;
+      *error = outputs[o].path + ": " + outputs[o].flag + " is the input " + in.flag + " " + in.path +
+               "; write it elsewhere";
+      return false;
+    }
+    for (std::size_t p = 0; p < o; ++p) {
+      if (!same_file(outputs[o].path, outputs[p].path)) continue;
+      *error = outputs[o].path + ": " + outputs[o].flag + " and " + outputs[p].flag + " name the same file";
+      return false;
+    }
+  }
+  return true;
+}
+
+namespace {
 
 // When memory runs out below --max-memory-mb: the address space
 // (ulimit -v) or the machine has less than the estimate.
@@ -328,6 +360,49 @@ bool parse_map_flag(const std::string& flag, const char* value, ModelOptions* op
   return true;
 }
 
+namespace {
+
+// What a run reads and writes, by flag, for outputs_are_safe. A COLMAP
+// --out folder's files are its outputs (--out itself is out_is_safe's).
+std::vector<NamedPath> model_inputs(const ModelOptions& opt) {
+  const char* flag = opt.input == Input::kColmap ? "--colmap" : opt.input == Input::kBal ? "--bal" : "--window";
+  std::vector<NamedPath> in;
+  for (const std::string& f : model_files(opt.input, opt.path)) in.push_back({flag, f});
+  if (!opt.sim3.empty()) in.push_back({"--sim3", opt.sim3});
+  return in;
+}
+
+// --out's and --decisions' folders, checked before deciding: one missing
+// would fail the second write after the first was done.
+bool folders_exist(const ModelOptions& opt, std::string* error) {
+  for (const std::string* p : {&opt.out, &opt.decisions}) {
+    if (p->empty()) continue;
+    fs::path path(*p);
+    if (!path.has_filename()) path = path.parent_path();  // "out/" is the folder out
+    const fs::path parent = path.parent_path();
+    std::error_code ec;
+    if (parent.empty() || fs::is_directory(parent, ec)) continue;
+    *error = *p + ":0: cannot write: its folder " + parent.string() + " does not exist (create it first)";
+    return false;
+  }
+  return true;
+}
+
+std::vector<NamedPath> model_outputs(const ModelOptions& opt) {
+  std::vector<NamedPath> out;
+  if (!opt.decisions.empty()) out.push_back({"--decisions", opt.decisions});
+  if (opt.out.empty()) return out;
+  if (opt.input != Input::kColmap) {
+    out.push_back({"--out", opt.out});
+  } else {
+    for (const char* ext : {"bin", "txt"})
+      for (const std::string& f : model_files(Input::kColmap, opt.out, ext)) out.push_back({"--out", f});
+  }
+  return out;
+}
+
+}  // namespace
+
 int run_model(const ModelOptions& opt) {
   if (opt.order_given && opt.order == io::KeyframeOrder::kName && opt.input != Input::kColmap) {
     std::fprintf(stderr, "keepless_sparsify: --order name needs --colmap (BAL cameras and window keyframes have no names)\n");
@@ -342,7 +417,8 @@ int run_model(const ModelOptions& opt) {
     return kExitInput;
   }
   std::string error;
-  if (!opt.out.empty() && !out_is_safe(opt, &error)) {
+  if ((!opt.out.empty() && !out_is_safe(opt, &error)) ||
+      !outputs_are_safe(model_inputs(opt), model_outputs(opt), &error) || !folders_exist(opt, &error)) {
     std::fprintf(stderr, "%s\n", error.c_str());
     return kExitInput;
   }
@@ -440,7 +516,7 @@ int run_model(const ModelOptions& opt) {
     kept += d.verdict == core::Verdict::kKeep;
   }
 
-  if (!opt.decisions.empty() && !io::write_file_atomically(opt.decisions, format_decisions(r.decisions), &error)) {
+  if (!opt.decisions.empty() && !io::write_file_atomically(opt.decisions, format_decisions(r.decisions.data(), r.decisions.size()), &error)) {
     std::fprintf(stderr, "%s\n", error.c_str());
     return kExitInput;
   }

@@ -3,10 +3,13 @@
 // file in; its decisions (replay or whole, see modes.hpp) and the floor;
 // the sparsified map out in the input's format.
 
+#include <cstddef>
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "keepless/core/config.hpp"
+#include "keepless/core/decision.hpp"
 #include "keepless/core/window_file.hpp"
 #include "keepless/io/keyframes.hpp"
 #include "modes.hpp"
@@ -59,6 +62,20 @@ constexpr std::int64_t kEvidenceM = 200;
 // bytes (the files, the parsed model and its keyframes), checked against
 // --max-memory-mb before reading.
 constexpr double kReadFactor = 4.0;
+
+// --decisions' contents: "<point_id> <keep|cull|skip> <flow> <capacity>" a line.
+std::string format_decisions(const core::PointDecision* decisions, std::size_t n);
+
+// A path a run reads or writes, and the flag that named it.
+struct NamedPath {
+  std::string flag;
+  std::string path;
+};
+
+// False with *error naming both when an output is one of the inputs (the
+// same path once resolved, or a hard link to it) or two outputs are one
+// file: checked before anything is read, so nothing is overwritten.
+bool outputs_are_safe(const std::vector<NamedPath>& inputs, const std::vector<NamedPath>& outputs, std::string* error);
 
 // Runs it all; prints a line per mode and the JSON summary (last line) on
 // stdout. Returns the exit status: 0, 2 (bad input or flags; one stderr line

@@ -219,7 +219,10 @@ bool read_colmap_model(const std::string& dir, ColmapModel* out, ColmapFormat* f
   return parse_colmap(dir, files, *format, out, error);
 }
 
-bool write_colmap_model(const std::string& dir, const ColmapModel& model, ColmapFormat format, std::string* error) {
+bool write_colmap_model(const std::string& dir_as_given, const ColmapModel& model, ColmapFormat format,
+                        std::string* error) {
+  std::string dir = dir_as_given;  // "out/" is the folder out
+  while (dir.size() > 1 && dir.back() == '/') dir.pop_back();
   // COLMAP's text reader ends a name at its first space: such a name only survives in binary.
   if (format == ColmapFormat::kText) {
     for (const ColmapImage& im : model.images) {
@@ -231,7 +234,16 @@ bool write_colmap_model(const std::string& dir, const ColmapModel& model, Colmap
     }
   }
   const ColmapFiles files = format_colmap(model, format);
-  const std::string tmp = dir + ".tmp-" + std::to_string(::getpid());
+  // Staged on DIR's own file system: beside a new DIR, inside an existing one
+  // (which may be a mount point), so the renames never cross devices.
+  struct stat st {};
+  const bool existing = ::stat(dir.c_str(), &st) == 0;
+  if (existing && !S_ISDIR(st.st_mode)) {
+    *error = dir + ":0: cannot write model: it is a file, not a folder";
+    return false;
+  }
+  const std::string tmp = existing ? dir + "/.keepless.tmp-" + std::to_string(::getpid())
+                                   : dir + ".tmp-" + std::to_string(::getpid());
   const detail::FileNames staged = detail::file_names(tmp, format);
   const detail::FileNames final_names = detail::file_names(dir, format);
   const auto io_error = [&](const std::string& path, int err) {
@@ -267,7 +279,7 @@ bool write_colmap_model(const std::string& dir, const ColmapModel& model, Colmap
     if (err != 0) return io_error(*path, err);
   }
   // A new directory: all three files at once. An existing one: file by file.
-  if (!exists(dir)) {
+  if (!existing) {
     if (std::rename(tmp.c_str(), dir.c_str()) != 0) return io_error(dir, errno);
     return true;
   }

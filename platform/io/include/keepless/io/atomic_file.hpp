@@ -6,7 +6,8 @@
 
 namespace keepless::io {
 
-// False with *error "PATH:0: reason" when the file cannot be read.
+// False with *error "PATH:0: reason" when the file cannot be read or is not
+// a regular file (a FIFO or a device is refused, never waited on).
 bool read_file(const std::string& path, std::string* out, std::string* error);
 
 // Writes `contents` to `path` (created or truncated); 0 or an errno value.

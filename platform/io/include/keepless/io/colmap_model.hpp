@@ -101,9 +101,11 @@ ColmapFiles format_colmap(const ColmapModel& model, ColmapFormat format);
 bool read_colmap_model(const std::string& dir, ColmapModel* out, ColmapFormat* format,
                        std::string* error);
 
-// Writes the three files into a temporary directory beside DIR, then renames
-// it to DIR (when absent) or the files into DIR: a failure leaves no partial
-// file in DIR.
+// Writes the three files into a temporary directory beside DIR (when absent),
+// then renames it to DIR, or inside DIR (when it exists, so that a mount point
+// works), then renames the files into DIR: a failure leaves no partial file in
+// DIR (the three renames into an existing DIR are one at a time, on one file
+// system). A trailing '/' names the same DIR.
 // Refused when DIR holds a file of the other format (it would shadow ours),
 // and in text when an image name holds a blank (COLMAP's text reader would
 // cut it there).
