@@ -405,11 +405,13 @@ Capacities compute_needs(const WindowFile& file) {
       ++observations;
     }
   }
+  // Saturated, not wrapped: a need beyond 32 bits is beyond every limit.
+  const auto u32 = [](std::uint64_t v) { return static_cast<std::uint32_t>(std::min<std::uint64_t>(v, UINT32_MAX)); };
   Capacities c{0, 0, 0, 0};
-  c.max_keyframes = static_cast<std::uint32_t>(file.keyframes.size());
-  c.max_points = static_cast<std::uint32_t>(views.size());
-  c.max_observations = static_cast<std::uint32_t>(observations);
-  c.max_pair_arcs = static_cast<std::uint32_t>(pair_arcs);
+  c.max_keyframes = u32(file.keyframes.size());
+  c.max_points = u32(views.size());
+  c.max_observations = u32(observations);
+  c.max_pair_arcs = u32(pair_arcs);
   return c;
 }
 

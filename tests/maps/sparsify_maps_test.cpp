@@ -7,6 +7,7 @@
 #include <sys/stat.h>
 
 #include <algorithm>
+#include <cmath>
 #include <deque>
 #include <map>
 #include <set>
@@ -549,6 +550,64 @@ TEST_F(SparsifyMaps, NonRegularModelFilesAreRefusedWithoutBlocking) {
   r = sparsify({"--colmap", path("m")});
   EXPECT_EQ(r.status, 2);
   EXPECT_EQ(r.err, path("m/points3D.bin") + ":0: not a regular file (refused: it may never end)\n");
+}
+
+// A camera whose centre or rotation is not finite is refused by its reader
+// with the place it is at; a --scale that carries a centre out of range, by
+// the run; a huge but finite quaternion is a rotation like any other.
+TEST_F(SparsifyMaps, CentresOutOfRangeAreRefusedWhereTheyAre) {
+  KEEPLESS_MAPS_NEED(maps_test::bal_problem());
+  io::ColmapModel m;
+  io::ColmapFormat format;
+  std::string error;
+  ASSERT_TRUE(io::read_colmap_model(fixture("sparse"), &m, &format, &error)) << error;
+  io::ColmapModel far = m;
+  const double a = 0.39;
+  const double q[4] = {std::cos(a), 0, 0, std::sin(a)};
+  std::copy(q, q + 4, far.images[0].qvec);
+  far.images[0].tvec[0] = far.images[0].tvec[1] = 1.5e308;  // finite, but R^T t is not
+  ASSERT_TRUE(io::write_colmap_model(path("far"), far, io::ColmapFormat::kBinary, &error)) << error;
+  maps_test::Result r = sparsify({"--colmap", path("far")});
+  EXPECT_EQ(r.status, 2);
+  EXPECT_EQ(r.err.rfind(path("far/images.bin") + ":", 0), 0u) << r.err;
+  EXPECT_NE(r.err.find("image " + std::to_string(far.images[0].id) + "'s camera centre is not finite"),
+            std::string::npos) << r.err;
+
+  r = sparsify({"--colmap", fixture("sparse"), "--scale", "1e308", "--mode", "whole"});
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find("centre is not finite in metres (--scale or --sim3 out of range)"), std::string::npos) << r.err;
+
+  io::BalProblem bal;
+  ASSERT_TRUE(io::read_bal(maps_test::bal_problem(), &bal, &error)) << error;
+  bal.camera_params[0] = 1e308;
+  bal.camera_text[0] = "1e308";
+  maps_test::write_all(path("spun.bal"), io::format_bal(bal));
+  r = sparsify({"--bal", path("spun.bal")});
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find("camera 0: its rotation or centre is not finite"), std::string::npos) << r.err;
+
+  io::ColmapModel huge = m;
+  for (io::ColmapImage& im : huge.images)
+    for (double& c : im.qvec) c *= 1e300;
+  const io::Keyframes a_kf = io::keyframes_from_colmap(m, io::KeyframeOrder::kName, io::Similarity{});
+  const io::Keyframes b_kf = io::keyframes_from_colmap(huge, io::KeyframeOrder::kName, io::Similarity{});
+  ASSERT_EQ(a_kf.file.keyframes.size(), b_kf.file.keyframes.size());
+  for (std::size_t k = 0; k < a_kf.file.keyframes.size(); ++k) {
+    for (int i = 0; i < 3; ++i) EXPECT_NEAR(a_kf.file.keyframes[k].centre[i], b_kf.file.keyframes[k].centre[i], 1e-9);
+    for (int i = 0; i < 4; ++i)
+      EXPECT_NEAR(a_kf.file.keyframes[k].orientation[i], b_kf.file.keyframes[k].orientation[i], 1e-12);
+  }
+}
+
+// --max-pair-arcs bounds the whole mode's one window of a model (replay's
+// windows of K images hold fewer): refused before deciding, with the count.
+TEST_F(SparsifyMaps, MaxPairArcsBoundsTheWholeModesWindow) {
+  maps_test::Result r = sparsify({"--colmap", fixture("sparse"), "--mode", "whole", "--max-pair-arcs", "1000"});
+  EXPECT_EQ(r.status, 2);
+  EXPECT_EQ(r.err.rfind(fixture("sparse") + ":0: ", 0), 0u) << r.err;
+  EXPECT_NE(r.err.find(" pair arcs in the whole mode's window exceed --max-pair-arcs 1000"), std::string::npos) << r.err;
+  r = sparsify({"--colmap", fixture("sparse"), "--mode", "whole", "--max-pair-arcs", "50000000"});
+  EXPECT_EQ(r.status, 0) << r.err;
 }
 
 // --max-memory-mb is estimated before allocating, on every input path:

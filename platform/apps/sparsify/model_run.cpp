@@ -1,6 +1,7 @@
 #include "model_run.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <charconv>
 #include <cinttypes>
 #include <cstdio>
@@ -108,8 +109,22 @@ bool load(const ModelOptions& opt, const core::WindowFileLimits& window_limits, 
   return false;
 }
 
-// The model's own limits: the window file's reader checks them itself.
-bool check_limits(const ModelOptions& opt, const Loaded& m, std::string* error) {
+// The readers refuse cameras whose centres are not finite; a --scale or
+// --sim3 can still carry one out of range.
+bool check_centres(const ModelOptions& opt, const Loaded& m, std::string* error) {
+  for (const core::Keyframe& kf : m.keyframes.file.keyframes) {
+    if (std::isfinite(kf.centre[0]) && std::isfinite(kf.centre[1]) && std::isfinite(kf.centre[2])) continue;
+    *error = opt.path + ":0: image " + std::to_string(kf.id) +
+             "'s centre is not finite in metres (--scale or --sim3 out of range)";
+    return false;
+  }
+  return true;
+}
+
+// The model's own limits: the window file's reader checks them itself. The
+// pair arcs bound the whole mode's one window (a replay window of K images
+// holds fewer).
+bool check_limits(const ModelOptions& opt, Mode mode, const Loaded& m, std::string* error) {
   const core::Capacities& n = m.keyframes.file.needs;
   const auto over = [&](std::uint64_t have, std::uint32_t limit, const char* what, const char* flag) {
     if (have <= limit) return false;
@@ -118,7 +133,9 @@ bool check_limits(const ModelOptions& opt, const Loaded& m, std::string* error) 
   };
   return !(over(m.keyframes.file.keyframes.size(), opt.limits.max_keyframes, "images", "--max-keyframes") ||
            over(m.model_points, opt.limits.max_points, "points", "--max-points") ||
-           over(n.max_observations, opt.limits.max_observations, "observations", "--max-observations"));
+           over(n.max_observations, opt.limits.max_observations, "observations", "--max-observations") ||
+           (mode == Mode::kWhole && opt.input != Input::kWindow &&
+            over(n.max_pair_arcs, opt.limits.max_pair_arcs, "pair arcs in the whole mode's window", "--max-pair-arcs")));
 }
 
 bool is_culled(const std::vector<core::PointDecision>& decisions, core::PointId p) {
@@ -447,7 +464,8 @@ int run_model(const ModelOptions& opt) {
   const std::uint64_t t_parse = platform::monotonic_ns();
   Loaded m;
   try {
-    if (!load(opt, window_limits, &m, &error) || !check_limits(opt, m, &error)) {
+    if (!load(opt, window_limits, &m, &error) || !check_limits(opt, mode, m, &error) ||
+        !check_centres(opt, m, &error)) {
       std::fprintf(stderr, "%s\n", error.c_str());
       return kExitInput;
     }

@@ -104,6 +104,17 @@ bool parse_bal(const std::string& name, const std::string& text, BalProblem* out
   for (std::size_t i = 0; i < out->camera_params.size(); ++i) {
     if (!number("camera parameter", &out->camera_params[i], &out->camera_text[i])) return false;
   }
+  // A rotation whose angle overflows, or a centre out of range, is no camera.
+  for (std::uint32_t i = 0; i < out->num_cameras; ++i) {
+    const double* r = &out->camera_params[9 * std::size_t{i}];
+    double c[3];
+    bal_camera_centre(*out, i, c);
+    if (!std::isfinite(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]) || !std::isfinite(c[0]) || !std::isfinite(c[1]) ||
+        !std::isfinite(c[2])) {
+      return fail(tokens[3 + 4 * std::size_t{nobs} + 9 * std::size_t{i}].line,
+                  "camera " + std::to_string(i) + ": its rotation or centre is not finite (out of range)");
+    }
+  }
   out->point_params.resize(3 * std::size_t{out->num_points});
   out->point_text.resize(out->point_params.size());
   for (std::size_t i = 0; i < out->point_params.size(); ++i) {

@@ -4,6 +4,7 @@
 #include <unistd.h>
 
 #include <cerrno>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <unordered_map>
@@ -11,6 +12,7 @@
 
 #include "colmap_parse.hpp"
 #include "keepless/io/atomic_file.hpp"
+#include "keepless/io/keyframes.hpp"
 
 namespace keepless::io {
 
@@ -70,6 +72,12 @@ bool check_model(const detail::FileNames& names, const detail::Positions& pos, c
     }
     if (im.qvec[0] == 0 && im.qvec[1] == 0 && im.qvec[2] == 0 && im.qvec[3] == 0) {
       return fail(names.images, pos.image[i], "image " + std::to_string(im.id) + " has a zero quaternion");
+    }
+    double centre[3];
+    colmap_camera_centre(im, centre);
+    if (!std::isfinite(centre[0]) || !std::isfinite(centre[1]) || !std::isfinite(centre[2])) {
+      return fail(names.images, pos.image[i],
+                  "image " + std::to_string(im.id) + "'s camera centre is not finite (its translation is out of range)");
     }
   }
   for (std::size_t i = 0; i < m.points.size(); ++i) {

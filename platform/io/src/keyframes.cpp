@@ -146,8 +146,7 @@ Keyframes keyframes_from_colmap(const ColmapModel& model, KeyframeOrder order, c
     colmap_camera_centre(image, c);
     to_metric(to_metric_frame, c, kf.centre);
     // Camera-to-model rotation, the conjugate of COLMAP's world-to-camera.
-    const double n = std::sqrt(image.qvec[0] * image.qvec[0] + image.qvec[1] * image.qvec[1] +
-                               image.qvec[2] * image.qvec[2] + image.qvec[3] * image.qvec[3]);
+    const double n = detail::quaternion_norm(image.qvec);
     kf.orientation[0] = image.qvec[0] / n;
     for (int k = 1; k < 4; ++k) kf.orientation[k] = -image.qvec[k] / n;
     const auto camera = cameras.find(image.camera_id);

@@ -22,9 +22,20 @@ inline void angle_axis_rotate(const double r[3], const double p[3], double out[3
   }
 }
 
+// |q|, scaled by its largest component first, so that neither a huge nor a
+// subnormal quaternion over- or underflows on the way (0 for a zero one).
+inline double quaternion_norm(const double q[4]) {
+  double m = 0;
+  for (int i = 0; i < 4; ++i) m = std::fmax(m, std::fabs(q[i]));
+  if (!(m > 0) || !std::isfinite(m)) return m;
+  double sum = 0;
+  for (int i = 0; i < 4; ++i) sum += (q[i] / m) * (q[i] / m);
+  return m * std::sqrt(sum);
+}
+
 // Row-major R(q) of a quaternion (w, x, y, z), normalised first.
 inline void quaternion_matrix(const double q_in[4], double m[9]) {
-  const double n = std::sqrt(q_in[0] * q_in[0] + q_in[1] * q_in[1] + q_in[2] * q_in[2] + q_in[3] * q_in[3]);
+  const double n = quaternion_norm(q_in);
   const double w = q_in[0] / n, x = q_in[1] / n, y = q_in[2] / n, z = q_in[3] / n;
   m[0] = 1 - 2 * (y * y + z * z);
   m[1] = 2 * (x * y - w * z);

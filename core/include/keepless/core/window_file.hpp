@@ -107,7 +107,8 @@ class WindowFileParser {
 bool parse_window_text(const std::string& name, const std::string& text, WindowFile* out,
                        std::string* error, const WindowFileLimits& limits = {});
 
-// The needs of `file` (does not validate it; ids are trusted).
+// The needs of `file` (does not validate it; ids are trusted), each saturated
+// at UINT32_MAX.
 Capacities compute_needs(const WindowFile& file);
 
 // `file` in the format above: each kf line followed by its observations;
