@@ -4,6 +4,8 @@
 #include <cmath>
 #include <vector>
 
+#include "id_table.hpp"
+
 namespace keepless::core {
 
 struct KeepThresholds::Impl {
@@ -308,15 +310,37 @@ std::size_t KeepThresholds::memory_bytes() const {
 }
 
 FractionBudget::FractionBudget(std::uint32_t max_points)
-    : held_(max_points), next_(max_points), known_(max_points) {}
+    : held_(max_points), next_(max_points), known_(max_points),
+      departed_(std::make_unique<IdTable>(std::max<std::uint32_t>(max_points, 1))),
+      ring_(std::max<std::uint32_t>(max_points, 1), 0) {}
+
+FractionBudget::~FractionBudget() = default;
+FractionBudget::FractionBudget(FractionBudget&&) noexcept = default;
+FractionBudget& FractionBudget::operator=(FractionBudget&&) noexcept = default;
 
 std::size_t FractionBudget::memory_bytes() const {
-  return sizeof(FractionBudget) + (held_.capacity() + next_.capacity()) * sizeof(Entry) + known_.capacity();
+  return sizeof(FractionBudget) + (held_.capacity() + next_.capacity()) * sizeof(Entry) + known_.capacity() +
+         sizeof(IdTable) + departed_->memory_bytes() + ring_.capacity() * sizeof(PointId);
 }
 
 void FractionBudget::clear() {
   count_ = 0;
   evaluated_ = granted_ = 0;
+  departed_->clear();
+  ring_next_ = 0;
+}
+
+// Remembers a point that left the window, in the ring slot of the oldest
+// departure, whose record goes (unless that point came back or left again
+// since, when its record names another slot).
+void FractionBudget::depart(PointId point, bool kept) {
+  const std::uint32_t slot = ring_next_;
+  ring_next_ = ring_next_ + 1 == ring_.size() ? 0 : ring_next_ + 1;
+  const std::uint32_t* old = departed_->find(ring_[slot]);
+  if (old != nullptr && (*old >> 1) == slot) departed_->erase(ring_[slot]);
+  ring_[slot] = point;
+  departed_->erase(point);
+  departed_->insert(point, slot << 1 | (kept ? 1u : 0u));  // never full: one record per ring slot
 }
 
 // One merge of the decisions with what is remembered (both by ascending id);
@@ -329,15 +353,21 @@ std::uint32_t FractionBudget::take(double fraction, const PointDecision* d, std:
   const Entry* held = held_.data();
   const std::uint32_t held_count = count_;
   std::uint8_t* known_at = known_.data();
+  const IdTable& departed = *departed_;
+  const bool any_departed = departed.size() > 0;
   for (std::uint32_t i = 0; i < n; ++i) {
     while (h < held_count && held[h].point < d[i].point) ++h;
-    const bool known = h < held_count && held[h].point == d[i].point;
-    const std::uint8_t k = known ? (held[h].kept ? kKnownKept : kKnown) : kFresh;
+    std::uint8_t k = kFresh;
+    if (h < held_count && held[h].point == d[i].point) {
+      k = held[h].kept ? kKnownKept : kKnown;
+    } else if (any_departed) {
+      if (const std::uint32_t* v = departed.find(d[i].point)) k = kReturned | ((*v & 1) ? kKnownKept : kKnown);
+    }
     known_at[i] = k;
     const bool candidate = d[i].verdict != Verdict::kSkip;
     candidates += candidate ? 1 : 0;
-    kept_before += candidate && k == kKnownKept ? 1 : 0;
-    fresh += candidate && !known ? 1 : 0;
+    kept_before += candidate && (k & kKnownKept) ? 1 : 0;
+    fresh += candidate && k == kFresh ? 1 : 0;
   }
   evaluated_ += fresh;
   const auto due = static_cast<std::uint64_t>(std::floor(fraction * static_cast<double>(evaluated_) + 0.5));
@@ -348,14 +378,20 @@ std::uint32_t FractionBudget::take(double fraction, const PointDecision* d, std:
 
 void FractionBudget::record(const PointDecision* d, std::uint32_t n) {
   n = std::min(n, static_cast<std::uint32_t>(known_.size()));
-  std::uint32_t m = 0;
+  std::uint32_t m = 0, h = 0;
   for (std::uint32_t i = 0; i < n; ++i) {
+    // Held points this decision no longer lists have left the window.
+    for (; h < count_ && held_[h].point < d[i].point; ++h) depart(held_[h].point, held_[h].kept);
+    if (h < count_ && held_[h].point == d[i].point) ++h;
+    const std::uint8_t k = known_[i];
+    if (k & kReturned) departed_->erase(d[i].point);  // in the window again
     if (d[i].verdict != Verdict::kSkip) {
       next_[m++] = Entry{d[i].point, d[i].verdict == Verdict::kKeep};
-    } else if (known_[i] != kFresh) {
-      next_[m++] = Entry{d[i].point, known_[i] == kKnownKept};
+    } else if (k != kFresh) {
+      next_[m++] = Entry{d[i].point, (k & kKnownKept) != 0};
     }
   }
+  for (; h < count_; ++h) depart(held_[h].point, held_[h].kept);
   held_.swap(next_);
   count_ = m;
 }

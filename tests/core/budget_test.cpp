@@ -458,6 +458,95 @@ TEST(KeepBudgets, FractionHoldsItsShareOverASequence) {
   EXPECT_GT(redecided, 1000u) << "points should be decided again in later windows";
 }
 
+// A camera sweeping back and forth over 20 places (a window of 4 keyframes,
+// each seeing its place's points and the next place's): points leave the
+// window and come back. A point the budget kept stays known when it returns,
+// so the map holds the share F of the distinct points evaluated on every
+// sweep, not F of it again on each revisit (which left 3 % of them after
+// three sweeps at F = 0.5).
+TEST(KeepBudgets, AFractionHoldsItsShareWhenPointsComeBack) {
+  const Capacities caps{4, 4000, 8000, 40000};
+  std::uint32_t returned = 0;
+  for (const double f : {0.2, 0.5, 0.7}) {
+    for (const SolveMode mode : {SolveMode::kFromScratch, SolveMode::kIncremental}) {
+      Params p;
+      p.budget = KeepBudget{BudgetKind::kFraction, 0, f};
+      Sparsifier s(caps, p, mode);
+      std::uint64_t rng = 7;
+      const auto pixel = [&rng](double step) {
+        rng = rng * 6364136223846793005ULL + 1442695040888963407ULL;
+        return step * static_cast<double>((rng >> 33) % 41);
+      };
+      struct Frame {
+        Keyframe kf;
+        std::vector<Observation> obs;
+      };
+      std::vector<Frame> window;
+      std::set<PointId> deleted, evaluated, in_window;
+      int place = 0, dir = 1;
+      for (int step = 0; step < 160 && !HasFailure(); ++step) {
+        if (window.size() == 4) window.erase(window.begin());
+        Frame k;
+        k.kf.id = static_cast<KeyframeId>(step + 1);
+        k.kf.centre[0] = place;
+        for (const int q : {place, place + 1}) {
+          for (int i = 0; i < 60; ++i) {
+            const PointId id = static_cast<PointId>(q * 100 + i);
+            if (deleted.count(id) == 0) k.obs.push_back({id, pixel(8.0), pixel(6.0)});
+          }
+        }
+        window.push_back(k);
+        place += dir;
+        if (place == 19 || place == 0) dir = -dir;
+        Window w(caps);
+        std::set<PointId> now;
+        for (const Frame& x : window) {
+          ASSERT_EQ(w.add_keyframe(x.kf, x.obs.data(), static_cast<std::uint32_t>(x.obs.size())), Status::kOk);
+          for (const Observation& o : x.obs) now.insert(o.point);
+        }
+        for (const PointId id : now) returned += evaluated.count(id) > 0 && in_window.count(id) == 0;
+        in_window = now;
+        ASSERT_EQ(mode == SolveMode::kIncremental ? s.update(w) : s.run(w), Status::kOk);
+        for (std::uint32_t i = 0; i < s.decision_count(); ++i) {
+          const PointDecision& d = s.decisions()[i];
+          if (d.verdict != Verdict::kSkip) evaluated.insert(d.point);
+          if (d.verdict == Verdict::kCull) deleted.insert(d.point);  // the VO deletes what is culled
+        }
+        for (Frame& x : window) {
+          x.obs.erase(std::remove_if(x.obs.begin(), x.obs.end(),
+                                     [&](const Observation& o) { return deleted.count(o.point) > 0; }),
+                      x.obs.end());
+        }
+        const auto due = static_cast<std::size_t>(std::floor(f * static_cast<double>(evaluated.size()) + 0.5));
+        ASSERT_EQ(evaluated.size() - deleted.size(), due) << "F " << f << " step " << step;
+      }
+    }
+  }
+  EXPECT_GT(returned, 1000u) << "points should come back to the window";
+}
+
+// What has left the window is remembered for the last max_points points to
+// leave: one that comes back after more left is new again (evaluated anew).
+TEST(KeepBudgets, AFractionForgetsWhatLeftLongestAgo) {
+  FractionBudget b(8);
+  const auto decide = [&b](std::vector<PointId> ids, double f) {
+    std::vector<PointDecision> d;
+    for (const PointId id : ids) d.push_back({id, Verdict::kKeep, 0, 0});
+    const std::uint32_t k = b.take(f, d.data(), static_cast<std::uint32_t>(d.size()));
+    b.record(d.data(), static_cast<std::uint32_t>(d.size()));
+    return k;
+  };
+  EXPECT_EQ(decide({1, 2}, 1.0), 2u);
+  EXPECT_EQ(b.evaluated(), 2u);
+  EXPECT_EQ(decide({10, 11, 12, 13, 14, 15, 16}, 1.0), 7u);  // 1 and 2 left: remembered
+  EXPECT_EQ(decide({1, 20}, 1.0), 2u);                       // 10..16 left; 1 came back, known
+  EXPECT_EQ(b.evaluated(), 10u);
+  // 2 left before 10..16 and 20's turn came: 8 departures since, so forgotten.
+  EXPECT_EQ(decide({30}, 1.0), 1u);
+  EXPECT_EQ(decide({2}, 1.0), 1u);
+  EXPECT_EQ(b.evaluated(), 12u);
+}
+
 // A cleared window starts a new map whose point ids may repeat the old
 // map's: after forget_history() a kept fraction decides as a new Sparsifier
 // would; without it, what the old map kept still counts.

@@ -97,7 +97,8 @@ enum TrackTerm : std::uint8_t {
 //     of the decision before), N the points evaluated for the first time so
 //     far (FractionBudget). A point stays in a sliding window for several
 //     decisions; so the budget's points stay F of what it evaluated instead
-//     of F^k after k decisions. A first decision keeps floor(F x candidates + 0.5);
+//     of F^k after k decisions, also when points leave the window and come
+//     back. A first decision keeps floor(F x candidates + 0.5);
 //   kObservations: the longest prefix of that order whose window
 //     observations (n per point) sum to at most `count`.
 // Candidates are the evaluated points within Params::scope. The coverage

@@ -66,11 +66,19 @@ class KeepThresholds {
 // N points first evaluated so far. The budget's points are then the share F
 // of every point it has evaluated (not culled by it since); the map holds F
 // of what it would without culling. A point is remembered, by id, while it
-// stays in the window: one that leaves and comes back counts as new.
+// stays in the window and, once it has left, among the last max_points
+// points to leave: one that comes back (a revisit, a covisibility window
+// that changed) is known, kept or not, and not evaluated again; one that
+// comes back after more than max_points others left counts as new.
 // Allocation-free after construction.
+class IdTable;
+
 class FractionBudget {
  public:
   explicit FractionBudget(std::uint32_t max_points);
+  ~FractionBudget();
+  FractionBudget(FractionBudget&&) noexcept;
+  FractionBudget& operator=(FractionBudget&&) noexcept;
 
   // K for a decision: `d` lists every window point (ascending ids, at most
   // max_points), its candidates with any verdict but kSkip. Counts the new
@@ -91,9 +99,16 @@ class FractionBudget {
     PointId point;
     bool kept;
   };
-  static constexpr std::uint8_t kFresh = 0, kKnown = 1, kKnownKept = 2;
+  static constexpr std::uint8_t kFresh = 0, kKnown = 1, kKnownKept = 2, kReturned = 4;
+  void depart(PointId point, bool kept);
+
   std::vector<Entry> held_, next_;    // [max_points] by ascending id
   std::vector<std::uint8_t> known_;   // [max_points] per decision of the last take()
+  // Points that left the window: id -> (ring slot << 1 | kept), and the ring
+  // of their ids in order of leaving (the oldest is overwritten first).
+  std::unique_ptr<IdTable> departed_;
+  std::vector<PointId> ring_;
+  std::uint32_t ring_next_ = 0;
   std::uint32_t count_ = 0;
   std::uint64_t evaluated_ = 0;
   std::uint64_t granted_ = 0;
