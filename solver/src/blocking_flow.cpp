@@ -152,10 +152,11 @@ Status MinCostFlow::Impl::run_phases(Mode m, Meter& meter) {
 void MinCostFlow::Impl::finish() {
   value = 0;
   cost_total = 0;
+  cost_overflow = false;
   for (ArcId a = 0; a < arcs; ++a) {
     const std::int32_t f = arc_pos[a] >= 0 ? arc[a].capacity - res[arc_pos[a]].cap : 0;
     arc_flow[a] = f;
-    cost_total += Cost{f} * arc[a].cost;
+    cost_overflow |= __builtin_add_overflow(cost_total, Cost{f} * arc[a].cost, &cost_total);  // each term < 2^61
     if (arc[a].tail == src_ext) value += f;
     if (arc[a].head == src_ext) value -= f;
   }
@@ -209,9 +210,9 @@ Status MinCostFlow::Impl::solve_scratch(NodeId s, NodeId t, const Budget& budget
   Meter meter(budget, stats);
   const Status status = run(Mode::kMaxFlow, meter);
   finish();
-  have_state = true;
-  optimal = status == Status::kOptimal;
-  return status;
+  have_state = !cost_overflow;
+  optimal = status == Status::kOptimal && !cost_overflow;
+  return cost_overflow ? Status::kInvalidInput : status;
 }
 
 }  // namespace keepless::solver

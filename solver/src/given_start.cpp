@@ -32,6 +32,7 @@ bool MinCostFlow::Impl::adopt(NodeId s, NodeId t, const Flow* flow, const Cost* 
   }
   Cost max_cost = 0;
   Cost total = 0;
+  bool wrapped = false;  // the total left int64: no certificate (the re-optimisation refuses it)
   const ArcId m = arcs;
   // No branches (`&`, `|`): an edited network scatters retired arcs over
   // the ids. A retired arc's flow must be 0, and is taken as 0.
@@ -47,7 +48,7 @@ bool MinCostFlow::Impl::adopt(NodeId s, NodeId t, const Flow* flow, const Cost* 
     excess[e.tail] -= fl;
     excess[e.head] += fl;
     max_cost = std::max<Cost>(max_cost, live ? e.cost : 0);
-    total += Cost{fl} * e.cost;
+    wrapped |= __builtin_add_overflow(total, Cost{fl} * e.cost, &total);
   }
   cost_total = total;
   // Conservation but at the terminals: an OR over the excesses with theirs
@@ -59,7 +60,7 @@ bool MinCostFlow::Impl::adopt(NodeId s, NodeId t, const Flow* flow, const Cost* 
   ex[s] = at_s;
   ex[t] = at_t;
   value = -at_s;
-  return ok && unbalanced == 0 && pot[t] - pot[s] > Cost{n - 1} * max_cost;
+  return ok && !wrapped && unbalanced == 0 && pot[t] - pot[s] > Cost{n - 1} * max_cost;
 }
 
 Status MinCostFlow::Impl::solve_from(NodeId s, NodeId t, const Flow* flow, const Cost* potential,
@@ -76,7 +77,7 @@ Status MinCostFlow::Impl::solve_from(NodeId s, NodeId t, const Flow* flow, const
   snk_ext = t;
   have_state = true;
   laid_out = false;
-  if (!certified) return solve_warm(s, t, budget);
+  if (!certified) return solve_warm(s, t, remaining(budget, static_cast<std::uint64_t>(arcs)));  // after the pass
   stats.work_units = static_cast<std::uint64_t>(arcs);
   stats.certified = true;
   imbalanced_count = 0;

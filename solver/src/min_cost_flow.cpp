@@ -110,17 +110,19 @@ Status MinCostFlow::renew_node(NodeId v) {
 Status MinCostFlow::set_tie_order(const ArcId* order, std::int32_t count) {
   Impl& m = *impl_;
   if (count < 0 || count > m.arcs || (count > 0 && order == nullptr)) return Status::kInvalidInput;
+  // Validated against the marks before anything is replaced: a refused
+  // order leaves the one in force (and the solver's state) as it was.
   for (std::int32_t k = 0; k < m.tie_count; ++k) m.in_tie_order[m.tie_order[k]] = 0;
-  m.tie_count = 0;
   for (std::int32_t k = 0; k < count; ++k) {
     const ArcId a = order[k];
     if (a < 0 || a >= m.arcs || m.in_tie_order[a] != 0) {
       for (std::int32_t j = 0; j < k; ++j) m.in_tie_order[order[j]] = 0;
+      for (std::int32_t j = 0; j < m.tie_count; ++j) m.in_tie_order[m.tie_order[j]] = 1;
       return Status::kInvalidInput;
     }
     m.in_tie_order[a] = 1;
-    m.tie_order[k] = a;
   }
+  std::copy(order, order + count, m.tie_order.begin());
   m.tie_count = count;
   m.laid_out = false;
   m.optimal = false;

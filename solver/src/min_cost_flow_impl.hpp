@@ -29,6 +29,14 @@ constexpr std::uint64_t kLabelLimit = std::uint64_t{1} << 62;
 constexpr std::uint64_t kScanStride = 1024;
 constexpr std::uint64_t kAugmentStride = 64;
 
+// What is left of `budget` once `used` work units are spent (a fallback
+// continues under the caller's budget, it does not start a new one).
+inline Budget remaining(const Budget& budget, std::uint64_t used) {
+  Budget b = budget;
+  b.work_units = used >= b.work_units ? 0 : b.work_units - used;
+  return b;
+}
+
 class Meter {
  public:
   Meter(const Budget& budget, const SolveStats& stats)
@@ -152,10 +160,12 @@ struct MinCostFlow::Impl {
 
   // State between calls.
   bool laid_out = false;     // the residual graph reflects the arcs
+  bool repair_pending = false;  // lay_out's imbalances not yet through local_repair (a resumed solve skips it)
   bool have_state = false;   // flows and potentials can seed solve_warm
   bool optimal = false;      // the last solve finished
   bool is_balanced = true;
   bool overflow = false;     // a label would have left 64 bits (never with checked input)
+  bool cost_overflow = false;  // finish(): the flow's total cost left int64 (refused: kInvalidInput)
   NodeId src = -1, snk = -1;          // internal, during a call
   NodeId src_ext = -1, snk_ext = -1;  // the user's, of the last solve
   Mode mode = Mode::kMaxFlow;

@@ -170,6 +170,7 @@ void MinCostFlow::Impl::lay_out(bool repair) {
     renewed[ext_of[v]] = 0;
     if (v != src && v != snk && excess[v] != 0) imbalanced[imbalanced_count++] = v;
   }
+  repair_pending = imbalanced_count > 0;
   laid_out = true;
 }
 

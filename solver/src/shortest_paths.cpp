@@ -239,9 +239,12 @@ MinCostFlow::Impl::Search MinCostFlow::Impl::shortest_paths_to_sink(Meter& meter
       const Residual& a = res[i];  // its partner a.head -> v is the arc searched
       if (a.rev_cap == 0 || level[a.head] >= 0) continue;
       relax(a.head, kv, pot[a.head] - a.cost - pv, v);
-      if (a.head == src && key[src] <= kv + (static_cast<std::uint64_t>(pot[src] - a.cost - pv) << shift) + 1) {
-        // Remember the arcs that offer the source its best label so far:
-        // at the end, those offering the final one are its admissible arcs.
+      if (a.head == src && rev[i] < first_rev[src] &&
+          key[src] <= kv + (static_cast<std::uint64_t>(pot[src] - a.cost - pv) << shift) + 1) {
+        // Remember the forward arcs that offer the source its best label so
+        // far: at the end, those offering the final one are its admissible
+        // arcs (cand_bits covers the forward block; the source's reverse
+        // records, arcs into it with flow, are scanned from its flow list).
         if (offer_count < static_cast<std::int32_t>(pending.size())) {
           pending[offer_count++] = Pending{static_cast<Cost>(kv + (static_cast<std::uint64_t>(pot[src] - a.cost - pv) << shift) + 1), rev[i]};
         } else {

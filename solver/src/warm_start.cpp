@@ -70,7 +70,10 @@ bool MinCostFlow::Impl::local_repair(Meter& meter) {
     for (std::int32_t k = 0; k < imbalanced_count; ++k) {
       const NodeId x = imbalanced[k];
       while (forward ? excess[x] > 0 : excess[x] < 0) {
-        if (!local_path(x, forward)) break;
+        if (!local_path(x, forward)) {
+          if (meter.exhausted(kAugmentStride)) return false;  // failed scans cost work too
+          break;
+        }
         const NodeId end = path_node[path_depth];
         std::int64_t f = forward ? excess[x] : -excess[x];
         if (end != src && end != snk) f = std::min(f, forward ? -excess[end] : excess[end]);
@@ -146,14 +149,20 @@ Status MinCostFlow::Impl::solve_warm(NodeId s, NodeId t, const Budget& budget) {
     lay_out(true);
   }
   Meter meter(budget, stats);
-  Status status = local_repair(meter) ? Status::kOptimal : Status::kBudgetExhausted;
+  // Once per layout: a resumed call goes on with the searches.
+  Status status = !repair_pending || local_repair(meter) ? Status::kOptimal : Status::kBudgetExhausted;
+  if (status == Status::kOptimal) repair_pending = false;
   if (status == Status::kOptimal) status = run(Mode::kExcess, meter);
   if (status == Status::kOptimal) status = run(Mode::kDeficit, meter);
   if (status == Status::kOptimal) status = run(Mode::kMaxFlow, meter);
   finish();
   if (overflow) {
     laid_out = false;
-    return solve_scratch(s, t, budget);
+    return solve_scratch(s, t, remaining(budget, stats.work_units));
+  }
+  if (cost_overflow) {
+    have_state = optimal = false;
+    return Status::kInvalidInput;
   }
   optimal = status == Status::kOptimal && is_balanced;
   return status;

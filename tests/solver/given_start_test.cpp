@@ -125,6 +125,30 @@ TEST(GivenStart, WrongStartsAreReoptimised) {
   });
 }
 
+// A start circulating flow through the source along many arcs into it: the
+// sink-side search reached the source over those arcs' reverse records and
+// marked positions past the source's forward block (a heap overflow; ASan
+// in the sanitizer suite). Such records are not the source's candidates.
+TEST(GivenStart, AFlowCirculatingThroughTheSourceIsCompleted) {
+  TestNetwork net;
+  net.label = "circulation through the source";
+  net.node_count = 4;  // s = 0, t = 1, a = 2, 3 unused
+  net.arcs.push_back({0, 2, 100, 0});
+  for (int k = 0; k < 100; ++k) net.arcs.push_back({2, 0, 1, 0});
+  net.arcs.push_back({2, 1, 1, 0});
+  net.arcs.push_back({2, 1, 1, 5});
+  MinCostFlow solver(Capacity{4, 103});
+  ASSERT_EQ(load(solver, net), Status::kOptimal);
+  std::vector<Flow> flow(net.arcs.size(), 0);
+  flow[0] = 2;  // s -> a -> s twice: zero cost, and no flow to the sink yet
+  flow[71] = flow[72] = 1;
+  std::vector<Cost> potential(4, 0);
+  ASSERT_EQ(solver.solve_from(0, 1, flow.data(), potential.data()), Status::kOptimal);
+  EXPECT_EQ(solver.flow_value(), 2);
+  EXPECT_EQ(solver.total_cost(), 5);
+  EXPECT_TRUE(is_fresh_optimum(solver, net));
+}
+
 class StoppedClock final : public Clock {
  public:
   std::uint64_t now_ns() const override { return 1000; }

@@ -160,7 +160,7 @@ TEST(MinCostFlowEdgeCase, LargeCapacitiesAndCostsAreExact) {
 TEST(MinCostFlowEdgeCase, ExtremeValuesAreRejectedOrExact) {
   MinCostFlow solver(kSmall);
   constexpr Flow kMax = std::numeric_limits<std::int64_t>::max();
-  for (const Flow capacity : {Flow{1} << 31, Flow{1} << 40, Flow{1} << 62, kMax}) {
+  for (const Flow capacity : {(Flow{1} << 31) - 1, Flow{1} << 31, Flow{1} << 40, Flow{1} << 62, kMax}) {
     for (const Cost cost : {Cost{1} << 30, Cost{1} << 31, Cost{1} << 40, kMax}) {
       SCOPED_TRACE(::testing::Message() << "capacity " << capacity << ", cost " << cost);
       ASSERT_EQ(solver.reset(3), Status::kOptimal);
@@ -182,6 +182,53 @@ TEST(MinCostFlowEdgeCase, ExtremeValuesAreRejectedOrExact) {
       }
       ASSERT_EQ(solved, Status::kOptimal);
       EXPECT_EQ(solver.flow_value(), capacity);
+      EXPECT_EQ(solver.total_cost(), total);
+    }
+  }
+}
+
+// A refused tie order (a repeat) leaves the order in force: the next solve
+// breaks the tie as before the refused call.
+TEST(MinCostFlowEdgeCase, ARefusedTieOrderLeavesTheOneInForce) {
+  MinCostFlow solver(kSmall);
+  // Two equal source arcs into node 2, one unit on to the sink: the tie order decides.
+  const TestNetwork net = make_network(3, 0, 1, {{0, 2, 1, 0}, {0, 2, 1, 0}, {2, 1, 1, 0}});
+  ASSERT_EQ(load(solver, net), Status::kOptimal);
+  const ArcId second_first[] = {1, 0};
+  ASSERT_EQ(solver.set_tie_order(second_first, 2), Status::kOptimal);
+  ASSERT_EQ(solver.solve(0, 1), Status::kOptimal);
+  ASSERT_EQ(solver.flow(1), 1);
+  const ArcId repeat[] = {1, 1};
+  EXPECT_EQ(solver.set_tie_order(repeat, 2), Status::kInvalidInput);
+  ASSERT_EQ(solver.solve(0, 1), Status::kOptimal);
+  EXPECT_EQ(solver.flow(1), 1);
+  EXPECT_EQ(solver.flow(0), 0);
+}
+
+// Every arc within the limits, but the optimum's total cost beyond int64:
+// refused (it wrapped to a negative "optimal" cost before), by a fresh, a
+// warm and a given-start solve alike; one arc fewer fits and is exact.
+TEST(MinCostFlowEdgeCase, ATotalCostBeyondInt64IsRefused) {
+  constexpr Flow kCap = (Flow{1} << 31) - 1;
+  constexpr Cost kCost = Cost{1} << 30;
+  for (const int parallel : {3, 5}) {
+    SCOPED_TRACE(::testing::Message() << parallel << " parallel arcs");
+    MinCostFlow solver(kSmall);
+    ASSERT_EQ(solver.reset(2), Status::kOptimal);
+    for (int k = 0; k < parallel; ++k) ASSERT_EQ(solver.add_arc(0, 1, kCap, kCost), Status::kOptimal);
+    Cost total = 0;
+    const bool overflows = __builtin_mul_overflow(kCap * kCost, Cost{parallel}, &total);
+    ASSERT_EQ(overflows, parallel == 5);
+    const Status expected = overflows ? Status::kInvalidInput : Status::kOptimal;
+    EXPECT_EQ(solver.solve(0, 1), expected);
+    if (!overflows) {
+      EXPECT_EQ(solver.total_cost(), total);
+    }
+    EXPECT_EQ(solver.solve_warm(0, 1), expected);
+    std::vector<Flow> flow(static_cast<std::size_t>(parallel), kCap);
+    const Cost potential[2] = {0, kCost + 1};
+    EXPECT_EQ(solver.solve_from(0, 1, flow.data(), potential), expected);
+    if (!overflows) {
       EXPECT_EQ(solver.total_cost(), total);
     }
   }

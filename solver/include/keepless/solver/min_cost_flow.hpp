@@ -12,8 +12,9 @@
 //
 // Generic: any directed network with integer capacities in [0, 2^31) and
 // costs in [0, 2^30], accepted when 4 (nodes + 2)^2 (max cost + 1) <= 2^62 (labels are
-// 64-bit). All storage is sized by the constructor; nothing allocates
-// afterwards. Deterministic: the result is a pure function of the calls made
+// 64-bit) and the minimum cost of the maximum flow fits int64 (a solve whose
+// total cost would not returns kInvalidInput). All storage is sized by the
+// constructor; nothing allocates afterwards. Deterministic: the result is a pure function of the calls made
 // (adjacency is visited in a fixed order; no hashing, no floats).
 // Tie-break: among equal-cost shortest paths, the blocking flow serves each
 // node's arcs in insertion order (or the order given to set_tie_order), so
@@ -108,6 +109,7 @@ class MinCostFlow {
   ~MinCostFlow();
   MinCostFlow(const MinCostFlow&) = delete;
   MinCostFlow& operator=(const MinCostFlow&) = delete;
+  // A moved-from solver may only be destroyed or assigned to.
   MinCostFlow(MinCostFlow&&) noexcept;
   MinCostFlow& operator=(MinCostFlow&&) noexcept;
 
@@ -129,7 +131,8 @@ class MinCostFlow {
   // tails, in this order, and every other arc after them in id order (by
   // default, id order alone). A network whose arc ids do not follow its
   // preferred order (e.g. recycled ids) states it here. Copied; takes effect
-  // at the next solve. kInvalidInput for an id out of range or a repeat.
+  // at the next solve. kInvalidInput for an id out of range or a repeat, the
+  // order in force left as it was.
   [[nodiscard]] Status set_tie_order(const ArcId* order, std::int32_t count);
 
   // Maximum flow from source to sink at minimum cost, from zero flow.
@@ -142,7 +145,10 @@ class MinCostFlow {
   // when there is no usable state. kBudgetExhausted may stop while excesses
   // from the repair are still being routed: then balanced() is false (the
   // flow respects capacities and the potential certificate but not
-  // conservation at some nodes); the next solve_warm() continues.
+  // conservation at some nodes); the next solve_warm() continues. A stop
+  // within a phase's search discards that search, so a resumed solve makes
+  // progress once its budget covers one search (up to the residual graph's
+  // record count in work units).
   [[nodiscard]] Status solve_warm(NodeId source, NodeId sink, const Budget& budget = {});
 
   // Starts from the caller's flow[arc] and potential[node] (arrays of
@@ -174,6 +180,9 @@ class MinCostFlow {
   [[nodiscard]] Status canonicalize(const ArcId* order, std::int32_t count,
                                     const Budget& budget = {});
 
+  // The accessors below take ids in range (0 .. arc_count() - 1, 0 ..
+  // node_count() - 1) unchecked, as a container's operator[] does: they sit
+  // in callers' per-arc loops. The calls above check what they are given.
   std::int32_t node_count() const;
   std::int32_t arc_count() const;
   NodeId tail(ArcId a) const;
