@@ -92,5 +92,55 @@ TEST(MinCostFlowNoAlloc, ResetAddArcSolveAllocateNothing) {
   EXPECT_EQ(rejected, expected);
 }
 
+// The incremental and given-start paths: edits, warm solves (budgeted and
+// resumed), tie orders, canonicalize and solve_from, on every network.
+TEST(MinCostFlowNoAlloc, EditsWarmGivenStartsAndCanonicalizeAllocateNothing) {
+  std::vector<TestNetwork> networks;
+  for (std::uint64_t seed = 0; seed < 60; ++seed) {
+    networks.push_back(random_general_network(seed, CostShape::kSmall));
+    networks.push_back(random_layered_network(seed));
+  }
+  std::vector<std::vector<ArcId>> orders(networks.size());
+  for (std::size_t i = 0; i < networks.size(); ++i) {
+    for (ArcId a = static_cast<ArcId>(networks[i].arcs.size()); a-- > 0;) orders[i].push_back(a);
+  }
+  std::vector<Flow> flow(kMaxTestArcs);
+  std::vector<Cost> potential(kMaxTestNodes);
+  std::vector<Status> statuses;
+  statuses.reserve(networks.size() * 16);
+  SplitMix64 rng(11);
+
+  MinCostFlow solver(Capacity{kMaxTestNodes, kMaxTestArcs});
+  AllocationCounter counter;
+  for (std::size_t i = 0; i < networks.size(); ++i) {
+    const TestNetwork& net = networks[i];
+    statuses.push_back(load(solver, net));
+    statuses.push_back(solver.set_tie_order(orders[i].data(), static_cast<std::int32_t>(orders[i].size())));
+    statuses.push_back(solver.solve(net.source, net.sink));
+    for (ArcId a = 0; a < solver.arc_count(); ++a) flow[static_cast<std::size_t>(a)] = solver.flow(a);
+    for (NodeId v = 0; v < solver.node_count(); ++v) potential[static_cast<std::size_t>(v)] = solver.potential(v);
+    for (int e = 0; e < 3 && solver.arc_count() > 0; ++e) {
+      const auto a = static_cast<ArcId>(rng.range(0, solver.arc_count() - 1));
+      statuses.push_back(solver.set_arc(a, rng.range(0, 9), rng.range(0, 20)));
+    }
+    if (solver.arc_count() > 0) {
+      statuses.push_back(solver.replace_arc(0, net.source, net.sink, 1, 3));
+    }
+    statuses.push_back(solver.renew_node(net.sink));
+    Status warm = solver.solve_warm(net.source, net.sink, Budget{5});
+    for (int k = 0; k < 1000 && warm == Status::kBudgetExhausted; ++k) {
+      warm = solver.solve_warm(net.source, net.sink, Budget{std::uint64_t{1} << 14});
+    }
+    statuses.push_back(warm);
+    statuses.push_back(solver.canonicalize(orders[i].data(), static_cast<std::int32_t>(orders[i].size())));
+    statuses.push_back(load(solver, net));
+    statuses.push_back(solver.solve_from(net.source, net.sink, flow.data(), potential.data()));
+  }
+  const std::uint64_t allocations = counter.stop();
+  EXPECT_EQ(allocations, 0u);
+  for (const Status s : statuses) EXPECT_EQ(s, Status::kOptimal);
+  EXPECT_GT(statuses.size(), networks.size() * 8);
+}
+
 }  // namespace
 }  // namespace keepless::solver::test
