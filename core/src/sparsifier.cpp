@@ -304,6 +304,16 @@ struct Sparsifier::Impl {
     sum.total_cost = thresholds->total_cost();
   }
 
+  // Every call starts with no decisions and an empty curve: a call that
+  // fails or is deferred leaves nothing of the previous window's answer.
+  void begin_call() {
+    count = 0;
+    summary = Summary{};
+    deferred = false;
+    curve_top = 0;
+    if (budgeted) curve[0] = curve[1] = 0;
+  }
+
   std::uint32_t kept_at(std::int64_t m) const {
     if (!budgeted || m < 1) return 0;
     const std::uint32_t b = static_cast<std::uint32_t>(std::min<std::int64_t>(m, curve_top));
@@ -335,11 +345,13 @@ struct Sparsifier::Impl {
     if (params.scope == Scope::kNewest && k > maturity) restrict_to_newest(window, k - 1 - maturity);
   }
 
-  // Turns a decided point into a skip, as the policies report skips.
+  // Turns a decided point into a skip, as the policies report skips (with a
+  // budget its M* reads 0, as every skip's does).
   void skip(PointDecision& d) {
     --(d.verdict == Verdict::kKeep ? summary.kept : summary.culled);
     ++summary.skipped;
     d = PointDecision{d.point, Verdict::kSkip, 0, 0};
+    if (!threshold_of.empty()) threshold_of[static_cast<std::size_t>(&d - decisions.data())] = 0;
   }
 
   // Tracking-safe culling, before the scope and the floor: points first seen
@@ -505,9 +517,7 @@ Status Sparsifier::validate(const Params& p) {
 
 Status Sparsifier::run(const Window& window, const solver::Budget& budget) {
   Impl& s = *impl_;
-  s.count = 0;
-  s.summary = Summary{};
-  s.deferred = false;
+  s.begin_call();
   if (Status v = validate(s.params); v != Status::kOk) return v;
   if (!s.network) s.network = std::make_unique<PaperNetwork>(s.caps);  // kIncremental's first run()
   PaperNetwork& net = *s.network;
@@ -541,9 +551,7 @@ Status Sparsifier::run(const Window& window, const solver::Budget& budget) {
 Status Sparsifier::update(const Window& window, const solver::Budget& budget) {
   Impl& s = *impl_;
   if (!s.incremental) return run(window, budget);
-  s.count = 0;
-  s.summary = Summary{};
-  s.deferred = false;
+  s.begin_call();
   if (Status v = validate(s.params); v != Status::kOk) return v;
   IncrementalNetwork& net = *s.incremental;
   if (!s.solver_incremental) {  // run() used the solver since

@@ -137,7 +137,10 @@ Status Window::add(const Keyframe& keyframe, const Observation* observations, st
 
   const std::uint32_t slot = w.count;
   w.keyframes[slot] = keyframe;
-  w.stamps[slot] = stamp != 0 ? stamp : next_stamp.fetch_add(1, std::memory_order_relaxed);
+  // A stamp vouches for what this window holds: a copy that drops the
+  // quality (hold_quality off) holds other contents, so it gets a new stamp.
+  const bool drops_quality = count > 0 && keyframe.quality != nullptr && !w.caps.hold_quality;
+  w.stamps[slot] = stamp != 0 && !drops_quality ? stamp : next_stamp.fetch_add(1, std::memory_order_relaxed);
   w.obs_begin[slot] = w.total;
   w.obs_count[slot] = count;
   if (count > 0) std::memcpy(w.pool.data() + w.total, observations, count * sizeof(Observation));

@@ -343,7 +343,11 @@ TEST(KeepBudgets, TakenFromWhatTheGuardLeaves) {
       for (std::uint32_t i = 0; i < plain.decision_count(); ++i) {
         const bool skipped = plain.decisions()[i].verdict == Verdict::kSkip;
         ASSERT_EQ(run.decisions()[i].verdict == Verdict::kSkip, skipped) << "seed " << seed;
-        if (!skipped) left.emplace_back(run.keep_thresholds()[i], run.decisions()[i].point);
+        if (skipped) {
+          EXPECT_EQ(run.keep_thresholds()[i], 0u) << "a skip's M* reads 0";
+        } else {
+          left.emplace_back(run.keep_thresholds()[i], run.decisions()[i].point);
+        }
       }
       std::sort(left.begin(), left.end());
       std::set<PointId> expected;

@@ -346,6 +346,32 @@ TEST(TrackCost, UpdateTakesTheQualityOfAKeyframeSentAgain) {
   EXPECT_GT(requalified, 300u);
 }
 
+// A window copied from one that holds quality into one that does not
+// (hold_quality off) has the same keyframes without their quality: update()
+// of the copy after the original decides as the reference on what the copy
+// holds (the stamps, which the copy kept before, vouched for the quality).
+TEST(TrackCost, ACopyWithoutQualityIsDecidedOnWhatItHolds) {
+  std::uint32_t windows = 0;
+  for (std::uint64_t seed = 1; seed <= 40 && !HasFailure(); ++seed) {
+    test::RandomCase c = test::random_case(8400 + seed, 8, 120);
+    test::random_policies(c, 8400 + seed);
+    test::random_quality(c, 8400 + seed);
+    Capacities without = kCaps;
+    without.hold_quality = false;
+    Window original(kCaps), copy(without);
+    ASSERT_TRUE(test::load(original, c.frames));
+    for (std::uint32_t k = 0; k < original.keyframe_count(); ++k) ASSERT_EQ(copy.copy_keyframe(original, k), Status::kOk);
+    std::vector<test::RefKeyframe> bare = c.frames;
+    for (test::RefKeyframe& f : bare) f.quality.clear();
+    Sparsifier s(kCaps, c.params, SolveMode::kIncremental);
+    ASSERT_EQ(s.update(original), Status::kOk);
+    ASSERT_EQ(s.update(copy), Status::kOk);
+    ASSERT_TRUE(agrees(s, test::reference_decide(bare, c.params))) << "seed " << seed;
+    ++windows;
+  }
+  EXPECT_EQ(windows, 40u);
+}
+
 // A keep budget with the track cost: the K smallest keep thresholds, which
 // the closed form's M sweep confirms (kept_at(M) = the points kept at M).
 TEST(TrackCost, BudgetKeepsWhatSomeMKeeps) {

@@ -84,6 +84,35 @@ TEST(WindowStamp, CopyKeepsKeyframeObservationsAndStamp) {
   EXPECT_EQ(to.total_observations(), 12u);
 }
 
+// A stamp vouches for the quality too: a copy into a window that does not
+// hold quality holds other contents, so it gets a new stamp (a Sparsifier
+// with the track cost that saw the stamp with quality would otherwise reuse
+// the levels it read then); a copy that keeps the quality keeps the stamp.
+TEST(WindowStamp, ACopyThatDropsTheQualityGetsANewStamp) {
+  Capacities with{4, 100, 100, 100};
+  with.hold_quality = true;
+  Capacities without = with;
+  without.hold_quality = false;
+  Window from(with), keeps(with), drops(without);
+  const auto obs = observations(1, 6);
+  std::vector<PointQuality> quality(6);
+  for (std::uint32_t i = 0; i < 6; ++i) quality[i].track_length = 2 + i;
+  Keyframe k = keyframe(7);
+  k.quality = quality.data();
+  ASSERT_EQ(from.add_keyframe(k, obs.data(), 6), Status::kOk);
+  ASSERT_EQ(keeps.copy_keyframe(from, 0), Status::kOk);
+  ASSERT_EQ(drops.copy_keyframe(from, 0), Status::kOk);
+  EXPECT_EQ(keeps.keyframe_stamp(0), from.keyframe_stamp(0));
+  ASSERT_NE(keeps.keyframe(0).quality, nullptr);
+  EXPECT_EQ(drops.keyframe(0).quality, nullptr);
+  EXPECT_NE(drops.keyframe_stamp(0), from.keyframe_stamp(0));
+  // Without quality to drop, a copy keeps its stamp in either window.
+  Window plain(with), plain_copy(without);
+  ASSERT_EQ(plain.add_keyframe(keyframe(8), obs.data(), 6), Status::kOk);
+  ASSERT_EQ(plain_copy.copy_keyframe(plain, 0), Status::kOk);
+  EXPECT_EQ(plain_copy.keyframe_stamp(0), plain.keyframe_stamp(0));
+}
+
 TEST(WindowStamp, RefusedCopiesChangeNothing) {
   Window from(Capacities{4, 100, 100, 100});
   const auto obs = observations(1, 8);

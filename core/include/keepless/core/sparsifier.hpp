@@ -87,7 +87,10 @@ class Sparsifier {
 
   // Decides every point of `window` (within Params::scope). On
   // kBudgetExhausted the decisions keep every evaluated point (nothing is
-  // culled on an unfinished solve, so the floor has nothing to do).
+  // culled on an unfinished solve, so the floor has nothing to do). Any other
+  // status but kOk (kCapacityExceeded, kInvalidArgument) leaves no decisions
+  // (decision_count() 0, kept_at() 0), and update()'s next call rebuilds its
+  // network from the window it is given.
   [[nodiscard]] Status run(const Window& window, const solver::Budget& budget = {});
 
   // The same decisions as run(window), incrementally: the network is edited

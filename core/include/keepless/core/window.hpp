@@ -90,8 +90,10 @@ class Window {
   const Observation* observations(std::uint32_t slot) const;
   std::uint32_t observation_count(std::uint32_t slot) const;
   // A number given to the keyframe in `slot` by add_keyframe, unique in the
-  // process, and kept by copy_keyframe: two slots (of this or any other
-  // Window) with the same stamp hold the same keyframe and observations, so
+  // process, and kept by copy_keyframe (unless the copy drops the keyframe's
+  // point quality, into a window without hold_quality: then a new one): two
+  // slots (of this or any other Window) with the same stamp hold the same
+  // keyframe, observations and quality, so
   // a consumer that saw the stamp before can skip comparing the contents.
   // Different stamps say nothing (the same contents may be added twice).
   std::uint64_t keyframe_stamp(std::uint32_t slot) const;
