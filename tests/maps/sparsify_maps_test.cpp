@@ -630,8 +630,8 @@ TEST_F(SparsifyMaps, MaxMemoryIsHonouredOnEveryInputPath) {
   }());
   const Case cases[] = {
       {{"--colmap", fixture("sparse"), "--max-memory-mb", "10"}, fixture("sparse") + ": reading this model needs about "},
-      {{"--colmap", fixture("sparse"), "--max-memory-mb", "40"}, fixture("sparse") + ": deciding needs about "},
-      {{"--colmap", fixture("sparse"), "--mode", "whole", "--max-memory-mb", "40"},
+      {{"--colmap", fixture("sparse"), "--max-memory-mb", "50"}, fixture("sparse") + ": deciding needs about "},
+      {{"--colmap", fixture("sparse"), "--mode", "whole", "--max-memory-mb", "50"},
        fixture("sparse") + ": deciding needs about "},
       {{"--bal", bal, "--max-memory-mb", "1"}, bal + ": reading this model needs about "},
       // A window file's reader checks record by record (with the whole-mode

@@ -444,15 +444,16 @@ int run_model(const ModelOptions& opt) {
                                              : (opt.input == Input::kWindow ? 0 : kDefaultFloor);
 
   // --max-memory-mb, estimated before allocating: reading a COLMAP or BAL
-  // model holds its files and the parsed model (kReadFactor x the files);
+  // model holds its files and the parsed model (a read factor x the files);
   // a window file is checked record by record by its reader (whole mode:
   // with the decision's memory too; replay: after reading, below).
   const double limit = static_cast<double>(opt.max_memory_mb) * 1048576.0;
   const std::uint64_t input_bytes = total_size(model_files(opt.input, opt.path));
-  const double read_need = opt.input == Input::kWindow ? 0.0 : kReadFactor * static_cast<double>(input_bytes);
+  const double read_factor = opt.input == Input::kBal ? kBalReadFactor : kColmapReadFactor;
+  const double read_need = opt.input == Input::kWindow ? 0.0 : read_factor * static_cast<double>(input_bytes);
   if (read_need > limit) {
     std::fprintf(stderr, "%s: reading this model needs about %s (%.0f x its %s bytes of files), above --max-memory-mb %llu\n",
-                 opt.path.c_str(), megabytes(read_need).c_str(), kReadFactor, grouped(input_bytes).c_str(),
+                 opt.path.c_str(), megabytes(read_need).c_str(), read_factor, grouped(input_bytes).c_str(),
                  static_cast<unsigned long long>(opt.max_memory_mb));
     return kExitInput;
   }

@@ -3,6 +3,8 @@
 #include <cinttypes>
 #include <cmath>
 #include <cstdio>
+#include <string_view>
+#include <vector>
 
 #include "keepless/core/window_file.hpp"
 #include "keepless/io/atomic_file.hpp"
@@ -12,61 +14,53 @@ namespace keepless::io {
 
 namespace {
 
-struct Token {
-  std::size_t start;
-  std::size_t size;
-  std::uint64_t line;
-};
-
-std::vector<Token> tokenize(const std::string& text) {
-  std::vector<Token> tokens;
-  std::uint64_t line = 1;
-  std::size_t i = 0;
-  while (i < text.size()) {
-    const char c = text[i];
-    if (c == '\n') {
-      ++line;
-      ++i;
-    } else if (c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f') {
-      ++i;
-    } else {
-      const std::size_t start = i;
-      while (i < text.size() && text[i] != '\n' && text[i] != ' ' && text[i] != '\t' && text[i] != '\r' &&
-             text[i] != '\v' && text[i] != '\f') {
-        ++i;
-      }
-      tokens.push_back({start, i - start, line});
-    }
+// The file's tokens in order, found on demand (nothing is stored per
+// token), with the line each is on.
+class Tokens {
+ public:
+  explicit Tokens(const std::string& text) : text_(text) {}
+  // The next token, or false at the end.
+  bool next(std::string_view* token, std::uint64_t* line) {
+    while (at_ < text_.size() && blank(text_[at_])) line_ += text_[at_++] == '\n' ? 1 : 0;
+    if (at_ >= text_.size()) return false;
+    const std::size_t start = at_;
+    while (at_ < text_.size() && !blank(text_[at_])) ++at_;
+    *token = std::string_view(text_).substr(start, at_ - start);
+    *line = line_;
+    return true;
   }
-  return tokens;
-}
+
+ private:
+  static bool blank(char c) { return c == '\n' || c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f'; }
+  const std::string& text_;
+  std::size_t at_ = 0;
+  std::uint64_t line_ = 1;
+};
 
 }  // namespace
 
 bool parse_bal(const std::string& name, const std::string& text, BalProblem* out, std::string* error) {
   *out = BalProblem{};
-  const std::vector<Token> tokens = tokenize(text);
-  std::size_t next = 0;
+  Tokens tokens(text);
   std::string word;
+  std::uint64_t at_line = 1;
   const auto fail = [&](std::uint64_t line, const std::string& reason) {
     *error = name + ":" + std::to_string(line) + ": " + reason;
     return false;
   };
-  const auto last_line = [&] { return tokens.empty() ? std::uint64_t{1} : tokens.back().line; };
   // The next token into `word`, or an error naming what was missing.
   const auto take = [&](const char* what) {
-    if (next >= tokens.size()) return fail(last_line(), std::string("truncated: missing ") + what);
-    word.assign(text, tokens[next].start, tokens[next].size);
-    ++next;
+    std::string_view t;
+    if (!tokens.next(&t, &at_line)) return fail(at_line, std::string("truncated: missing ") + what);
+    word.assign(t.data(), t.size());
     return true;
   };
-  const auto line = [&] { return tokens[next - 1].line; };
   const auto index = [&](const char* what, std::uint64_t limit, std::uint32_t* v) {
     std::uint64_t x = 0;
     if (!take(what)) return false;
     if (!core::parse_uint64(word.c_str(), &x) || x >= limit) {
-      return fail(line(), std::string("bad ") + what + " '" + word.substr(0, 40) + "' (an integer below " +
-                              std::to_string(limit) + ")");
+      return fail(at_line, std::string("bad ") + what + " '" + word.substr(0, 40) + "' (an integer below " +
+                               std::to_string(limit) + ")");
     }
     *v = static_cast<std::uint32_t>(x);
     return true;
@@ -74,7 +68,7 @@ bool parse_bal(const std::string& name, const std::string& text, BalProblem* out
   const auto number = [&](const char* what, double* v, std::string* keep) {
     if (!take(what)) return false;
     if (!core::parse_finite_double(word.c_str(), v)) {
-      return fail(line(), std::string("bad ") + what + " '" + word.substr(0, 40) + "' (a finite number)");
+      return fail(at_line, std::string("bad ") + what + " '" + word.substr(0, 40) + "' (a finite number)");
     }
     *keep = word;
     return true;
@@ -85,13 +79,23 @@ bool parse_bal(const std::string& name, const std::string& text, BalProblem* out
       !index("observation count", kCount, &nobs)) {
     return false;
   }
-  const std::uint64_t needed = 3 + 4 * std::uint64_t{nobs} + 9 * std::uint64_t{out->num_cameras} +
+  // The counts against the values the file holds, before anything is sized
+  // by them: one counting pass over the rest of the file.
+  const std::uint64_t needed = 4 * std::uint64_t{nobs} + 9 * std::uint64_t{out->num_cameras} +
                                3 * std::uint64_t{out->num_points};
-  if (tokens.size() < needed) {
-    return fail(last_line(), "truncated: the counts need " + std::to_string(needed) + " values, the file has " +
-                                 std::to_string(tokens.size()));
+  {
+    Tokens rest = tokens;
+    std::string_view t;
+    std::uint64_t line = at_line, have = 0, extra_line = 0;
+    while (rest.next(&t, &line)) {
+      if (have++ == needed) extra_line = line;
+    }
+    if (have < needed) {  // on the line of the last value
+      return fail(line, "truncated: the counts need " + std::to_string(needed + 3) + " values, the file has " +
+                            std::to_string(have + 3));
+    }
+    if (have > needed) return fail(extra_line, "values after the last point");
   }
-  if (tokens.size() > needed) return fail(tokens[needed].line, "values after the last point");
   out->observations.resize(nobs);
   for (BalObservation& o : out->observations) {
     if (!index("camera index", out->num_cameras, &o.camera) || !index("point index", out->num_points, &o.point) ||
@@ -101,8 +105,10 @@ bool parse_bal(const std::string& name, const std::string& text, BalProblem* out
   }
   out->camera_params.resize(9 * std::size_t{out->num_cameras});
   out->camera_text.resize(out->camera_params.size());
+  std::vector<std::uint64_t> camera_line(out->num_cameras);
   for (std::size_t i = 0; i < out->camera_params.size(); ++i) {
     if (!number("camera parameter", &out->camera_params[i], &out->camera_text[i])) return false;
+    if (i % 9 == 0) camera_line[i / 9] = at_line;
   }
   // A rotation whose angle overflows, or a centre out of range, is no camera.
   for (std::uint32_t i = 0; i < out->num_cameras; ++i) {
@@ -111,8 +117,7 @@ bool parse_bal(const std::string& name, const std::string& text, BalProblem* out
     bal_camera_centre(*out, i, c);
     if (!std::isfinite(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]) || !std::isfinite(c[0]) || !std::isfinite(c[1]) ||
         !std::isfinite(c[2])) {
-      return fail(tokens[3 + 4 * std::size_t{nobs} + 9 * std::size_t{i}].line,
-                  "camera " + std::to_string(i) + ": its rotation or centre is not finite (out of range)");
+      return fail(camera_line[i], "camera " + std::to_string(i) + ": its rotation or centre is not finite (out of range)");
     }
   }
   out->point_params.resize(3 * std::size_t{out->num_points});

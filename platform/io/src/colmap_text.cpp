@@ -67,36 +67,37 @@ class Lines {
   std::uint64_t line_ = 0;
 };
 
-// One line's fields, parsed strictly.
+// One line's fields, parsed strictly. Tokens are found on demand by a
+// cursor over the line (a POINTS2D line is read left to right): nothing is
+// stored per token, so a line of millions of fields costs no more than the
+// text that holds it.
 class Fields {
  public:
   Fields(const std::string& name, std::string_view line, std::uint64_t number, std::string* error)
       : name_(name), line_(line), number_(number), error_(error) {
-    std::size_t i = 0;
-    while (true) {
-      while (i < line.size() && is_blank(line[i])) ++i;
-      if (i >= line.size()) break;
-      const std::size_t start = i;
-      while (i < line.size() && !is_blank(line[i])) ++i;
-      starts_.push_back(start);
-      tokens_.emplace_back(line.substr(start, i - start));
-    }
+    cursor_ = skip_blanks(0);
+    for (std::size_t i = cursor_; i < line.size(); i = skip_blanks(skip_token(i))) ++count_;
   }
-  std::size_t size() const { return tokens_.size(); }
+  std::size_t size() const { return count_; }
   // The line from field i on (the image name).
-  std::string rest(std::size_t i) const { return std::string(line_.substr(starts_[i])); }
+  std::string rest(std::size_t i) const { return std::string(line_.substr(start(i))); }
+  // Field i as a string (short: a number or a name).
+  std::string token(std::size_t i) const {
+    const std::size_t at = start(i);
+    return std::string(line_.substr(at, skip_token(at) - at));
+  }
 
   bool fail(const std::string& reason) {
     *error_ = name_ + ":" + std::to_string(number_) + ": " + reason;
     return false;
   }
   bool at_least(std::size_t n, const char* what) {
-    return tokens_.size() >= n || fail(std::string("expected ") + what + ", got " +
-                                       std::to_string(tokens_.size()) + " fields");
+    return count_ >= n || fail(std::string("expected ") + what + ", got " + std::to_string(count_) + " fields");
   }
   bool u64(std::size_t i, const char* what, std::uint64_t* out) {
+    const std::string& t = field(i);
     // parse_uint64 reads a C string: a NUL inside the token would end it early.
-    return (tokens_[i].find('\0') == std::string::npos && core::parse_uint64(tokens_[i].c_str(), out)) ||
+    return (t.find('\0') == std::string::npos && core::parse_uint64(t.c_str(), out)) ||
            bad(i, what, "an unsigned integer");
   }
   template <typename T>
@@ -111,7 +112,7 @@ class Fields {
     return uint<std::uint32_t>(i, what, UINT32_MAX, out);
   }
   bool f64(std::size_t i, const char* what, double* out) {
-    return parse_number(tokens_[i], out) || bad(i, what, "a finite number");
+    return parse_number(field(i), out) || bad(i, what, "a finite number");
   }
   // Fields first .. first + n - 1 into out[0 .. n - 1].
   bool f64s(std::size_t first, std::size_t n, const char* what, double* out) {
@@ -120,12 +121,36 @@ class Fields {
     }
     return true;
   }
-  const std::string& token(std::size_t i) const { return tokens_[i]; }
 
  private:
+  std::size_t skip_blanks(std::size_t i) const {
+    while (i < line_.size() && is_blank(line_[i])) ++i;
+    return i;
+  }
+  std::size_t skip_token(std::size_t i) const {
+    while (i < line_.size() && !is_blank(line_[i])) ++i;
+    return i;
+  }
+  // Where field i starts: from the cursor when i is at or after it, else
+  // from the line's start (fields are mostly read in order).
+  std::size_t start(std::size_t i) const {
+    if (i < cursor_index_) {
+      cursor_index_ = 0;
+      cursor_ = skip_blanks(0);
+    }
+    for (; cursor_index_ < i; ++cursor_index_) cursor_ = skip_blanks(skip_token(cursor_));
+    return cursor_;
+  }
+  // Field i in a buffer reused across fields (its capacity settles at the
+  // longest field read).
+  const std::string& field(std::size_t i) {
+    const std::size_t at = start(i);
+    buffer_.assign(line_.data() + at, skip_token(at) - at);
+    return buffer_;
+  }
   bool bad(std::size_t i, const char* what, const std::string& expected) {
     std::string t;
-    for (const char c : tokens_[i].substr(0, 40)) t += c == '\0' ? std::string("\\0") : std::string(1, c);
+    for (const char c : token(i).substr(0, 40)) t += c == '\0' ? std::string("\\0") : std::string(1, c);
     return fail(std::string("bad ") + what + " '" + t + "' (field " + std::to_string(i + 1) + ", " +
                 expected + ")");
   }
@@ -133,8 +158,9 @@ class Fields {
   std::string_view line_;
   std::uint64_t number_;
   std::string* error_;
-  std::vector<std::size_t> starts_;
-  std::vector<std::string> tokens_;
+  std::size_t count_ = 0;
+  mutable std::size_t cursor_index_ = 0, cursor_ = 0;  // field cursor_index_ starts at cursor_
+  std::string buffer_;
 };
 
 // Calls parse(fields, line number, lines) for each record line; stops at
