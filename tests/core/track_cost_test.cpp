@@ -31,6 +31,14 @@ std::uint32_t level(const PointQuality& q, std::uint8_t terms) {
   return out;
 }
 
+// A random window, policies and point qualities (the track cost) from one seed.
+test::RandomCase track_case(std::uint64_t seed, std::uint32_t max_keyframes, std::uint32_t max_points) {
+  test::RandomCase c = test::random_case(seed, max_keyframes, max_points);
+  test::random_policies(c, seed);
+  test::random_quality(c, seed);
+  return c;
+}
+
 PointQuality with_length(std::uint32_t t) {
   PointQuality q;
   q.track_length = t;
@@ -279,9 +287,7 @@ TEST(TrackCost, RandomWindowsMatchReference) {
 TEST(TrackCost, UpdateMatchesRunAndReference) {
   std::uint32_t windows = 0;
   for (std::uint64_t seed = 1; seed <= 40 && !HasFailure(); ++seed) {
-    test::RandomCase c = test::random_case(7300 + seed, 16, 200);
-    test::random_policies(c, 7300 + seed);
-    test::random_quality(c, 7300 + seed);
+    test::RandomCase c = track_case(7300 + seed, 16, 200);
     const std::uint32_t size = 3 + static_cast<std::uint32_t>(seed % 6);
     Window window(kCaps);
     Sparsifier run(kCaps, c.params);
@@ -312,9 +318,7 @@ TEST(TrackCost, UpdateMatchesRunAndReference) {
 TEST(TrackCost, UpdateTakesTheQualityOfAKeyframeSentAgain) {
   std::uint32_t windows = 0, requalified = 0;
   for (std::uint64_t seed = 1; seed <= 60 && !HasFailure(); ++seed) {
-    test::RandomCase c = test::random_case(8100 + seed, 12, 200);
-    test::random_policies(c, 8100 + seed);
-    test::random_quality(c, 8100 + seed);
+    test::RandomCase c = track_case(8100 + seed, 12, 200);
     c.params.track_terms = kTrackLength | kTrackAge;  // the terms that change as a map ages
     const std::size_t size = 3 + seed % 4;
     Sparsifier closed(kCaps, c.params, SolveMode::kIncremental, Start::kClosedForm);
@@ -353,9 +357,7 @@ TEST(TrackCost, UpdateTakesTheQualityOfAKeyframeSentAgain) {
 TEST(TrackCost, ACopyWithoutQualityIsDecidedOnWhatItHolds) {
   std::uint32_t windows = 0;
   for (std::uint64_t seed = 1; seed <= 40 && !HasFailure(); ++seed) {
-    test::RandomCase c = test::random_case(8400 + seed, 8, 120);
-    test::random_policies(c, 8400 + seed);
-    test::random_quality(c, 8400 + seed);
+    test::RandomCase c = track_case(8400 + seed, 8, 120);
     Capacities without = kCaps;
     without.hold_quality = false;
     Window original(kCaps), copy(without);
