@@ -655,7 +655,8 @@ int main(int argc, char** argv) {
           ",\"not_converged\":" + std::to_string(not_converged) +
           ",\"floor\":" + std::to_string(sp::kDefaultFloor) + ",\"exact_floor\":" + std::to_string(opt.exact_floor) +
           ",\"cost\":\"" + core::to_string(opt.cost) + "\",\"theta\":" + std::to_string(opt.theta) +
-          ",\"ba_iterations\":" + std::to_string(opt.ba_iterations) + ",\"model\":\"" + json_escaped(model) + "\",\"cpus\":\"" + cpus + "\"}";
+          ",\"ba_iterations\":" + std::to_string(opt.ba_iterations) + ",\"model\":\"" + json_escaped(model) +
+          "\",\"cpus\":\"" + cpus + "\"}";
   std::printf("%s\n", json.c_str());
   return 0;
 }

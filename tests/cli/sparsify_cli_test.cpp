@@ -124,7 +124,9 @@ class SparsifyCliTest : public ::testing::Test {
   // Files left under a temporary name (NAME.tmp-PID) in the test's folder.
   std::size_t temporaries() const {
     std::size_t n = 0;
-    for (const auto& e : fs::directory_iterator(dir_)) n += e.path().filename().string().find(".tmp") != std::string::npos;
+    for (const auto& e : fs::directory_iterator(dir_)) {
+      n += e.path().filename().string().find(".tmp") != std::string::npos;
+    }
     return n;
   }
 

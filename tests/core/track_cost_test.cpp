@@ -362,7 +362,9 @@ TEST(TrackCost, ACopyWithoutQualityIsDecidedOnWhatItHolds) {
     without.hold_quality = false;
     Window original(kCaps), copy(without);
     ASSERT_TRUE(test::load(original, c.frames));
-    for (std::uint32_t k = 0; k < original.keyframe_count(); ++k) ASSERT_EQ(copy.copy_keyframe(original, k), Status::kOk);
+    for (std::uint32_t k = 0; k < original.keyframe_count(); ++k) {
+      ASSERT_EQ(copy.copy_keyframe(original, k), Status::kOk);
+    }
     std::vector<test::RefKeyframe> bare = c.frames;
     for (test::RefKeyframe& f : bare) f.quality.clear();
     Sparsifier s(kCaps, c.params, SolveMode::kIncremental);

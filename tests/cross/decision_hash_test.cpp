@@ -33,7 +33,8 @@ namespace {
 constexpr std::uint64_t kExpectedCostHash = 0x231e8d5f5870d2a7ULL;
 constexpr std::uint64_t kExpectedDecisionHash = 0x6da842663cdda28eULL;
 constexpr std::uint64_t kExpectedPolicyHash = 0x8092a28e8907ad34ULL;
-constexpr std::uint64_t kExpectedBudgetHash = 0x092d7eb36f52bbcaULL;  // 2026-12-04: a kept fraction remembers points that left
+// 2026-12-04: the budget workload's kept fractions remember points that left.
+constexpr std::uint64_t kExpectedBudgetHash = 0x092d7eb36f52bbcaULL;
 constexpr std::uint64_t kExpectedTrackHash = 0x458af2d5de07218dULL;
 
 // splitmix64: a fixed, portable stream (std:: distributions are not

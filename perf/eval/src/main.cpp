@@ -596,7 +596,8 @@ int main(int argc, char** argv) {
   }
   if (!a.cpus.empty()) {  // the CPU times are per thread; pinning keeps other work off their cores
     const keepless::platform::PinResult pin = keepless::platform::pin_to_cpus(a.cpus);
-    summary.settings += "; cpus " + pin.granted + (pin.ok ? "" : " (pinning to " + a.cpus + " refused: " + pin.error + ")");
+    summary.settings += "; cpus " + pin.granted;
+    if (!pin.ok) summary.settings += " (pinning to " + a.cpus + " refused: " + pin.error + ")";
   }
 
   std::vector<std::pair<std::string, ke::WindowSizes>> sizes;  // --window-sizes

@@ -135,7 +135,8 @@ bool check_limits(const ModelOptions& opt, Mode mode, const Loaded& m, std::stri
            over(m.model_points, opt.limits.max_points, "points", "--max-points") ||
            over(n.max_observations, opt.limits.max_observations, "observations", "--max-observations") ||
            (mode == Mode::kWhole && opt.input != Input::kWindow &&
-            over(n.max_pair_arcs, opt.limits.max_pair_arcs, "pair arcs in the whole mode's window", "--max-pair-arcs")));
+            over(n.max_pair_arcs, opt.limits.max_pair_arcs, "pair arcs in the whole mode's window",
+                 "--max-pair-arcs")));
 }
 
 bool is_culled(const std::vector<core::PointDecision>& decisions, core::PointId p) {
@@ -535,7 +536,8 @@ int run_model(const ModelOptions& opt) {
     kept += d.verdict == core::Verdict::kKeep;
   }
 
-  if (!opt.decisions.empty() && !io::write_file_atomically(opt.decisions, format_decisions(r.decisions.data(), r.decisions.size()), &error)) {
+  if (!opt.decisions.empty() &&
+      !io::write_file_atomically(opt.decisions, format_decisions(r.decisions.data(), r.decisions.size()), &error)) {
     std::fprintf(stderr, "%s\n", error.c_str());
     return kExitInput;
   }

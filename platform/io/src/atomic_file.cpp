@@ -33,7 +33,9 @@ bool read_file(const std::string& path, std::string* out, std::string* error) {
     problem = S_ISDIR(st.st_mode) ? "is a directory, not a file" : "not a regular file (refused: it may never end)";
   } else {
     const int flags = ::fcntl(fd, F_GETFL);
-    if (flags < 0 || ::fcntl(fd, F_SETFL, flags & ~O_NONBLOCK) != 0) problem = std::string("cannot read: ") + std::strerror(errno);
+    if (flags < 0 || ::fcntl(fd, F_SETFL, flags & ~O_NONBLOCK) != 0) {
+      problem = std::string("cannot read: ") + std::strerror(errno);
+    }
   }
   if (problem.empty()) {
     out->clear();

@@ -117,7 +117,8 @@ bool parse_bal(const std::string& name, const std::string& text, BalProblem* out
     bal_camera_centre(*out, i, c);
     if (!std::isfinite(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]) || !std::isfinite(c[0]) || !std::isfinite(c[1]) ||
         !std::isfinite(c[2])) {
-      return fail(camera_line[i], "camera " + std::to_string(i) + ": its rotation or centre is not finite (out of range)");
+      return fail(camera_line[i],
+                  "camera " + std::to_string(i) + ": its rotation or centre is not finite (out of range)");
     }
   }
   out->point_params.resize(3 * std::size_t{out->num_points});

@@ -77,7 +77,8 @@ bool check_model(const detail::FileNames& names, const detail::Positions& pos, c
     colmap_camera_centre(im, centre);
     if (!std::isfinite(centre[0]) || !std::isfinite(centre[1]) || !std::isfinite(centre[2])) {
       return fail(names.images, pos.image[i],
-                  "image " + std::to_string(im.id) + "'s camera centre is not finite (its translation is out of range)");
+                  "image " + std::to_string(im.id) +
+                      "'s camera centre is not finite (its translation is out of range)");
     }
   }
   for (std::size_t i = 0; i < m.points.size(); ++i) {

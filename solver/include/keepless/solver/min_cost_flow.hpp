@@ -11,11 +11,12 @@
 // way the flows are the same.
 //
 // Generic: any directed network with integer capacities in [0, 2^31) and
-// costs in [0, 2^30], accepted when 4 (nodes + 2)^2 (max cost + 1) <= 2^62 (labels are
-// 64-bit) and the minimum cost of the maximum flow fits int64 (a solve whose
-// total cost would not returns kInvalidInput). All storage is sized by the
-// constructor; nothing allocates afterwards. Deterministic: the result is a pure function of the calls made
-// (adjacency is visited in a fixed order; no hashing, no floats).
+// costs in [0, 2^30], accepted when 4 (nodes + 2)^2 (max cost + 1) <= 2^62
+// (labels are 64-bit) and the minimum cost of the maximum flow fits int64 (a
+// solve whose total cost would not returns kInvalidInput). All storage is
+// sized by the constructor; nothing allocates afterwards. Deterministic: the
+// result is a pure function of the calls made (adjacency is visited in a
+// fixed order; no hashing, no floats).
 // Tie-break: among equal-cost shortest paths, the blocking flow serves each
 // node's arcs in insertion order (or the order given to set_tie_order), so
 // earlier arcs win ties (the paper's network inserts points by ascending id;
