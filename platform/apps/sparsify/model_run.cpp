@@ -1,9 +1,9 @@
 #include "model_run.hpp"
 
 #include <algorithm>
-#include <cmath>
 #include <charconv>
 #include <cinttypes>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <new>
@@ -255,7 +255,7 @@ std::string format_decisions(const core::PointDecision* decisions, std::size_t n
   for (std::size_t i = 0; i < n; ++i) {
     const core::PointDecision& d = decisions[i];
     const int len = std::snprintf(line, sizeof line, "%" PRIu64 " %s %" PRId64 " %" PRId64 "\n", d.point,
-                                core::to_string(d.verdict), d.flow, d.capacity);
+                                  core::to_string(d.verdict), d.flow, d.capacity);
     s.append(line, static_cast<std::size_t>(len));
   }
   return s;
@@ -413,8 +413,9 @@ std::vector<NamedPath> model_outputs(const ModelOptions& opt) {
   if (opt.input != Input::kColmap) {
     out.push_back({"--out", opt.out});
   } else {
-    for (const char* ext : {"bin", "txt"})
+    for (const char* ext : {"bin", "txt"}) {
       for (const std::string& f : model_files(Input::kColmap, opt.out, ext)) out.push_back({"--out", f});
+    }
   }
   return out;
 }
