@@ -105,20 +105,21 @@ bool parse_bal(const std::string& name, const std::string& text, BalProblem* out
   }
   out->camera_params.resize(9 * std::size_t{out->num_cameras});
   out->camera_text.resize(out->camera_params.size());
-  std::vector<std::uint64_t> camera_line(out->num_cameras);
+  // A rotation whose angle overflows, or a centre out of range, is no camera:
+  // each is checked once its 9 values are read, at the line of its first.
+  std::uint64_t camera_line = 0;
   for (std::size_t i = 0; i < out->camera_params.size(); ++i) {
     if (!number("camera parameter", &out->camera_params[i], &out->camera_text[i])) return false;
-    if (i % 9 == 0) camera_line[i / 9] = at_line;
-  }
-  // A rotation whose angle overflows, or a centre out of range, is no camera.
-  for (std::uint32_t i = 0; i < out->num_cameras; ++i) {
-    const double* r = &out->camera_params[9 * std::size_t{i}];
+    if (i % 9 == 0) camera_line = at_line;
+    if (i % 9 != 8) continue;
+    const auto camera = static_cast<std::uint32_t>(i / 9);
+    const double* r = &out->camera_params[i - 8];
     double c[3];
-    bal_camera_centre(*out, i, c);
+    bal_camera_centre(*out, camera, c);
     if (!std::isfinite(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]) || !std::isfinite(c[0]) || !std::isfinite(c[1]) ||
         !std::isfinite(c[2])) {
-      return fail(camera_line[i],
-                  "camera " + std::to_string(i) + ": its rotation or centre is not finite (out of range)");
+      return fail(camera_line,
+                  "camera " + std::to_string(camera) + ": its rotation or centre is not finite (out of range)");
     }
   }
   out->point_params.resize(3 * std::size_t{out->num_points});
