@@ -1,49 +1,24 @@
 #include "keepless/platform/window_file_io.hpp"
 
-#include <fcntl.h>
-#include <sys/stat.h>
-#include <sys/types.h>
 #include <unistd.h>
 
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
 
+#include "keepless/platform/regular_file.hpp"
+
 namespace keepless::platform {
-
-// Window files may exceed 2 GiB: 32-bit builds define _FILE_OFFSET_BITS=64
-// (top-level CMakeLists.txt), or open/fstat would fail with EOVERFLOW.
-static_assert(sizeof(off_t) == 8, "64-bit file offsets needed (_FILE_OFFSET_BITS=64 on 32-bit targets)");
-
-namespace {
-
-struct Fd {
-  int fd = -1;
-  ~Fd() {
-    if (fd >= 0) ::close(fd);
-  }
-};
-
-}  // namespace
 
 bool read_window_file(const std::string& path, core::WindowFile* out, std::string* error,
                       const core::WindowFileLimits& limits) {
   *out = core::WindowFile{};
-  const auto fail = [&](const char* what, int err) {
-    *error = path + ":0: " + what + (err != 0 ? std::string(": ") + std::strerror(err) : std::string());
+  RegularFile f;
+  std::string problem;
+  if (!open_regular_file(path, &f, &problem)) {
+    *error = path + ":0: " + problem;
     return false;
-  };
-  // O_NONBLOCK: opening a FIFO without a writer would otherwise wait forever.
-  Fd f;
-  f.fd = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC | O_NOCTTY);
-  if (f.fd < 0) return fail("cannot open", errno);
-  struct stat st {};
-  if (::fstat(f.fd, &st) != 0) return fail("cannot stat", errno);
-  if (!S_ISREG(st.st_mode)) {
-    return fail(S_ISDIR(st.st_mode) ? "is a directory, not a window file" : "not a regular file (refused: it may never end)", 0);
   }
-  const int flags = ::fcntl(f.fd, F_GETFL);
-  if (flags < 0 || ::fcntl(f.fd, F_SETFL, flags & ~O_NONBLOCK) != 0) return fail("cannot read", errno);
 
   core::WindowFileParser parser(path, limits);
   char buf[1 << 16];

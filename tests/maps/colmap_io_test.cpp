@@ -608,7 +608,7 @@ TEST(ColmapModelFiles, AFolderWithoutAModelIsNamed) {
   // Some binary files: the missing one is named.
   maps_test::write_all(dir + "/images.bin", "x");
   EXPECT_FALSE(io::read_colmap_model(dir, &m, &format, &error));
-  EXPECT_EQ(error.rfind(dir + "/cameras.bin:0: cannot read", 0), 0u) << error;
+  EXPECT_EQ(error.rfind(dir + "/cameras.bin:0: cannot open: No such file", 0), 0u) << error;
   fs::remove_all(dir);
 }
 

@@ -1,56 +1,33 @@
 #include "keepless/io/atomic_file.hpp"
 
-#include <fcntl.h>
-#include <sys/stat.h>
-#include <sys/types.h>
 #include <unistd.h>
 
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
 
+#include "keepless/platform/regular_file.hpp"
+
 namespace keepless::io {
 
-// COLMAP models, BAL problems and keyframe files may exceed 2 GiB: 32-bit
-// builds define _FILE_OFFSET_BITS=64 (top-level CMakeLists.txt), or open/fstat
-// would fail with EOVERFLOW.
-static_assert(sizeof(off_t) == 8, "64-bit file offsets needed (_FILE_OFFSET_BITS=64 on 32-bit targets)");
-
 bool read_file(const std::string& path, std::string* out, std::string* error) {
-  const auto fail = [&](const std::string& what) {
-    *error = path + ":0: " + what;
-    return false;
-  };
-  // O_NONBLOCK: opening a FIFO without a writer would otherwise wait forever;
-  // only regular files are read (a FIFO or a device may never end).
-  const int fd = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC | O_NOCTTY);
-  if (fd < 0) return fail(std::string("cannot read: ") + std::strerror(errno));
-  struct stat st {};
+  platform::RegularFile f;
   std::string problem;
-  if (::fstat(fd, &st) != 0) {
-    problem = std::string("cannot read: ") + std::strerror(errno);
-  } else if (!S_ISREG(st.st_mode)) {
-    problem = S_ISDIR(st.st_mode) ? "is a directory, not a file" : "not a regular file (refused: it may never end)";
-  } else {
-    const int flags = ::fcntl(fd, F_GETFL);
-    if (flags < 0 || ::fcntl(fd, F_SETFL, flags & ~O_NONBLOCK) != 0) {
-      problem = std::string("cannot read: ") + std::strerror(errno);
-    }
-  }
-  if (problem.empty()) {
+  if (platform::open_regular_file(path, &f, &problem)) {
     out->clear();
-    out->reserve(static_cast<std::size_t>(st.st_size));
+    out->reserve(static_cast<std::size_t>(f.size));
     char buffer[1 << 16];
     for (;;) {
-      const ssize_t n = ::read(fd, buffer, sizeof buffer);
+      const ssize_t n = ::read(f.fd, buffer, sizeof buffer);
       if (n < 0 && errno == EINTR) continue;
       if (n < 0) problem = std::string("cannot read: ") + std::strerror(errno);
       if (n <= 0) break;
       out->append(buffer, static_cast<std::size_t>(n));
     }
   }
-  ::close(fd);
-  return problem.empty() || fail(problem);
+  if (problem.empty()) return true;
+  *error = path + ":0: " + problem;
+  return false;
 }
 
 int write_whole_file(const std::string& path, const std::string& contents) {
