@@ -11,6 +11,10 @@
 # reads, the in-process paper reference decided exactly what the plain paper
 # run decided (the extras change nothing for it), the model decided
 # differently (it used them), and neither replay allocated.
+#
+# With -DLCM=ON it also runs --lcm with --cost authors: keepless_node (beside
+# the tool) must answer every keyframe the stream publishes over loopback UDP,
+# none lost: it is sized for the unmapped keypoints the keyframes carry.
 cmake_minimum_required(VERSION 3.20)  # quoted if() arguments are strings (CMP0054)
 
 function(run_latency last_var)
@@ -112,6 +116,17 @@ if(DEFINED KEEP)
       message(FATAL_ERROR "--use ${use} decided ${use_digest}, the plain fraction ${digest}: ${use_json}")
     endif()
   endforeach()
+endif()
+if(LCM)
+  run_latency(lcm_json --lcm --cost authors)
+  string(JSON lcm_decisions GET "${lcm_json}" lcm_decisions)
+  string(JSON lcm_lost GET "${lcm_json}" lcm_lost)
+  string(JSON unmapped GET "${lcm_json}" unmapped_per_kf)
+  if(NOT lcm_decisions EQUAL 40 OR NOT lcm_lost EQUAL 0 OR NOT unmapped EQUAL 300)
+    message(FATAL_ERROR "--lcm: expected 40 decisions from keepless_node, none lost, with 300 unmapped "
+                        "keypoints a keyframe: ${lcm_json}")
+  endif()
+
 endif()
 if(NOT DEFINED COST)
   return()

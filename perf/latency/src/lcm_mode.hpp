@@ -20,8 +20,9 @@ struct LcmResult {
 // Starts keepless_node (next to `argv0`) on a process-unique udpm port with
 // ttl=0, publishes the stream's keyframes one at a time and times each from
 // publish to the matching decision's arrival. `node_flags` (the policy) are
-// passed to the node after the capacities. Stops the node at the end.
-bool run_lcm_mode(const char* argv0, const KeyframeStream& stream, std::uint32_t warmup,
+// passed to the node after the capacities, with the latency target
+// (`latency_target_ms`, 0: none). Stops the node at the end.
+bool run_lcm_mode(const char* argv0, const KeyframeStream& stream, std::uint32_t warmup, double latency_target_ms,
                   const std::vector<std::string>& node_flags, LcmResult* out, std::string* error);
 
 // The keyframe_t messages on channel KEEPLESS_KEYFRAME of an LCM log, in

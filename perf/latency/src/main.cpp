@@ -750,7 +750,7 @@ int main(int argc, char** argv) {
   LcmResult lcm;
   if (o.lcm) {
     std::string error;
-    if (!run_lcm_mode(argv[0], stream, o.warmup, o.node_flags, &lcm, &error)) {
+    if (!run_lcm_mode(argv[0], stream, o.warmup, budget_ms, o.node_flags, &lcm, &error)) {
       std::fprintf(stderr, "keepless_latency: --lcm: %s\n", error.c_str());
     } else {
       std::printf("over LCM (keepless_node on loopback, published -> decision received): %u decisions,"
@@ -773,14 +773,14 @@ int main(int argc, char** argv) {
       "\"ours_zero_flow_median_ms\":%.4f,\"lemon_ns_over_ours_zero_flow\":%.3f,"
       "\"slide_scratch_median_ms\":%.4f,\"slide_incremental_median_ms\":%.4f,"
       "\"slide_zero_flow_median_ms\":%.4f,"
-      "\"lcm_decisions\":%u,\"lcm_p50_ms\":%.4f,\"lcm_p99_ms\":%.4f,\"lcm_max_ms\":%.4f,",
+      "\"lcm_decisions\":%u,\"lcm_lost\":%u,\"lcm_p50_ms\":%.4f,\"lcm_p99_ms\":%.4f,\"lcm_max_ms\":%.4f,",
       o.workload.c_str(), stream.window, r.decisions, granted.c_str(), o.mlock ? "true" : "false",
       r.e2e.p(0.5), r.e2e.p(0.9), r.e2e.p(0.99), r.e2e.p(0.999), r.e2e.max(), r.ingest.p(0.5), r.ingest.p(0.99),
       r.network.p(0.5), r.network.p(0.99), r.solve.p(0.5), r.solve.p(0.99), r.decide.p(0.5), r.decide.p(0.99),
       r.publish.p(0.5), r.publish.p(0.99), budget_ms, r.exhausted, r.deferred, r.late,
       static_cast<unsigned long long>(r.allocations), r.footprint, r.compared, ours, inc, lemon_ns, lemon_cs,
       closed, ratio(lemon_ns, ours), ratio(ours, closed), ratio(ours, inc), zero, ratio(lemon_ns, zero),
-      median_ms(r.slide_scratch), median_ms(r.slide_incremental), median_ms(r.slide_zero_flow), lcm.decisions, lcm.p50_ms, lcm.p99_ms, lcm.max_ms);
+      median_ms(r.slide_scratch), median_ms(r.slide_incremental), median_ms(r.slide_zero_flow), lcm.decisions, lcm.lost, lcm.p50_ms, lcm.p99_ms, lcm.max_ms);
   // The policy and its reference. Digests are hex strings (64 bits do not
   // survive a JSON number as a double).
   std::printf(
