@@ -10,6 +10,7 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <unordered_map>
 
 #include "keepless/io/bal_problem.hpp"
@@ -290,6 +291,33 @@ TEST(CostModelsOnTheFixture, TrackUsesTheModelsTrackLengthsAndErrors) {
               core::Status::kOk);
     EXPECT_TRUE(differ(mode, track, r.decisions)) << sparsify::to_string(mode);
     EXPECT_GT(r.totals.track_fallback, 0u) << sparsify::to_string(mode);
+  }
+}
+
+// A point ERROR beyond a float's range (finite in the model's doubles) is the
+// largest float, not infinity, which the window would refuse: the model still
+// decides, under every cost model.
+TEST(CostModelsOnTheFixture, AnErrorBeyondAFloatIsTheLargest) {
+  KEEPLESS_MAPS_NEED(maps_test::fixture("sparse/images.bin"));
+  Fixture f = read_fixture();
+  ASSERT_FALSE(::testing::Test::HasFailure());
+  f.model.points[0].error = 1e39;
+  const std::uint64_t id = f.model.points[0].id;
+  const io::Keyframes k = io::keyframes_from_colmap(f.model, io::KeyframeOrder::kName, f.sim);
+  std::size_t seen = 0;
+  for (std::size_t i = 0; i < k.file.keyframes.size(); ++i) {
+    for (std::size_t j = 0; j < k.file.observations[i].size(); ++j) {
+      if (k.file.observations[i][j].point != id) continue;
+      EXPECT_EQ(k.file.keyframes[i].quality[j].reprojection_error, std::numeric_limits<float>::max());
+      ++seen;
+    }
+  }
+  EXPECT_GT(seen, 1u);
+  for (const core::CostModel model : {core::CostModel::kPaper, core::CostModel::kTrack}) {
+    sparsify::ModeResult r;
+    EXPECT_EQ(sparsify::decide(k.file, sparsify::Mode::kReplay, params_for(f.model, model), 20, &r),
+              core::Status::kOk)
+        << core::to_string(model);
   }
 }
 

@@ -98,6 +98,16 @@ TEST(OpencvPose, RejectsMalformedPosesAndLeavesOutputUnchanged) {
   cv::Mat inf = to_mat(Tcw, 3, CV_32F);
   inf.at<float>(0, 0) = std::numeric_limits<float>::infinity();
   EXPECT_EQ(pose_from_tcw(inf, &pose), Status::kNonFinite);
+  // A NaN in the last row reads as the Eigen overload reads it: not finite.
+  for (const int type : {CV_32F, CV_64F}) {
+    cv::Mat last = to_mat(Tcw, 4, type);
+    if (type == CV_32F) last.at<float>(3, 3) = std::numeric_limits<float>::quiet_NaN();
+    if (type == CV_64F) last.at<double>(3, 3) = std::numeric_limits<double>::quiet_NaN();
+    EXPECT_EQ(pose_from_tcw(last, &pose), Status::kNonFinite);
+  }
+  Eigen::Matrix4d last = Tcw.matrix();
+  last(3, 3) = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_EQ(pose_from_tcw(last, &pose), Status::kNonFinite);
   cv::Mat scaled = to_mat(Tcw, 4, CV_64F);
   scaled(cv::Rect(0, 0, 3, 3)) *= 1.01;  // a similarity, not a rotation
   EXPECT_EQ(pose_from_tcw(scaled, &pose), Status::kNotRotation);
@@ -249,6 +259,8 @@ TEST(OpencvKeyframes, NothingAllocatesPerKeyframe) {
     poses.push_back(to_mat(twc(0.01 * k, {0, 1, 0}, {0.3 * k, 0, 0}).inverse(), k % 2 == 0 ? 4 : 3,
                            k % 3 == 0 ? CV_32F : CV_64F));
   }
+  const std::size_t memory = adapter.memory_bytes();
+  EXPECT_GE(memory, caps.max_observations * (sizeof(core::Observation) + sizeof(core::PointId)));
   test::AllocationCounter allocations;
   std::uint32_t culled_total = 0;
   for (int k = 0; k < 12; ++k) {
@@ -269,6 +281,7 @@ TEST(OpencvKeyframes, NothingAllocatesPerKeyframe) {
   }
   EXPECT_EQ(allocations.stop(), 0u);
   EXPECT_GT(culled_total, 0u);  // the decisions did something
+  EXPECT_EQ(adapter.memory_bytes(), memory);  // fixed at construction
 }
 
 // Fills a window of `keyframes` overlapping keyframes, with `per` unmapped
@@ -328,8 +341,9 @@ TEST(OpencvKeyframes, NonFiniteDepthsOrIntrinsicsAndShortDepthListsAreRefused) {
   KeyframeExtras extras;
   extras.intrinsics = {500, 500, 320, 240};
   extras.depths = &depths;
+  // Beyond a float's range too: keyframe_t carries depths as floats, where it would be infinite.
   for (double bad : {std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::infinity(),
-                     -std::numeric_limits<double>::infinity()}) {
+                     -std::numeric_limits<double>::infinity(), 1e39, -1e39}) {
     depths[7] = bad;
     EXPECT_EQ(adapter.add_keyframe(window, 1, centre_at(0), f.keypoints, f.ids, extras), Status::kNonFinite);
   }
@@ -604,6 +618,31 @@ TEST(OpencvDeferred, CullsAreExcludedThenDeletedByTheRule) {
   defer_culls({}, deferred, &excluded, &deleted);
   EXPECT_EQ(deleted, std::vector<core::PointId>{3});
   EXPECT_EQ(deferred.size(), 0u);
+}
+
+// With the id sets reserved as the header says (the culls, and the culls plus
+// the deferred capacity), the deferred step never allocates, however many it culls.
+TEST(OpencvDeferred, ReservedIdSetsNeverGrow) {
+  constexpr std::uint32_t kMaxPoints = 64;
+  core::DeferredCulls deferred(kMaxPoints, 1);
+  std::vector<core::PointId> culled, excluded, deleted, ids;
+  culled.reserve(kMaxPoints);
+  excluded.reserve(kMaxPoints);
+  deleted.reserve(kMaxPoints + deferred.capacity());
+  ids.reserve(kMaxPoints);
+  test::AllocationCounter allocations;
+  std::uint64_t deleted_total = 0;
+  for (std::uint32_t k = 0; k < 8; ++k) {
+    ids.clear();
+    culled.clear();
+    for (std::uint32_t i = 0; i < kMaxPoints; ++i) ids.push_back(1000 * k + i);
+    for (std::uint32_t i = 0; i < (k % 2 == 0 ? kMaxPoints : 3u); ++i) culled.push_back(1000 * k + i);
+    ASSERT_EQ(note_keyframe(deferred, ids, nullptr), Status::kOk);
+    defer_culls(culled, deferred, &excluded, &deleted);
+    deleted_total += deleted.size();
+  }
+  EXPECT_EQ(allocations.stop(), 0u);
+  EXPECT_GT(deleted_total, 0u);  // the rule deleted, the refusals too
 }
 
 }  // namespace

@@ -1,8 +1,9 @@
 #include "keepless/io/keyframes.hpp"
 
 #include <algorithm>
-#include <numeric>
 #include <cmath>
+#include <limits>
+#include <numeric>
 #include <unordered_map>
 #include <unordered_set>
 
@@ -174,7 +175,9 @@ Keyframes keyframes_from_colmap(const ColmapModel& model, KeyframeOrder order, c
         o.depth = metric_depth(r[6] * X[0] + r[7] * X[1] + r[8] * X[2] + image.tvec[2], to_metric_frame);
         q.track_length = static_cast<std::uint32_t>(x->second->track.size());
         if (std::isfinite(x->second->error) && x->second->error >= 0) {
-          q.reprojection_error = static_cast<float>(x->second->error);
+          // A float: an error beyond its range stays the largest, not infinity (which the window refuses).
+          q.reprojection_error =
+              static_cast<float>(std::min(x->second->error, static_cast<double>(std::numeric_limits<float>::max())));
         }
       }
     }

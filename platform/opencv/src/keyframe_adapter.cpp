@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace keepless::opencv {
 
@@ -9,9 +10,9 @@ const char* to_string(Status s) {
   switch (s) {
     case Status::kOk: return "ok";
     case Status::kBadMatrix: return "bad pose matrix (need 4x4 or 3x4, CV_32F or CV_64F)";
-    case Status::kNonFinite: return "non-finite number";
+    case Status::kNonFinite: return "non-finite number (or a depth beyond a float's range)";
     case Status::kNotRotation: return "not a rotation";
-    case Status::kSizeMismatch: return "keypoints and point ids differ in length";
+    case Status::kSizeMismatch: return "point ids, depths, tracked flags or quality not as long as the keypoints";
     case Status::kDuplicatePoint: return "map point id given twice";
     case Status::kReservedPointId: return "map point id uses the reserved top bit";
     case Status::kWindowRejected: return "window rejected the keyframe";
@@ -52,8 +53,12 @@ Status pose_from_tcw(const cv::Mat& Tcw, CameraPose* out) {
     t(r) = at(r, 3);
   }
   if (!R.allFinite() || !t.allFinite()) return Status::kNonFinite;
-  if (Tcw.rows == 4 && (at(3, 0) != 0 || at(3, 1) != 0 || at(3, 2) != 0 || at(3, 3) != 1)) {
-    return Status::kBadMatrix;
+  if (Tcw.rows == 4) {  // as the Eigen overload: a NaN anywhere is kNonFinite, a wrong last row kBadMatrix
+    const double last[4] = {at(3, 0), at(3, 1), at(3, 2), at(3, 3)};
+    for (double x : last) {
+      if (!std::isfinite(x)) return Status::kNonFinite;
+    }
+    if (last[0] != 0 || last[1] != 0 || last[2] != 0 || last[3] != 1) return Status::kBadMatrix;
   }
   return pose_from_rotation(R, t, out);
 }
@@ -86,6 +91,15 @@ KeyframeRecord::KeyframeRecord(const core::Capacities& capacities) {
   unmapped.reserve(capacities.max_unmapped_keypoints);
   tracked.reserve(capacities.max_observations);
   quality.reserve(capacities.max_observations);
+}
+
+std::size_t KeyframeRecord::memory_bytes() const {
+  return observations.capacity() * sizeof(core::Observation) + unmapped.capacity() * sizeof(core::Keypoint) +
+         tracked.capacity() * sizeof(std::uint8_t) + quality.capacity() * sizeof(core::PointQuality);
+}
+
+std::size_t KeyframeAdapter::memory_bytes() const {
+  return record_.memory_bytes() + sorted_.capacity() * sizeof(core::PointId);
 }
 
 KeyframeAdapter::KeyframeAdapter(const core::Capacities& capacities)
@@ -131,8 +145,8 @@ Status KeyframeAdapter::convert(core::KeyframeId id, const CameraPose& pose,
     }
   }
   if (depths != nullptr) {
-    for (double z : *depths) {
-      if (!std::isfinite(z)) return Status::kNonFinite;
+    for (double z : *depths) {  // keyframe_t carries depths as floats
+      if (!(std::abs(z) <= static_cast<double>(std::numeric_limits<float>::max()))) return Status::kNonFinite;
     }
   }
   sorted_.assign(point_ids.begin(), point_ids.end());

@@ -36,9 +36,9 @@ namespace keepless::opencv {
 enum class [[nodiscard]] Status : std::uint8_t {
   kOk = 0,
   kBadMatrix,        // a pose cv::Mat that is not 4x4 or 3x4 CV_32F/CV_64F
-  kNonFinite,        // NaN or infinity in a pose or keypoint
+  kNonFinite,        // NaN or infinity in a pose, keypoint or extra; a depth beyond a float's range
   kNotRotation,      // rotation not orthonormal with det +1, or quaternion not unit
-  kSizeMismatch,     // keypoints and point ids of different lengths
+  kSizeMismatch,     // point ids, depths, tracked flags or quality not as long as the keypoints
   kDuplicatePoint,   // a map point id given twice for one keyframe
   kReservedPointId,  // a map point id with kUnmappedBit set
   kWindowRejected,   // core::Window::add_keyframe refused it (see window_status())
@@ -87,8 +87,9 @@ struct KeyframeExtras {
   Intrinsics intrinsics;  // non-finite: kNonFinite
   // Per mapped keypoint (in point_ids' order), the map point's depth z in
   // this camera, metres, as the SLAM estimates it. As in core, <= 0 means
-  // unknown (the observation costs the neutral level); NaN or infinity is
-  // refused (kNonFinite), a length other than point_ids' is kSizeMismatch.
+  // unknown (the observation costs the neutral level); NaN, infinity or a
+  // magnitude beyond a float's (keyframe_t carries floats) is refused
+  // (kNonFinite), a length other than point_ids' is kSizeMismatch.
   const std::vector<double>* depths = nullptr;
   // Per mapped keypoint (in point_ids' order), nonzero if the tracker matched
   // its map point in its latest frames (core::Keyframe::tracked): on the
@@ -115,6 +116,7 @@ struct KeyframeRecord {
   std::vector<core::Keypoint> unmapped;         // UnmappedAs::kKeypointList
   std::vector<std::uint8_t> tracked;            // per observation, or empty (keyframe.tracked points here)
   std::vector<core::PointQuality> quality;      // per observation, or empty (keyframe.quality points here)
+  std::size_t memory_bytes() const;             // the four buffers' reserved bytes
 };
 
 // Converts keyframes into a window. Its buffers are reserved once from the
@@ -153,6 +155,9 @@ class KeyframeAdapter {
   }
   core::Status window_status() const { return window_status_; }
   const KeyframeRecord& last() const { return record_; }
+  // Bytes reserved at construction (the record's buffers and the duplicate
+  // check's), fixed from then on.
+  std::size_t memory_bytes() const;
 
  private:
   static KeyframeExtras as_reserved_ids(const std::vector<cv::KeyPoint>* unmapped) {
@@ -189,7 +194,9 @@ inline void culled_points(const core::Sparsifier& s, std::vector<core::PointId>*
 // After a decision: the `culled` map points become excluded (`excluded`:
 // leave them out of local BA, keep them for tracking); those `deferred`
 // cannot hold, and those its rule deletes at this tick, are `deleted`
-// (remove them from the map). Both ascending; outputs replaced.
+// (remove them from the map). Both ascending; outputs replaced. Allocation-free
+// when `excluded` has capacity for the culls and `deleted` for the culls plus
+// deferred.capacity() (reserve them once: max_points, max_points + deferred.capacity()).
 void defer_culls(const std::vector<core::PointId>& culled, core::DeferredCulls& deferred,
                  std::vector<core::PointId>* excluded, std::vector<core::PointId>* deleted);
 
