@@ -191,20 +191,32 @@ OrderTracker::Verdict OrderTracker::check(std::int64_t publisher, std::int64_t s
   v.reason = follows(last_sequence_, last_utime_, sequence, utime, bounds_);
   if (v.reason != RejectReason::kNone && keyframe && continues_run(sequence, utime) &&
       run_length_ + 1 >= bounds_.restart_confirm) {
-    v.reason = RejectReason::kNone;
-    v.restart = true;
+    if (run_first_sequence_ <= kRestartMaxFirstSequence) {
+      v.reason = RejectReason::kNone;
+      v.restart = true;
+    } else {
+      // Only an order that has accepted nothing for a while: a live stream's
+      // late or retransmitted keyframes never take the order back.
+      const std::uint64_t silence =
+          bounds_.owner_timeout_ns > 0 ? bounds_.owner_timeout_ns : OrderBounds{}.owner_timeout_ns;
+      if (now_ns >= last_heard_ns_ && now_ns - last_heard_ns_ >= silence) {
+        v.reason = RejectReason::kNone;
+        v.resync = true;
+      }
+    }
   }
   return v;
 }
 
 void OrderTracker::accept(const Verdict& v, std::int64_t publisher, std::int64_t sequence, std::int64_t utime,
                           std::uint64_t now_ns) {
-  if (v.takeover || v.restart || !owned_) {
+  if (v.takeover || v.restart || v.resync || !owned_) {
     if (v.takeover) {
       ++owners_seen_;
       if (owned_) ++takeovers_;
     }
     if (v.restart) ++restarts_;
+    if (v.resync) ++resyncs_;
     run_length_ = 0;
   } else if (sequence > last_sequence_) {
     gaps_ += static_cast<std::uint64_t>(sequence) - static_cast<std::uint64_t>(last_sequence_) - 1;
@@ -219,8 +231,9 @@ void OrderTracker::accept(const Verdict& v, std::int64_t publisher, std::int64_t
 bool OrderTracker::extend_restart(std::int64_t publisher, std::int64_t sequence, std::int64_t utime) {
   if (!owned_ || publisher != owner_) return false;
   if (!continues_run(sequence, utime)) {
-    if (sequence < 0 || sequence > kRestartMaxFirstSequence) return false;
+    if (sequence < 0) return false;
     run_length_ = 0;
+    run_first_sequence_ = sequence;
   }
   ++run_length_;
   run_sequence_ = sequence;
@@ -368,18 +381,22 @@ void split_map_event(const keepless::map_event_t& msg, const core::Window& windo
   const auto nm = static_cast<std::size_t>(msg.num_merged_points);
   std::uint64_t* deleted = scratch;
   std::uint64_t* from = scratch + nd;
+  // Per sorted source, nonzero once a merge from it was applied (at the
+  // first position of its run in `from`): a repeat is found in O(log n).
+  std::uint64_t* applied = scratch + nd + nm;
   for (std::size_t i = 0; i < nd; ++i) deleted[i] = static_cast<std::uint64_t>(msg.deleted_point_id[i]);
   for (std::size_t i = 0; i < nm; ++i) from[i] = static_cast<std::uint64_t>(msg.merged_from_id[i]);
+  std::fill(applied, applied + nm, 0);
   std::sort(deleted, deleted + nd);
   std::sort(from, from + nm);
   for (std::size_t i = 0; i < nm; ++i) {
     const std::int64_t f = msg.merged_from_id[i];
     const std::int64_t t = msg.merged_into_id[i];
-    const auto source = std::equal_range(from, from + nm, static_cast<std::uint64_t>(f));
+    const auto source =
+        static_cast<std::size_t>(std::lower_bound(from, from + nm, static_cast<std::uint64_t>(f)) - from);
     // A repeat of a source already applied by this event (a refused earlier
     // item, e.g. 5 -> 5, does not take the source's turn).
-    const bool repeated = source.second - source.first > 1 &&
-                          std::find(out.merged_from, out.merged_from + out.merged, f) != out.merged_from + out.merged;
+    const bool repeated = applied[source] != 0;
     if (f == t) {
       refuse(f, A::ITEM_MERGE_SELF);
     } else if (repeated) {
@@ -394,6 +411,7 @@ void split_map_event(const keepless::map_event_t& msg, const core::Window& windo
       out.merged_from[out.merged] = f;
       out.merged_into[out.merged] = t;
       ++out.merged;
+      applied[source] = 1;
     }
   }
   std::bitset<1024> seen;  // window slots (--window <= 256)

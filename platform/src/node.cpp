@@ -96,7 +96,7 @@ struct Node::Impl {
     max_decision = reserve_decision(decision, capacities, deferring ? deferred.capacity() : 0);
     merged_kept.resize(c.max_event_ids);
     observations.resize(c.max_observations);
-    id_scratch.resize(std::max<std::size_t>(c.max_observations, 2 * std::size_t{c.max_event_ids}));
+    id_scratch.resize(std::max<std::size_t>(c.max_observations, 3 * std::size_t{c.max_event_ids}));
     out.resize(max_decision);
     status.last_capacity = keepless::status_t::CAPACITY_NONE;
     status.last_capacity_sequence = -1;
@@ -199,6 +199,12 @@ struct Node::Impl {
   // `evicted`: older keyframes the push dropped to make room, a window beyond
   // capacity (counted and logged here, once, whether decided or skipped).
   RejectReason admit_keyframe(const OrderTracker::Verdict& v, std::uint32_t* evicted) {
+    if (v.resync && !config.quiet) {
+      std::fprintf(stderr,
+                   "keepless_node: order resynchronised at seq %lld (publisher %lld): the last accepted message "
+                   "was not continued; window kept\n",
+                   static_cast<long long>(kf.sequence), static_cast<long long>(kf.publisher_id));
+    }
     if (v.takeover || v.restart) {
       sliding.clear();
       culls.clear();
@@ -498,8 +504,13 @@ struct Node::Impl {
       core::Status s = sliding.edit(e);
       merges_applied = sliding.merges_effective();
       if (s == core::Status::kOk && into_excluded > 0) {
+        // Applied where the source was in the window (as merges_effective counts).
+        std::uint32_t present = 0;
+        for (std::uint32_t i = 0; i < into_excluded; ++i) {
+          present += sliding.window().point_views(static_cast<core::PointId>(merged_kept[i])) > 0 ? 1 : 0;
+        }
         s = sliding.drop_points(reinterpret_cast<const core::PointId*>(merged_kept.data()), into_excluded);
-        merges_applied += into_excluded;
+        if (s == core::Status::kOk) merges_applied += present;
       }
       if (s != core::Status::kOk) r = reason_of(s);
       if (s == core::Status::kOk && deferring) forget_edited_points(items, into_excluded);
@@ -587,7 +598,7 @@ struct Node::Impl {
     status.last_sequence = order.last_sequence();
     status.sequence_gaps = static_cast<std::int64_t>(order.sequence_gaps());
     status.keyframes_skipped = static_cast<std::int64_t>(counters.keyframes_skipped);
-    status.stream_restarts = static_cast<std::int64_t>(order.restarts());
+    status.stream_restarts = static_cast<std::int64_t>(order.restarts() + order.resyncs());
     status.stream_conflicts = static_cast<std::int64_t>(counters.not_owner);
     status.publishers_seen = static_cast<std::int64_t>(order.owners_seen());
     status.publishers_active = order.owned() ? 1 : 0;

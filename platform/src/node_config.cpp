@@ -81,8 +81,10 @@ std::string node_usage() {
          "  --max-memory-mb N         refuse to start when the fixed memory would exceed N MB (default 1024)\n"
          "  --max-sequence-jump N     refuse a sequence more than N above the publisher's last (default 1000000)\n"
          "  --max-utime-jump-s X      refuse a utime more than X s above the publisher's last (default 600)\n"
-         "  --restart-confirm N       N valid keyframes of the window's publisher that start again near\n"
-         "                            sequence 0, in order among themselves, are a restart (default 3, 2..64)\n"
+         "  --restart-confirm N       N valid keyframes of the window's publisher refused by its order, in\n"
+         "                            order among themselves, are a restart if they start again near\n"
+         "                            sequence 0, else a resync (window kept) once the order has accepted\n"
+         "                            nothing for --owner-timeout-s (1 s if 0) (default 3, 2..64)\n"
          "  --owner-timeout-s X       another publisher id takes the window over only after its owner has\n"
          "                            been silent X s (default 1; 0 = never)\n"
          "  --cull-memory N           culled point ids remembered against in-flight keyframes\n"
@@ -463,7 +465,7 @@ double estimate_node_bytes(const NodeConfig& config) {
   const MemoryModel model = probe_memory_model(config.params, core::SolveMode::kIncremental, 2);
   const double ids = config.cull_memory != 0 ? config.cull_memory : caps.max_points;
   // Sliding-window scratch, message objects and buffers, decision arrays, cull memory.
-  const double messages = 158.0 * config.max_observations + 124.0 * config.max_event_ids +
+  const double messages = 158.0 * config.max_observations + 132.0 * config.max_event_ids +
                           16.0 * (caps.max_points + caps.max_keyframes) + 8.0 * caps.max_points;
   // Deferred culling: the held points (a 16-byte slot table at <= 1/2 load,
   // id and last match) and the decision's two lists.

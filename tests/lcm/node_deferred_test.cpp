@@ -193,6 +193,33 @@ TEST_F(DeferredNode, MapEventsAndResetsForgetExcludedPoints) {
   EXPECT_EQ(node_->deferred_culls().size(), 0u);
 }
 
+// A merge into an excluded point whose source is not in the window changes
+// nothing and is not counted in merged_applied (it was counted).
+TEST_F(DeferredNode, AMergeIntoAnExcludedPointCountsOnlyIfItsSourceWasInTheWindow) {
+  make_deferred(5);
+  const std::int64_t q = exclude_one();
+  ASSERT_GE(q, 0);
+  const std::int64_t absent = 987654;
+  ASSERT_EQ(node_->window().point_views(static_cast<std::uint64_t>(absent)), 0u);
+  const std::int64_t live = static_cast<std::int64_t>(node_->window().observations(0)[0].point);
+  ASSERT_FALSE(node_->deferred_culls().contains(static_cast<std::uint64_t>(live)));
+  const kt::WindowSnapshot before = kt::snapshot(node_->window());
+  keepless::map_event_t e = kt::make_event(++seq_);
+  e.merged_from_id = {absent};
+  e.merged_into_id = {q};
+  send(e);
+  ASSERT_FALSE(acks_.empty());
+  EXPECT_EQ(acks_.back().status, keepless::map_event_ack_t::STATUS_APPLIED);
+  EXPECT_EQ(acks_.back().merged_applied, 0);
+  EXPECT_TRUE(kt::snapshot(node_->window()) == before);
+  keepless::map_event_t both = kt::make_event(++seq_);
+  both.merged_from_id = {absent + 1, live};
+  both.merged_into_id = {q, q};
+  send(both);
+  EXPECT_EQ(acks_.back().merged_applied, 1);
+  EXPECT_FALSE(in_window(node_->window(), static_cast<std::uint64_t>(live)));
+}
+
 TEST_F(DeferredNode, AFullMemoryDeletesAtOnceAndCountsIt) {
   make_deferred(4, /*memory=*/1);
   const std::int64_t p = exclude_one();

@@ -460,6 +460,26 @@ TEST_F(GuardOnMemq, ARefusedMergeDoesNotHideTheValidOne) {
   for (std::uint32_t j = 0; j < w.observation_count(0); ++j) EXPECT_NE(w.observations(0)[j].point, 5u) << "5 merged";
 }
 
+// Repeats of sources among distinct ones, in any order: each source's first
+// valid merge applies, every later one is refused as a repeat (found by the
+// sorted sources, not by a scan of the merges applied so far).
+TEST_F(GuardOnMemq, EachSourcesFirstValidMergeAppliesAndItsRepeatsAreRefused) {
+  fill_without_culling();  // 10: 0..29, 11: 10..39, 12: 20..49
+  keepless::map_event_t e = kt::make_event(4);
+  e.merged_from_id = {7, 3, 7, 4, 3, 7, 4};
+  e.merged_into_id = {7, 30, 31, 32, 33, 34, 35};  // 7 -> 7 refused: 7 -> 31 is 7's first valid one
+  send(e);
+  ASSERT_EQ(acks_.size(), 1u);
+  EXPECT_EQ(acks_.back().merged_applied, 3);
+  EXPECT_EQ(acks_.back().refused[map_event_ack_t::ITEM_MERGE_SELF], 1);
+  EXPECT_EQ(acks_.back().refused[map_event_ack_t::ITEM_MERGE_REPEATED_SOURCE], 3);
+  const keepless::core::Window& w = node_->window();
+  EXPECT_EQ(w.point_views(7), 0u);
+  EXPECT_EQ(w.point_views(3), 0u);
+  EXPECT_EQ(w.point_views(4), 0u);
+  EXPECT_GT(w.point_views(31), 0u);
+}
+
 // merged_applied counted merges that changed nothing (source not in the window).
 TEST_F(GuardOnMemq, MergedAppliedCountsOnlyMergesThatChangedSomething) {
   fill_without_culling();
@@ -470,6 +490,100 @@ TEST_F(GuardOnMemq, MergedAppliedCountsOnlyMergesThatChangedSomething) {
   ASSERT_EQ(acks_.size(), 1u);
   EXPECT_EQ(acks_.back().status, map_event_ack_t::STATUS_APPLIED);
   EXPECT_EQ(acks_.back().merged_applied, 1);
+}
+
+// One owner message the stream does not continue, within the jump bounds,
+// became the order and refused every later message of the owner, its reset
+// included (a sequence with a bit flipped, a utime stepped ahead, an absurd
+// first message heard mid-run, a far-ahead map event). A run of
+// --restart-confirm valid keyframes in order among themselves, once the order
+// has accepted nothing for --owner-timeout-s, is a resync: it becomes the
+// order and the window is kept.
+class ResyncOnMemq : public GuardOnMemq {
+ protected:
+  // The owner's keyframes from..to at 10 Hz of node time.
+  void stream_at_10hz(std::int64_t from, std::int64_t to) {
+    for (std::int64_t s = from; s <= to; ++s) {
+      clock_.advance(100000000);
+      send(kt::make_keyframe(s, s, kt::id_range(s * 5 % kPoints, 30)));
+    }
+  }
+  // After the poison: 4 s of the stream from `from` is served again within
+  // the silence (1 s) and the run (3 keyframes), by a resync that keeps the
+  // window (`window` keyframes with the resync's); then the owner's reset is honoured.
+  void expect_resynchronised(std::int64_t from, std::int32_t window = 4) {
+    const std::size_t first = decisions_.size();
+    stream_at_10hz(from, from + 39);
+    EXPECT_GE(count(decision_t::STATUS_OPTIMAL, first), 40u - 13u);
+    EXPECT_EQ(decisions_.back().status, decision_t::STATUS_OPTIMAL);
+    EXPECT_EQ(node_->order().last_sequence(), from + 39);
+    EXPECT_EQ(node_->order().resyncs(), 1u);
+    EXPECT_EQ(node_->order().restarts(), 0u);
+    EXPECT_EQ(status().stream_restarts, 1);
+    std::size_t resync = first;
+    while (resync < decisions_.size() && decisions_[resync].status != decision_t::STATUS_OPTIMAL) ++resync;
+    ASSERT_LT(resync, decisions_.size());
+    EXPECT_EQ(decisions_[resync].num_window_keyframes, window) << "a resync keeps the window";
+    keepless::map_event_t reset = kt::make_event(from + 40);
+    reset.reset = true;
+    send(reset);
+    EXPECT_EQ(acks_.back().status, map_event_ack_t::STATUS_APPLIED);
+    EXPECT_EQ(node_->window().keyframe_count(), 0u);
+  }
+};
+
+TEST_F(ResyncOnMemq, ASequenceWithABitFlippedIsOutvoted) {
+  stream_at_10hz(1, 20);
+  keepless::keyframe_t flipped = kt::make_keyframe(21, 21, kt::id_range(105, 30));
+  flipped.sequence = 21 + (1 << 19);  // within --max-sequence-jump
+  clock_.advance(100000000);
+  send(flipped);
+  ASSERT_EQ(decisions_.back().status, decision_t::STATUS_OPTIMAL);
+  expect_resynchronised(22);
+}
+
+TEST_F(ResyncOnMemq, AUtimeSteppedAheadIsOutvoted) {
+  stream_at_10hz(1, 20);
+  keepless::keyframe_t stepped = kt::make_keyframe(21, 21, kt::id_range(105, 30));
+  stepped.utime += 500ll * 1000000;  // within --max-utime-jump-s
+  clock_.advance(100000000);
+  send(stepped);
+  ASSERT_EQ(decisions_.back().status, decision_t::STATUS_OPTIMAL);
+  expect_resynchronised(22);
+}
+
+TEST_F(ResyncOnMemq, AnAbsurdFirstMessageHeardMidRunIsOutvoted) {
+  keepless::keyframe_t absurd = kt::make_keyframe(4999, 99999, kt::id_range(0, 30));
+  absurd.sequence = std::numeric_limits<std::int64_t>::max();
+  send(absurd);
+  stream_at_10hz(5000, 5002);  // a run of three, but not yet a second since the order accepted anything
+  ASSERT_EQ(rejected(RejectReason::kOutOfOrder), 3u);
+  expect_resynchronised(5003, 2);  // the absurd keyframe stays: only its sequence was wrong
+}
+
+TEST_F(ResyncOnMemq, AFarAheadMapEventIsOutvoted) {
+  stream_at_10hz(1, 20);
+  keepless::map_event_t far = kt::make_event(21 + 900000);  // within --max-sequence-jump
+  far.utime = kt::make_keyframe(21, 0, {}).utime;
+  send(far);
+  ASSERT_EQ(acks_.back().status, map_event_ack_t::STATUS_APPLIED);
+  expect_resynchronised(22);
+}
+
+// Late keyframes of a live stream (valid, in order among themselves, refused
+// by the order) never take it back: the order keeps accepting.
+// (Sequences above 16: a run from 16 or below is a restart, served at once.)
+TEST_F(ResyncOnMemq, LateKeyframesOfALiveStreamNeverResync) {
+  stream_at_10hz(101, 120);
+  const std::size_t first = decisions_.size();
+  for (std::int64_t s = 121; s <= 160; ++s) {
+    stream_at_10hz(s, s);
+    send(kt::make_keyframe(s - 10, 1000 + s, kt::id_range(s * 5 % kPoints, 30)));  // late, not in the window
+  }
+  EXPECT_EQ(count(decision_t::STATUS_OPTIMAL, first), 40u);
+  EXPECT_EQ(rejected(RejectReason::kOutOfOrder), 40u);
+  EXPECT_EQ(node_->order().resyncs(), 0u);
+  EXPECT_EQ(node_->order().last_sequence(), 160);
 }
 
 }  // namespace

@@ -84,11 +84,16 @@ RejectReason check_map_event_bytes(const void* data, std::size_t size, const Mes
 // 2. The owner's order: sequence strictly increasing, utime never
 //    decreasing, neither jumping further than the bounds.
 // 3. A refused or invalid message changes nothing. The one exception is the
-//    restart candidate: an owner keyframe that is valid against the window
-//    but refused by the order, in order with the candidate's last one (or
-//    starting a new candidate with sequence <= kRestartMaxFirstSequence).
-//    `restart_confirm` such keyframes are a restart: the last one is
-//    accepted, the window and the cull memory are cleared.
+//    candidate run: owner keyframes valid against the window but refused by
+//    the order, each in order with the run's last one. `restart_confirm` of
+//    them are a restart when the run began at sequence <=
+//    kRestartMaxFirstSequence (the last one is accepted, the window and the
+//    cull memory are cleared), and a resync otherwise, once the order has
+//    accepted nothing for the resync silence (owner_timeout_ns, or 1 s when
+//    that is 0): the last one is accepted and becomes the order, the window
+//    kept. A resync undoes an order set by one message the stream does not
+//    continue (a corrupted sequence, a clock step, a first message heard
+//    mid-run); without it such a message locked the owner out.
 // 4. A reset is honoured only from the owner, in order.
 // 5. Only a newer accepted keyframe of the owner supersedes a queued one
 //    (Node's drain).
@@ -112,6 +117,7 @@ class OrderTracker {
     RejectReason reason = RejectReason::kNone;  // kNone: accept (possibly by takeover or restart)
     bool takeover = false;  // a new owner: clear the window and the culls first
     bool restart = false;   // the owner restarted: clear the window and the culls first
+    bool resync = false;    // the owner's stream replaces an order it does not continue; window kept
   };
   [[nodiscard]] Verdict check(std::int64_t publisher, std::int64_t sequence, std::int64_t utime,
                               std::uint64_t now_ns, bool keyframe) const;
@@ -119,7 +125,7 @@ class OrderTracker {
   void accept(const Verdict& v, std::int64_t publisher, std::int64_t sequence, std::int64_t utime,
               std::uint64_t now_ns);
   // An owner keyframe, valid against the window, refused by the order:
-  // extends (or starts) the restart candidate. Returns true if it did.
+  // extends (or starts) the candidate run. Returns true if it did.
   bool extend_restart(std::int64_t publisher, std::int64_t sequence, std::int64_t utime);
 
   bool owned() const { return owned_; }
@@ -129,6 +135,7 @@ class OrderTracker {
   std::uint64_t last_heard_ns() const { return last_heard_ns_; }
   std::uint64_t sequence_gaps() const { return gaps_; }
   std::uint64_t restarts() const { return restarts_; }
+  std::uint64_t resyncs() const { return resyncs_; }
   std::uint64_t takeovers() const { return takeovers_; }
   std::uint64_t owners_seen() const { return owners_seen_; }
   std::size_t memory_bytes() const { return sizeof(*this); }
@@ -143,9 +150,10 @@ class OrderTracker {
   std::int64_t last_utime_ = 0;
   std::uint64_t last_heard_ns_ = 0;
   std::uint32_t run_length_ = 0;  // the restart candidate
+  std::int64_t run_first_sequence_ = 0;
   std::int64_t run_sequence_ = 0;
   std::int64_t run_utime_ = 0;
-  std::uint64_t gaps_ = 0, restarts_ = 0, takeovers_ = 0, owners_seen_ = 0;
+  std::uint64_t gaps_ = 0, restarts_ = 0, resyncs_ = 0, takeovers_ = 0, owners_seen_ = 0;
 };
 
 // Decoded keyframe against the window (not the order: see OrderTracker).
@@ -172,8 +180,9 @@ struct MapEventItems {
   std::uint32_t refused = 0;
 };
 class RecentIds;
-// `scratch` must hold num_deleted_points + num_merged_points ids. The counts
-// must already match the arrays (check_map_event).
+// `scratch` must hold num_deleted_points + 2 * num_merged_points ids. The
+// counts must already match the arrays (check_map_event). O(n log n) in the
+// lists' lengths.
 void split_map_event(const keepless::map_event_t& msg, const core::Window& window, const RecentIds* culled,
                      std::uint64_t* scratch, MapEventItems& out);
 
