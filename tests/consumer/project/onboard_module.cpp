@@ -5,18 +5,22 @@
 #include <cinttypes>
 #include <cstdint>
 #include <cstdio>
+#include <string>
 
 #include "keepless/core/config.hpp"
 #include "keepless/core/decision.hpp"
 #include "keepless/core/sparsifier.hpp"
 #include "keepless/core/status.hpp"
 #include "keepless/core/window.hpp"
+#include "keepless/io/atomic_file.hpp"
 #include "keepless/platform/monotonic_clock.hpp"
 
 #ifdef ONBOARD_MODULE_WITH_LCM
 #include <vector>
 
 #include "keepless/decision_t.hpp"
+#include "keepless/keyframe_t.hpp"
+#include "keepless/platform/message_validation.hpp"
 #endif
 #ifdef ONBOARD_MODULE_WITH_OPENCV
 #include <vector>
@@ -179,6 +183,31 @@ int main() {
     return 1;
   }
   std::printf("  decision_t: %d bytes, %d culled ids\n", encoded, decoded.num_culled);
+  // keepless::platform_lcm: the node's byte checks on an incoming keyframe_t.
+  keepless::keyframe_t keyframe{};
+  keyframe.orientation[0] = 1;
+  keyframe.image_width = 640;
+  keyframe.image_height = 480;
+  std::vector<std::uint8_t> bytes(static_cast<std::size_t>(keyframe.getEncodedSize()));
+  keyframe.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
+  if (platform::check_keyframe_bytes(bytes.data(), bytes.size(), platform::MessageLimits{}) !=
+      platform::RejectReason::kNone) {
+    std::printf("onboard_module: a valid keyframe_t failed the node's byte checks\n");
+    return 1;
+  }
 #endif
+  // keepless::io: the culled ids written atomically and read back.
+  std::string text;
+  for (std::uint32_t i = 0; i < sparsifier.decision_count(); ++i) {
+    if (d[i].verdict == core::Verdict::kCull) text += std::to_string(d[i].point) + "\n";
+  }
+  const std::string path = "onboard_module_culled.txt";
+  std::string back, error;
+  if (!io::write_file_atomically(path, text, &error) || !io::read_file(path, &back, &error) || back != text) {
+    std::printf("onboard_module: keepless::io did not round-trip the culled ids: %s\n", error.c_str());
+    return 1;
+  }
+  std::remove(path.c_str());
+  std::printf("  keepless::io: %zu bytes written and read back\n", back.size());
   return 0;
 }
