@@ -586,8 +586,6 @@ TEST_F(SparsifyCliTest, MaturityMatchesReference) {
   EXPECT_EQ(bad.status, 2);
 }
 
-#ifdef KEEPLESS_MAKE_WINDOW_BIN
-
 TEST_F(SparsifyCliTest, GeneratorIsDeterministicPerSeed) {
   const std::vector<std::string> common = {"--keyframes",  "6",  "--points", "400",
                                            "--obs-per-kf", "150"};
@@ -653,7 +651,6 @@ TEST_F(SparsifyCliTest, MatchesReferenceOnGeneratedWindows) {
   }
 }
 
-#endif  // KEEPLESS_MAKE_WINDOW_BIN
 
 
 // Issue 15, defect 5: a FIFO with no writer blocked open() forever and
