@@ -9,7 +9,10 @@ first, then by name). A variant's rows are labelled with its keepless_eval
 flags from flags.txt; with --no-baselines among them only its keepless rows
 count (the baselines are paper's). Prints, per sequence, one Markdown table: per kept
 fraction F and per method of each variant, failed seeds, frames tracked,
-ATE (mean ± sd over seeds, failed runs included), ATE over the original's,
+ATE (mean ± sd over seeds, failed runs included), ATE over the original's
+(paired: each run's original is the one of its own directory and seed, and
+seeds whose original failed are left out of the ratios and shares, as
+keepless_eval's own tables do),
 local-BA observations and CPU seconds, map points and keyframes; then the
 smallest F from which each method never failed, per F the method with the
 lowest mean ATE among those with no failure, the accuracy-cost frontier:
@@ -56,7 +59,8 @@ def method_label(label, flags_text):
 
 
 def load(out, variants, flags):
-    # (sequence) -> (F, label) -> [rows]; original rows are shared by every variant (same seeds).
+    # (sequence) -> (F, label) -> [rows]; originals by (variant directory, seed): a variant's flags
+    # can change the original too (--no-keyframe-culling), and directories hold different seeds.
     table = defaultdict(lambda: defaultdict(list))
     originals = defaultdict(dict)
     titles = {}  # sequence -> its heading (the synthetic back end's trajectories say so)
@@ -70,8 +74,9 @@ def load(out, variants, flags):
             for row in csv.DictReader(f):
                 name, method, fraction = row["name"], row["variant"], float(row["target_fraction"])
                 titles[name] = f"{name} (synthetic, {row['group']})" if row["kind"] == "trajectory" else name
+                row["_pair"] = (variant, int(row["seed"]))
                 if method == "original":
-                    originals[name][int(row["seed"])] = row
+                    originals[name][row["_pair"]] = row
                     continue
                 if method != "ours" and keepless_only:
                     continue
@@ -92,8 +97,24 @@ def failed(row):
     return row["failed"] not in ("0", "", "null")
 
 
+def paired(rows, originals, key):
+    """Mean of `key` over the rows whose own original did not fail, over the same originals' mean."""
+    both = [(r, originals[r["_pair"]]) for r in rows if r["_pair"] in originals and not failed(originals[r["_pair"]])]
+    if not both:
+        return float("nan")
+    return statistics.mean(float(r[key]) for r, _ in both) / statistics.mean(float(o[key]) for _, o in both)
+
+
+def seed_originals(originals):
+    """One original per seed (the first directory's) for the original's own row."""
+    by_seed = {}
+    for (_, seed), row in sorted(originals.items()):
+        by_seed.setdefault(seed, row)
+    return list(by_seed.values())
+
+
 def sequence_table(name, cells, originals, order):
-    orig = list(originals.values())
+    orig = seed_originals(originals)
     ate0, sd0 = stat(orig, "ate_m")
     lines = [f"#### {name}", "",
              "| F | method | failed | frames tracked | ATE (m) | / original | local-BA obs | local-BA CPU (s) |"
@@ -105,7 +126,7 @@ def sequence_table(name, cells, originals, order):
         cpu, cpu_sd = stat(rows, "ba_cpu_s")
         fails = sum(failed(r) for r in rows)
         return (f"| {fraction} | {label} | {fails} / {len(rows)} | {stat(rows, 'frames_tracked')[0]:.1f} |"
-                f" {ate:.4g} ± {sd:.2g} | {ate / ate0:.2f} | {stat(rows, 'observations')[0]:,.0f} |"
+                f" {ate:.4g} ± {sd:.2g} | {paired(rows, originals, 'ate_m'):.2f} | {stat(rows, 'observations')[0]:,.0f} |"
                 f" {cpu:.2f} ± {cpu_sd:.2f} | {stat(rows, 'mps')[0]:,.0f} | {stat(rows, 'kfs')[0]:.0f} |")
 
     lines.append(row_line("–", "original", orig))
@@ -146,9 +167,10 @@ def sequence_table(name, cells, originals, order):
                                                    for obs, ate, name in sorted(frontier)) + ".")
     lines.append("")
     # Does local-BA size buy accuracy here? Each run against its seed's original.
-    pairs = [(math.log(float(r["observations"]) / float(originals[int(r["seed"])]["observations"])),
-              math.log(float(r["ate_m"]) / float(originals[int(r["seed"])]["ate_m"])))
-             for rows in cells.values() for r in rows if not failed(r) and int(r["seed"]) in originals]
+    pairs = [(math.log(float(r["observations"]) / float(originals[r["_pair"]]["observations"])),
+              math.log(float(r["ate_m"]) / float(originals[r["_pair"]]["ate_m"])))
+             for rows in cells.values() for r in rows
+             if not failed(r) and r["_pair"] in originals and not failed(originals[r["_pair"]])]
     xs, ys = [x for x, _ in pairs], [y for _, y in pairs]
     if len(pairs) > 2 and len(set(xs)) > 1 and len(set(ys)) > 1:
         r = statistics.correlation(xs, ys)
@@ -160,8 +182,6 @@ def sequence_table(name, cells, originals, order):
 
 def condensed_rows(cells, originals, variants, flags):
     """Per variant and F with a run: its title and one cell per method (ATE ratio, failed seeds, BA share)."""
-    orig = list(originals.values())
-    ate0, obs0 = stat(orig, "ate_m")[0], stat(orig, "observations")[0]
     out = []
     for variant in variants:
         given = flags[variant][0]
@@ -173,24 +193,27 @@ def condensed_rows(cells, originals, variants, flags):
                 if not rows:
                     row.append("–")
                     continue
-                ratio, fails = stat(rows, "ate_m")[0] / ate0, sum(failed(r) for r in rows)
+                ratio, fails = paired(rows, originals, "ate_m"), sum(failed(r) for r in rows)
                 text = f"{ratio:.2f}" if ratio < 10 else f"{ratio:.0f}"
                 text = f"**{text}**" if fails == 0 else text
-                row.append(f"{text} ({fails}/{len(rows)}), {100 * stat(rows, 'observations')[0] / obs0:.0f} %")
+                row.append(f"{text} ({fails}/{len(rows)}), {100 * paired(rows, originals, 'observations'):.0f} %")
             if any(c != "–" for c in row):
                 out.append(f"{title} | {fraction:.1f} | " + " | ".join(row))
     return out
 
 
-CELL = ("Each cell: ATE over the original's (failed seeds), local-BA observations as a share of the original's; "
-        "bold: no seed failed.")
+CELL = ("Each cell: ATE over the original's (failed seeds), local-BA observations as a share of the original's, "
+        "each run against its own seed's original; bold: no seed failed.")
 
 
 def condensed_table(name, cells, originals, variants, flags):
-    orig = list(originals.values())
-    ate0, obs0 = stat(orig, "ate_m")[0], stat(orig, "observations")[0]
+    orig = seed_originals(originals)
+    tracked = [r for r in orig if not failed(r)]
+    ate0, obs0 = stat(tracked, "ate_m")[0], stat(tracked, "observations")[0]
+    lost = len(orig) - len(tracked)
     lines = [f"#### {name}", "",
-             f"Original: ATE {ate0:.3g} m, {obs0:,.0f} local-BA observations, {len(orig)} seeds. {CELL}",
+             f"Original: ATE {ate0:.3g} m, {obs0:,.0f} local-BA observations, {len(tracked)} seeds"
+             f"{f' ({lost} more failed: left out of the ratios)' if lost else ''}. {CELL}",
              "", "| culling | F | " + " | ".join(m for _, m in METHODS) + " |", "|---|---:|" + "---|" * len(METHODS)]
     lines += [f"| {row} |" for row in condensed_rows(cells, originals, variants, flags)]
     lines.append("")
@@ -203,7 +226,7 @@ def synthetic_table(names, table, originals, titles, variants, flags):
              "| trajectory (group) | original ATE (m) | culling | F | " + " | ".join(m for _, m in METHODS) + " |",
              "|---|---:|---|---:|" + "---|" * len(METHODS)]
     for name in names:
-        ate0 = stat(list(originals[name].values()), "ate_m")[0]
+        ate0 = stat(seed_originals(originals[name]), "ate_m")[0]
         heading = titles[name].replace("synthetic, ", "")
         lines += [f"| {heading} | {ate0:.3g} | {row} |"
                   for row in condensed_rows(table[name], originals[name], variants, flags)]
