@@ -32,14 +32,40 @@ std::vector<core::PointId> baseline_culls(Selector selector, const std::vector<C
       });
       break;
     case Selector::kAnms: {
-      std::vector<SscPoint> pts(n);
-      for (std::size_t i = 0; i < n; ++i) {
-        pts[i] = {candidates[i].u, candidates[i].v, candidates[i].response, candidates[i].id};
+      // Keyframes in the order they first appear, each with its candidates.
+      std::vector<int> frames;
+      std::vector<std::vector<std::uint32_t>> per;
+      for (std::uint32_t i = 0; i < n; ++i) {
+        auto at = std::find(frames.begin(), frames.end(), candidates[i].keyframe);
+        if (at == frames.end()) {
+          frames.push_back(candidates[i].keyframe);
+          per.emplace_back();
+          at = frames.end() - 1;
+        }
+        per[static_cast<std::size_t>(at - frames.begin())].push_back(i);
       }
-      const std::vector<std::uint32_t> keep =
-          ssc_select(pts, static_cast<std::uint32_t>(n - cull), width, height);
+      const std::size_t keep = n - cull;
+      std::vector<std::size_t> quota(per.size());
+      std::vector<std::pair<double, std::size_t>> remainder;  // (-fraction, keyframe): largest first, then order
+      std::size_t given = 0;
+      for (std::size_t k = 0; k < per.size(); ++k) {
+        const double exact = double(keep) * double(per[k].size()) / double(n);
+        quota[k] = static_cast<std::size_t>(exact);
+        given += quota[k];
+        remainder.emplace_back(-(exact - double(quota[k])), k);
+      }
+      std::sort(remainder.begin(), remainder.end());
+      for (std::size_t j = 0; given < keep && j < remainder.size(); ++j, ++given) ++quota[remainder[j].second];
       std::vector<bool> kept(n, false);
-      for (std::uint32_t k : keep) kept[k] = true;
+      for (std::size_t k = 0; k < per.size(); ++k) {
+        std::vector<SscPoint> pts;
+        for (std::uint32_t i : per[k]) {
+          pts.push_back({candidates[i].u, candidates[i].v, candidates[i].response, candidates[i].id});
+        }
+        for (std::uint32_t j : ssc_select(pts, static_cast<std::uint32_t>(quota[k]), width, height)) {
+          kept[per[k][j]] = true;
+        }
+      }
       std::stable_partition(order.begin(), order.end(), [&](std::uint32_t i) { return !kept[i]; });
       break;
     }

@@ -218,7 +218,7 @@ std::vector<core::PointId> Vo::select_points(int kf, const std::vector<int>& loc
         listed[static_cast<std::size_t>(p)] = 1;
       }
       candidates.push_back({id, d.f.keys[i].pt.x, d.f.keys[i].pt.y, d.f.keys[i].response,
-                            static_cast<int>(map_.points[static_cast<std::size_t>(p)].obs.size())});
+                            static_cast<int>(map_.points[static_cast<std::size_t>(p)].obs.size()), k});
       if (std::binary_search(keepless_culls.begin(), keepless_culls.end(), id)) {
         ++cull;
         own_culls.push_back(id);
