@@ -86,7 +86,11 @@ ContractRun summarize(const Comparison& c) {
   const auto& g = c.original;
   r.mp_percent = paired(c.ours, g, [](const RunRecord& a, const RunRecord& o) { return pct(double(a.mps), double(o.mps)); });
   r.kf_percent = paired(c.ours, g, [](const RunRecord& a, const RunRecord& o) { return pct(double(a.kfs), double(o.kfs)); });
-  r.ba_time_percent = paired(c.ours, g, [](const RunRecord& a, const RunRecord& o) { return pct(a.ba_s, o.ba_s); });
+  // The local BAs' thread CPU time where both runs measured it (the wall clock moves with the machine's load).
+  r.ba_time_percent = paired(c.ours, g, [](const RunRecord& a, const RunRecord& o) {
+    return std::isfinite(a.ba_cpu_s) && std::isfinite(o.ba_cpu_s) && o.ba_cpu_s > 0 ? pct(a.ba_cpu_s, o.ba_cpu_s)
+                                                                                   : pct(a.ba_s, o.ba_s);
+  });
   auto mp_of = [&](const std::vector<RunRecord>& v) {
     return paired(v, g, [](const RunRecord& a, const RunRecord& o) { return pct(double(a.mps), double(o.mps)); });
   };
