@@ -45,9 +45,11 @@ step() { printf '\n== %s (%ds)\n' "$*" $((SECONDS - start)); }
 
 # --- host tools --------------------------------------------------------------
 # lcm-gen runs on the host during the build (liblcm-bin); everything the
-# target links comes from the sysroot.
+# target links comes from the sysroot. The full suite also runs host tools:
+# colmap (the map tests' checker) and javac with lcm.jar (the Java check).
 host_packages=(cmake ninja-build pkgconf qemu-user "g++-$triple" "binutils-$triple"
                liblcm-bin)
+((full)) && host_packages+=(colmap default-jdk-headless liblcm-java)
 missing=()
 for p in "${host_packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q 'install ok installed' || missing+=("$p")
