@@ -74,6 +74,8 @@ const std::vector<cli::Flag> kFlags = {
     {"--image-frames", "N", "frames read from --image-tracks (default all, --quick 12)"},
     {"--noise-free", nullptr, "no synthetic pixel noise"},
     {"--no-baselines", nullptr, "keepless only, no baselines"},
+    {"--vo-baselines", "LIST", "the real VO's baselines, comma-separated from random, longest-track, anms\n"
+                               "(default all three; keepless and the original always run)"},
     {"--no-ablation", nullptr, "no ablation variants"},
     {"--ablation-all", nullptr, "every ablation variant"},
     {"--use", "NAME", "a use (core::apply_use) and what it asks of the real VO, applied before\n"
@@ -170,6 +172,9 @@ struct Args {
   int max_keyframes = -1, keypoints = -1, window = -1, ba_iterations = -1, image_frames = -1;
   bool window_sizes = false;
   bool noise_free = false, baselines = true, ablation = true, ablation_all = false;
+  std::vector<keepless::eval::vo::Selector> vo_baselines = {keepless::eval::vo::Selector::kRandom,
+                                                            keepless::eval::vo::Selector::kLongestTrack,
+                                                            keepless::eval::vo::Selector::kAnms};  // --vo-baselines
   keepless::core::Params policy;  // scope, coverage_floor, theta, cost_model, maturity_keyframes, track_terms, cost_terms (the real VO), spatial_weight; the rest is set per variant
   bool tracked_flags = false;     // --tracked-flags (the real VO)
   bool defer_fixed = false;       // --defer-fixed (the real VO)
@@ -297,6 +302,17 @@ Args parse(int argc, char** argv) {
     else if (f == "--noise-free") a.noise_free = true;
     else if (f == "--window-sizes") a.window_sizes = true;
     else if (f == "--no-baselines") a.baselines = false;
+    else if (f == "--vo-baselines") {
+      a.vo_baselines.clear();
+      std::stringstream list(val());
+      for (std::string item; std::getline(list, item, ',');) {
+        using keepless::eval::vo::Selector;
+        if (item == "random") a.vo_baselines.push_back(Selector::kRandom);
+        else if (item == "longest-track") a.vo_baselines.push_back(Selector::kLongestTrack);
+        else if (item == "anms") a.vo_baselines.push_back(Selector::kAnms);
+        else fail("--vo-baselines: random, longest-track or anms, comma-separated, got '" + item + "'");
+      }
+    }
     else if (f == "--no-ablation") a.ablation = false;
     else if (f == "--ablation-all") a.ablation_all = true;
     else if (f == "--scope") {
@@ -695,6 +711,7 @@ int main(int argc, char** argv) {
     vo.seeds = summary.seeds;
     for (const OperatingPoint& op : a.ops) vo.ops.emplace_back(op.fraction, op.M);
     vo.baselines = a.baselines;
+    vo.baseline_list = a.vo_baselines;
     vo.policy = a.policy;
     vo.tracked_flags = a.tracked_flags;
     vo.defer_fixed = a.defer_fixed;

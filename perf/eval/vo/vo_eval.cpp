@@ -125,7 +125,11 @@ bool evaluate_real_vo(const VoInput& in, const VoEvalOptions& o, std::vector<Com
           {Selector::kKeepless, &c.ours}, {Selector::kRandom, &c.random},
           {Selector::kLongestTrack, &c.longest_track}, {Selector::kAnms, &c.anms}};
       for (const auto& [selector, into] : runs) {
-        if (selector != Selector::kKeepless && !o.baselines) continue;
+        if (selector != Selector::kKeepless &&
+            (!o.baselines ||
+             std::find(o.baseline_list.begin(), o.baseline_list.end(), selector) == o.baseline_list.end())) {
+          continue;
+        }
         vo.selector = selector;
         const RealRunResult r = run_real_vo(seq, vo);
         into->push_back(record_of(r, selector == Selector::kKeepless ? "ours" : to_string(selector), vo.seed, c.M));
