@@ -171,8 +171,11 @@ RejectReason follows(std::int64_t last_sequence, std::int64_t last_utime, std::i
 
 OrderTracker::OrderTracker(const OrderBounds& bounds) : bounds_(bounds) {}
 
-bool OrderTracker::continues_run(std::int64_t sequence, std::int64_t utime) const {
-  return run_length_ > 0 && follows(run_sequence_, run_utime_, sequence, utime, bounds_) == RejectReason::kNone;
+bool OrderTracker::continues(const Run& run, std::int64_t sequence, std::int64_t utime) const {
+  if (run.length == 0 || follows(run.sequence, run.utime, sequence, utime, bounds_) != RejectReason::kNone) return false;
+  // A restarted VO counts up from near 0 in small steps: a straggler of the
+  // old run, far above, neither extends nor completes the restart.
+  return &run != &restart_run_ || sequence - run.sequence <= kRestartMaxFirstSequence;
 }
 
 OrderTracker::Verdict OrderTracker::check(std::int64_t publisher, std::int64_t sequence, std::int64_t utime,
@@ -189,21 +192,20 @@ OrderTracker::Verdict OrderTracker::check(std::int64_t publisher, std::int64_t s
     return v;
   }
   v.reason = follows(last_sequence_, last_utime_, sequence, utime, bounds_);
-  if (v.reason != RejectReason::kNone && keyframe && continues_run(sequence, utime) &&
-      run_length_ + 1 >= bounds_.restart_confirm) {
-    if (run_first_sequence_ <= kRestartMaxFirstSequence) {
-      v.reason = RejectReason::kNone;
-      v.restart = true;
-    } else {
-      // Only an order that has accepted nothing for a while: a live stream's
-      // late or retransmitted keyframes never take the order back.
-      const std::uint64_t silence =
-          bounds_.owner_timeout_ns > 0 ? bounds_.owner_timeout_ns : OrderBounds{}.owner_timeout_ns;
-      if (now_ns >= last_heard_ns_ && now_ns - last_heard_ns_ >= silence) {
-        v.reason = RejectReason::kNone;
-        v.resync = true;
-      }
-    }
+  if (v.reason == RejectReason::kNone || !keyframe) return v;
+  const auto confirms = [&](const Run& run) {
+    return continues(run, sequence, utime) && run.length + 1 >= bounds_.restart_confirm;
+  };
+  // A resync only of an order that has accepted nothing for a while: a live
+  // stream's late or retransmitted keyframes never take the order back.
+  const std::uint64_t silence =
+      bounds_.owner_timeout_ns > 0 ? bounds_.owner_timeout_ns : OrderBounds{}.owner_timeout_ns;
+  if (confirms(restart_run_)) {
+    v.reason = RejectReason::kNone;
+    v.restart = true;
+  } else if (confirms(resync_run_) && now_ns >= last_heard_ns_ && now_ns - last_heard_ns_ >= silence) {
+    v.reason = RejectReason::kNone;
+    v.resync = true;
   }
   return v;
 }
@@ -217,7 +219,7 @@ void OrderTracker::accept(const Verdict& v, std::int64_t publisher, std::int64_t
     }
     if (v.restart) ++restarts_;
     if (v.resync) ++resyncs_;
-    run_length_ = 0;
+    restart_run_ = resync_run_ = Run{};
   } else if (sequence > last_sequence_) {
     gaps_ += static_cast<std::uint64_t>(sequence) - static_cast<std::uint64_t>(last_sequence_) - 1;
   }
@@ -229,16 +231,20 @@ void OrderTracker::accept(const Verdict& v, std::int64_t publisher, std::int64_t
 }
 
 bool OrderTracker::extend_restart(std::int64_t publisher, std::int64_t sequence, std::int64_t utime) {
-  if (!owned_ || publisher != owner_) return false;
-  if (!continues_run(sequence, utime)) {
-    if (sequence < 0) return false;
-    run_length_ = 0;
-    run_first_sequence_ = sequence;
+  if (!owned_ || publisher != owner_ || sequence < 0) return false;
+  bool extended = false;
+  for (Run* run : {&restart_run_, &resync_run_}) {
+    const bool starts = (run == &restart_run_) == (sequence <= kRestartMaxFirstSequence);
+    if (continues(*run, sequence, utime)) {
+      *run = Run{run->length + 1, sequence, utime};
+    } else if (starts) {
+      *run = Run{1, sequence, utime};
+    } else {
+      continue;
+    }
+    extended = true;
   }
-  ++run_length_;
-  run_sequence_ = sequence;
-  run_utime_ = utime;
-  return true;
+  return extended;
 }
 
 RejectReason check_keyframe(const keepless::keyframe_t& msg, const core::Window& window,

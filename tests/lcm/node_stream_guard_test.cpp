@@ -570,6 +570,35 @@ TEST_F(ResyncOnMemq, AFarAheadMapEventIsOutvoted) {
   expect_resynchronised(22);
 }
 
+// A stray keyframe with a low sequence (a restart candidate of its own) does
+// not stop the stream's resync.
+TEST_F(ResyncOnMemq, AStrayLowSequenceDoesNotBlockTheResync) {
+  stream_at_10hz(101, 120);
+  keepless::keyframe_t flipped = kt::make_keyframe(121, 121, kt::id_range(105, 30));
+  flipped.sequence = 121 + (1 << 19);
+  clock_.advance(100000000);
+  send(flipped);
+  stream_at_10hz(122, 122);
+  send(kt::make_keyframe(5, 777, kt::id_range(300, 30)));  // valid, refused, sequence <= 16
+  expect_resynchronised(123);
+}
+
+// Stragglers of the old run refused by the order (sequence above 16) between
+// a restarted VO's keyframes never delay its restart.
+TEST_F(ResyncOnMemq, RefusedStragglersDoNotDelayARestart) {
+  stream_at_10hz(1020, 1029);
+  send(kt::make_keyframe(1, 1, kt::id_range(0, 20)));             // the new process
+  send(kt::make_keyframe(1025, 5025, kt::id_range(230, 30)));     // the old one's, late: refused
+  send(kt::make_keyframe(2, 2, kt::id_range(1, 20)));
+  send(kt::make_keyframe(1026, 5026, kt::id_range(231, 30)));     // again
+  const std::size_t first = decisions_.size();
+  send(kt::make_keyframe(3, 3, kt::id_range(2, 20)));
+  EXPECT_EQ(count(decision_t::STATUS_OPTIMAL, first), 1u) << "served from its third keyframe";
+  EXPECT_EQ(node_->order().restarts(), 1u);
+  EXPECT_EQ(node_->order().resyncs(), 0u);
+  EXPECT_EQ(node_->order().last_sequence(), 3);
+}
+
 // Late keyframes of a live stream (valid, in order among themselves, refused
 // by the order) never take it back: the order keeps accepting.
 // (Sequences above 16: a run from 16 or below is a restart, served at once.)

@@ -84,16 +84,20 @@ RejectReason check_map_event_bytes(const void* data, std::size_t size, const Mes
 // 2. The owner's order: sequence strictly increasing, utime never
 //    decreasing, neither jumping further than the bounds.
 // 3. A refused or invalid message changes nothing. The one exception is the
-//    candidate run: owner keyframes valid against the window but refused by
-//    the order, each in order with the run's last one. `restart_confirm` of
-//    them are a restart when the run began at sequence <=
-//    kRestartMaxFirstSequence (the last one is accepted, the window and the
-//    cull memory are cleared), and a resync otherwise, once the order has
-//    accepted nothing for the resync silence (owner_timeout_ns, or 1 s when
-//    that is 0): the last one is accepted and becomes the order, the window
-//    kept. A resync undoes an order set by one message the stream does not
-//    continue (a corrupted sequence, a clock step, a first message heard
-//    mid-run); without it such a message locked the owner out.
+//    two candidate runs: owner keyframes valid against the window but
+//    refused by the order, each in order with its run's last one. The
+//    restart run starts at a sequence <= kRestartMaxFirstSequence:
+//    `restart_confirm` keyframes are a restart (the last one is accepted,
+//    the window and the cull memory are cleared). The resync run starts
+//    above it: `restart_confirm` keyframes, once the order has accepted
+//    nothing for the resync silence (owner_timeout_ns, or 1 s when that is
+//    0), are a resync: the last one is accepted and becomes the order, the
+//    window kept. A resync undoes an order set by one message the stream
+//    does not continue (a corrupted sequence, a clock step, a first message
+//    heard mid-run); without it such a message locked the owner out. Each
+//    run is replaced only by a keyframe that could start it, and the restart
+//    run is continued only in steps of at most kRestartMaxFirstSequence, so
+//    stragglers of an old run never break or complete a restart.
 // 4. A reset is honoured only from the owner, in order.
 // 5. Only a newer accepted keyframe of the owner supersedes a queued one
 //    (Node's drain).
@@ -125,7 +129,7 @@ class OrderTracker {
   void accept(const Verdict& v, std::int64_t publisher, std::int64_t sequence, std::int64_t utime,
               std::uint64_t now_ns);
   // An owner keyframe, valid against the window, refused by the order:
-  // extends (or starts) the candidate run. Returns true if it did.
+  // extends (or starts) a candidate run. Returns true if it did.
   bool extend_restart(std::int64_t publisher, std::int64_t sequence, std::int64_t utime);
 
   bool owned() const { return owned_; }
@@ -141,7 +145,11 @@ class OrderTracker {
   std::size_t memory_bytes() const { return sizeof(*this); }
 
  private:
-  bool continues_run(std::int64_t sequence, std::int64_t utime) const;
+  struct Run {
+    std::uint32_t length = 0;
+    std::int64_t sequence = 0, utime = 0;  // its last keyframe's
+  };
+  bool continues(const Run& run, std::int64_t sequence, std::int64_t utime) const;
 
   OrderBounds bounds_;
   bool owned_ = false;
@@ -149,10 +157,7 @@ class OrderTracker {
   std::int64_t last_sequence_ = -1;
   std::int64_t last_utime_ = 0;
   std::uint64_t last_heard_ns_ = 0;
-  std::uint32_t run_length_ = 0;  // the restart candidate
-  std::int64_t run_first_sequence_ = 0;
-  std::int64_t run_sequence_ = 0;
-  std::int64_t run_utime_ = 0;
+  Run restart_run_, resync_run_;  // the candidates (rule 3)
   std::uint64_t gaps_ = 0, restarts_ = 0, resyncs_ = 0, takeovers_ = 0, owners_seen_ = 0;
 };
 
