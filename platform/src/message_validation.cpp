@@ -172,7 +172,9 @@ RejectReason follows(std::int64_t last_sequence, std::int64_t last_utime, std::i
 OrderTracker::OrderTracker(const OrderBounds& bounds) : bounds_(bounds) {}
 
 bool OrderTracker::continues(const Run& run, std::int64_t sequence, std::int64_t utime) const {
-  if (run.length == 0 || follows(run.sequence, run.utime, sequence, utime, bounds_) != RejectReason::kNone) return false;
+  if (run.length == 0 || follows(run.sequence, run.utime, sequence, utime, bounds_) != RejectReason::kNone) {
+    return false;
+  }
   // A restarted VO counts up from near 0 in small steps: a straggler of the
   // old run, far above, neither extends nor completes the restart.
   return &run != &restart_run_ || sequence - run.sequence <= kRestartMaxFirstSequence;

@@ -10,8 +10,8 @@
 
 #include <algorithm>
 #include <chrono>
-#include <cstdio>
 #include <cmath>
+#include <cstdio>
 #include <vector>
 
 #include "keepless/decision_t.hpp"
@@ -130,7 +130,9 @@ bool run_lcm_mode(const char* argv0, const KeyframeStream& stream, std::uint32_t
       "--max-pair-arcs", std::to_string(need.max_pair_arcs + 1), "--status-period-ms", "200", "--quiet",
       "--latency-target-ms", std::to_string(latency_target_ms)};
   std::uint32_t unmapped_per_frame = 0;
-  for (const core::Keyframe& kf : stream.keyframes) unmapped_per_frame = std::max(unmapped_per_frame, kf.unmapped_count);
+  for (const core::Keyframe& kf : stream.keyframes) {
+    unmapped_per_frame = std::max(unmapped_per_frame, kf.unmapped_count);
+  }
   if (unmapped_per_frame > 0) args.insert(args.end(), {"--max-unmapped", std::to_string(unmapped_per_frame)});
   args.insert(args.end(), node_flags.begin(), node_flags.end());
   std::vector<char*> argv;

@@ -780,7 +780,8 @@ int main(int argc, char** argv) {
       r.publish.p(0.5), r.publish.p(0.99), budget_ms, r.exhausted, r.deferred, r.late,
       static_cast<unsigned long long>(r.allocations), r.footprint, r.compared, ours, inc, lemon_ns, lemon_cs,
       closed, ratio(lemon_ns, ours), ratio(ours, closed), ratio(ours, inc), zero, ratio(lemon_ns, zero),
-      median_ms(r.slide_scratch), median_ms(r.slide_incremental), median_ms(r.slide_zero_flow), lcm.decisions, lcm.lost, lcm.p50_ms, lcm.p99_ms, lcm.max_ms);
+      median_ms(r.slide_scratch), median_ms(r.slide_incremental), median_ms(r.slide_zero_flow), lcm.decisions,
+      lcm.lost, lcm.p50_ms, lcm.p99_ms, lcm.max_ms);
   // The policy and its reference. Digests are hex strings (64 bits do not
   // survive a JSON number as a double).
   std::printf(
