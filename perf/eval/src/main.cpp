@@ -710,8 +710,8 @@ int main(int argc, char** argv) {
     vo.max_frames = a.frames_last == -2 && a.quick ? 60 : 0;  // --quick: the first 60 frames
     vo.seeds = summary.seeds;
     for (const OperatingPoint& op : a.ops) vo.ops.emplace_back(op.fraction, op.M);
-    vo.baselines = a.baselines;
-    vo.baseline_list = a.vo_baselines;
+    if (a.baselines) vo.baselines = a.vo_baselines;
+    else vo.baselines.clear();
     vo.policy = a.policy;
     vo.tracked_flags = a.tracked_flags;
     vo.defer_fixed = a.defer_fixed;

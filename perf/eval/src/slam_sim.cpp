@@ -466,24 +466,16 @@ class Engine {
       const auto slot = static_cast<std::size_t>(std::find(window.begin(), window.end(), home[i]) - window.begin());
       per[slot].push_back(i);
     }
-    std::vector<std::uint32_t> quota(window.size(), 0);
-    std::vector<std::pair<double, std::size_t>> rem;
-    std::uint32_t given = 0;
+    std::vector<std::vector<SscPoint>> groups(window.size());
     for (std::size_t sl = 0; sl < window.size(); ++sl) {
-      const double exact = evaluated.empty() ? 0.0 : double(keep) * double(per[sl].size()) / double(evaluated.size());
-      quota[sl] = static_cast<std::uint32_t>(std::floor(exact));
-      given += quota[sl];
-      rem.emplace_back(-(exact - std::floor(exact)), sl);
-    }
-    std::sort(rem.begin(), rem.end());
-    for (std::size_t j = 0; given < keep && j < rem.size(); ++j, ++given) ++quota[rem[j].second];
-    for (std::size_t sl = 0; sl < window.size(); ++sl) {
-      std::vector<SscPoint> pts;
       for (std::uint32_t i : per[sl]) {
         const KeyPoint& p = kp(home[i], home_kp[i]);
-        pts.push_back(SscPoint{p.u, p.v, p.response, static_cast<std::uint64_t>(evaluated[i])});
+        groups[sl].push_back(SscPoint{p.u, p.v, p.response, static_cast<std::uint64_t>(evaluated[i])});
       }
-      for (std::uint32_t j : ssc_select(pts, quota[sl], s_.cam.width, s_.cam.height)) (*kept)[per[sl][j]] = 1;
+    }
+    const auto chosen = ssc_select_shared(groups, keep, s_.cam.width, s_.cam.height);
+    for (std::size_t sl = 0; sl < window.size(); ++sl) {
+      for (std::uint32_t j : chosen[sl]) (*kept)[per[sl][j]] = 1;
     }
   }
 

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numeric>
+#include <utility>
 
 namespace keepless::eval {
 
@@ -73,6 +74,27 @@ std::vector<std::uint32_t> ssc_select(const std::vector<SscPoint>& points, std::
     }
   }
   return best;
+}
+
+std::vector<std::vector<std::uint32_t>> ssc_select_shared(const std::vector<std::vector<SscPoint>>& groups,
+                                                          std::uint32_t k, int cols, int rows) {
+  std::size_t total = 0;
+  for (const auto& g : groups) total += g.size();
+  const std::uint32_t keep = static_cast<std::uint32_t>(std::min<std::size_t>(k, total));
+  std::vector<std::uint32_t> quota(groups.size(), 0);
+  std::vector<std::pair<double, std::size_t>> remainder;  // (-fraction, group): largest first, then order
+  std::uint32_t given = 0;
+  for (std::size_t g = 0; g < groups.size(); ++g) {
+    const double exact = total == 0 ? 0.0 : double(keep) * double(groups[g].size()) / double(total);
+    quota[g] = static_cast<std::uint32_t>(std::floor(exact));
+    given += quota[g];
+    remainder.emplace_back(-(exact - std::floor(exact)), g);
+  }
+  std::sort(remainder.begin(), remainder.end());
+  for (std::size_t j = 0; given < keep && j < remainder.size(); ++j, ++given) ++quota[remainder[j].second];
+  std::vector<std::vector<std::uint32_t>> kept(groups.size());
+  for (std::size_t g = 0; g < groups.size(); ++g) kept[g] = ssc_select(groups[g], quota[g], cols, rows);
+  return kept;
 }
 
 }  // namespace keepless::eval

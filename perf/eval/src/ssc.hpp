@@ -20,4 +20,11 @@ struct SscPoint {
 std::vector<std::uint32_t> ssc_select(const std::vector<SscPoint>& points, std::uint32_t k, int cols,
                                       int rows, double tolerance = 0.1);
 
+// ANMS over several images: each group (one image's points) keeps its share
+// of k in proportion to its size (largest remainder, ties to the earlier
+// group), chosen by ssc_select on its image. Per group, the kept indices
+// into it; min(k, total) in all.
+std::vector<std::vector<std::uint32_t>> ssc_select_shared(const std::vector<std::vector<SscPoint>>& groups,
+                                                          std::uint32_t k, int cols, int rows);
+
 }  // namespace keepless::eval

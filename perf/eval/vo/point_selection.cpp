@@ -44,27 +44,16 @@ std::vector<core::PointId> baseline_culls(Selector selector, const std::vector<C
         }
         per[static_cast<std::size_t>(at - frames.begin())].push_back(i);
       }
-      const std::size_t keep = n - cull;
-      std::vector<std::size_t> quota(per.size());
-      std::vector<std::pair<double, std::size_t>> remainder;  // (-fraction, keyframe): largest first, then order
-      std::size_t given = 0;
+      std::vector<std::vector<SscPoint>> groups(per.size());
       for (std::size_t k = 0; k < per.size(); ++k) {
-        const double exact = double(keep) * double(per[k].size()) / double(n);
-        quota[k] = static_cast<std::size_t>(exact);
-        given += quota[k];
-        remainder.emplace_back(-(exact - double(quota[k])), k);
+        for (std::uint32_t i : per[k]) {
+          groups[k].push_back({candidates[i].u, candidates[i].v, candidates[i].response, candidates[i].id});
+        }
       }
-      std::sort(remainder.begin(), remainder.end());
-      for (std::size_t j = 0; given < keep && j < remainder.size(); ++j, ++given) ++quota[remainder[j].second];
+      const auto chosen = ssc_select_shared(groups, static_cast<std::uint32_t>(n - cull), width, height);
       std::vector<bool> kept(n, false);
       for (std::size_t k = 0; k < per.size(); ++k) {
-        std::vector<SscPoint> pts;
-        for (std::uint32_t i : per[k]) {
-          pts.push_back({candidates[i].u, candidates[i].v, candidates[i].response, candidates[i].id});
-        }
-        for (std::uint32_t j : ssc_select(pts, static_cast<std::uint32_t>(quota[k]), width, height)) {
-          kept[per[k][j]] = true;
-        }
+        for (std::uint32_t j : chosen[k]) kept[per[k][j]] = true;
       }
       std::stable_partition(order.begin(), order.end(), [&](std::uint32_t i) { return !kept[i]; });
       break;

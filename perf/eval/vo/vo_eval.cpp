@@ -126,8 +126,7 @@ bool evaluate_real_vo(const VoInput& in, const VoEvalOptions& o, std::vector<Com
           {Selector::kLongestTrack, &c.longest_track}, {Selector::kAnms, &c.anms}};
       for (const auto& [selector, into] : runs) {
         if (selector != Selector::kKeepless &&
-            (!o.baselines ||
-             std::find(o.baseline_list.begin(), o.baseline_list.end(), selector) == o.baseline_list.end())) {
+            std::find(o.baselines.begin(), o.baselines.end(), selector) == o.baselines.end()) {
           continue;
         }
         vo.selector = selector;

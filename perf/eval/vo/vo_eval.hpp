@@ -26,9 +26,8 @@ struct VoEvalOptions {
   int max_frames = 0;                               // > 0: at most this many of them (--quick without --frames)
   std::vector<std::uint64_t> seeds;                 // RANSAC order and the random baseline's priorities
   std::vector<std::pair<double, std::int64_t>> ops;  // (kept fraction, NaN for a given M; M)
-  bool baselines = true;
-  // --vo-baselines: which baselines run (kRandom, kLongestTrack, kAnms; default all).
-  std::vector<Selector> baseline_list = {Selector::kRandom, Selector::kLongestTrack, Selector::kAnms};
+  // The baselines that run beside keepless (--vo-baselines; empty with --no-baselines).
+  std::vector<Selector> baselines = {Selector::kRandom, Selector::kLongestTrack, Selector::kAnms};
   // --scope, --floor, --cost: only scope, coverage_floor and cost_model are
   // read. A kept fraction runs keepless with that keep budget over the new
   // keyframe's points (scope newest: the points the VO culls), or with
