@@ -508,6 +508,15 @@ class ResyncOnMemq : public GuardOnMemq {
       send(kt::make_keyframe(s, s, kt::id_range(s * 5 % kPoints, 30)));
     }
   }
+  // The owner's keyframe `s` with bit 19 of its sequence flipped (within
+  // --max-sequence-jump), 0.1 s on: accepted, and it becomes the order.
+  void send_flipped(std::int64_t s) {
+    keepless::keyframe_t flipped = kt::make_keyframe(s, s, kt::id_range(105, 30));
+    flipped.sequence = s + (1 << 19);
+    clock_.advance(100000000);
+    send(flipped);
+    ASSERT_EQ(decisions_.back().status, decision_t::STATUS_OPTIMAL);
+  }
   // After the poison: 4 s of the stream from `from` is served again within
   // the silence (1 s) and the run (3 keyframes), by a resync that keeps the
   // window (`window` keyframes with the resync's); then the owner's reset is honoured.
@@ -534,11 +543,7 @@ class ResyncOnMemq : public GuardOnMemq {
 
 TEST_F(ResyncOnMemq, ASequenceWithABitFlippedIsOutvoted) {
   stream_at_10hz(1, 20);
-  keepless::keyframe_t flipped = kt::make_keyframe(21, 21, kt::id_range(105, 30));
-  flipped.sequence = 21 + (1 << 19);  // within --max-sequence-jump
-  clock_.advance(100000000);
-  send(flipped);
-  ASSERT_EQ(decisions_.back().status, decision_t::STATUS_OPTIMAL);
+  send_flipped(21);
   expect_resynchronised(22);
 }
 
@@ -574,10 +579,7 @@ TEST_F(ResyncOnMemq, AFarAheadMapEventIsOutvoted) {
 // not stop the stream's resync.
 TEST_F(ResyncOnMemq, AStrayLowSequenceDoesNotBlockTheResync) {
   stream_at_10hz(101, 120);
-  keepless::keyframe_t flipped = kt::make_keyframe(121, 121, kt::id_range(105, 30));
-  flipped.sequence = 121 + (1 << 19);
-  clock_.advance(100000000);
-  send(flipped);
+  send_flipped(121);
   stream_at_10hz(122, 122);
   send(kt::make_keyframe(5, 777, kt::id_range(300, 30)));  // valid, refused, sequence <= 16
   expect_resynchronised(123);
