@@ -46,6 +46,11 @@ stop() {
 
 have_logger=0
 if command -v lcm-logger >/dev/null && command -v lcm-logplayer >/dev/null; then have_logger=1; fi
+if [ "$REPLAY" = 1 ] && [ "$have_logger" = 0 ]; then
+  echo "run_demo: lcm-logger / lcm-logplayer not found (Debian: liblcm-bin): the replay cannot be checked;" \
+    "install them or set KEEPLESS_DEMO_REPLAY=0" >&2
+  exit 2
+fi
 
 echo "== keepless demo: keepless_node + keepless_vo_sim over $URL"
 if [ "$have_logger" = 1 ]; then

@@ -144,9 +144,9 @@ TEST_F(SparsifyCliTest, UnreadableWindowFileIsLineZero) {
   const std::string missing = path("no_such_file.txt");
   expect_error_result(sparsify({"--window", missing, "--decisions", path("decisions.txt")}),
                       missing, 0, "cannot open");
-  // A directory opens but cannot be read.
+  // A directory is refused by name, not read.
   expect_error_result(sparsify({"--window", dir_, "--decisions", path("decisions.txt")}), dir_, 0,
-                      "");
+                      "is a directory, not a file");
 }
 
 TEST_F(SparsifyCliTest, UnknownKeyframe) {
@@ -168,10 +168,17 @@ TEST_F(SparsifyCliTest, DuplicateObservation) {
 }
 
 TEST_F(SparsifyCliTest, NonFiniteNumbers) {
-  for (const char* line : {"obs 20 2 nan 5", "obs 20 2 5 inf", "obs 20 2 -inf 5", "kf 30 0 nan 0",
-                           "kf 30 0 0 0 1 0 0 infinity", "obs 20 2 1e999 5"}) {
-    SCOPED_TRACE(line);
-    expect_input_error(std::string(kGoodHead) + line + "\n", 5, "");
+  const std::pair<const char*, const char*> cases[] = {
+      {"obs 20 2 nan 5", "non-finite u 'nan'"},
+      {"obs 20 2 5 inf", "non-finite v 'inf'"},
+      {"obs 20 2 -inf 5", "non-finite u '-inf'"},
+      {"kf 30 0 nan 0", "non-finite cy 'nan'"},
+      {"kf 30 0 0 0 1 0 0 infinity", "non-finite qz 'infinity'"},
+      {"obs 20 2 1e999 5", "u '1e999' out of double range"},
+  };
+  for (const auto& c : cases) {
+    SCOPED_TRACE(c.first);
+    expect_input_error(std::string(kGoodHead) + c.first + "\n", 5, c.second);
   }
 }
 

@@ -121,6 +121,15 @@ TEST_P(ToolCli, EveryDocumentedFlagIsKnownToTheParser) {
       const auto r = run({d.name});
       EXPECT_EQ(r.status, 2);
       EXPECT_NE(r.err.find("option '" + d.name + "' needs a value"), std::string::npos) << r.err;
+      // The value check above is the shared table's; given a value, the
+      // tool's own parser must take the flag: it refuses the value by the
+      // flag's name or reaches the unknown option after it.
+      const auto given = run({d.name, "x", "--not-an-option"});
+      EXPECT_EQ(given.status, 2);
+      EXPECT_EQ(given.err.find("unknown option '" + d.name + "'"), std::string::npos) << given.err;
+      EXPECT_TRUE(given.err.find(d.name) != std::string::npos ||
+                  given.err.find("unknown option '--not-an-option'") != std::string::npos)
+          << given.err;
     } else {
       const auto r = run({d.name, "--not-an-option"});
       EXPECT_EQ(r.status, 2);

@@ -7,7 +7,7 @@
 //
 // If a deliberate change to the costs, the network or the solver's tie-break
 // changes the decisions, the failure prints the new hash: re-record it here
-// and check that the aarch64 suite agrees (docs/cross.md).
+// and check that the aarch64 suite agrees (docs/embedded/bit-identical.md).
 
 #include <gtest/gtest.h>
 

@@ -10,6 +10,7 @@
 #include <memory>
 #include <sstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -119,9 +120,11 @@ struct RunOutput {
   std::string last_line;
 };
 
-RunOutput run(const std::string& args) {
+// stderr_only: stdout_text holds what the tool wrote to stderr instead.
+RunOutput run(const std::string& args, bool stderr_only = false) {
   RunOutput r;
-  const std::string cmd = std::string(KEEPLESS_EVAL_BIN) + " " + args + " 2>/dev/null";
+  const std::string cmd =
+      std::string(KEEPLESS_EVAL_BIN) + " " + args + (stderr_only ? " 2>&1 >/dev/null" : " 2>/dev/null");
   FILE* p = popen(cmd.c_str(), "r");
   if (!p) return r;
   char buf[4096];
@@ -369,24 +372,39 @@ TEST(KeeplessEval, TrackShareReachesKeepless) {
   EXPECT_EQ(result("--track-share 0"), by_order);
 }
 
+// Each bad flag is refused for itself: exit 2 with a message naming it,
+// before any input is opened (the input named, /nonexistent, would also
+// exit 2 but say "cannot open").
 TEST(KeeplessEval, RejectsBadFlagsWithStatus2) {
   require_binary();
-  EXPECT_EQ(run("--no-such-flag").status, 2);
-  EXPECT_EQ(run("--scope oldest --bal /nonexistent").status, 2);
-  EXPECT_EQ(run("--cost cheap --bal /nonexistent").status, 2);
-  EXPECT_EQ(run("--floor -1 --bal /nonexistent").status, 2);
-  EXPECT_EQ(run("--theta 1.5 --bal /nonexistent").status, 2);
-  EXPECT_EQ(run("--track-share 1.5 --kept-fraction 0.3 --bal /nonexistent").status, 2);
-  EXPECT_EQ(run("--track-share 0.5 --M 100 --bal /nonexistent").status, 2);
-  EXPECT_EQ(run("--decide oldest --bal /nonexistent").status, 2);
-  EXPECT_EQ(run("--keyframe-culling sometimes --bal /nonexistent").status, 2);
-  EXPECT_EQ(run("--M abc --bal /nonexistent").status, 2);
-  EXPECT_EQ(run("--kept-fraction 1.5 --bal /nonexistent").status, 2);
-  EXPECT_EQ(run("--M 100 --kept-fraction 0.3 --bal /nonexistent").status, 2);
-  EXPECT_EQ(run("--seeds 0 --bal /nonexistent").status, 2);
-  EXPECT_EQ(run("--error-floor tum --bal /nonexistent").status, 2);
-  EXPECT_EQ(run("--trajectory /nonexistent/file.txt --format tum").status, 2);
-  EXPECT_EQ(run("").status, 2);  // no input
+  const std::pair<const char*, const char*> cases[] = {
+      {"--no-such-flag", "--no-such-flag"},
+      {"--scope oldest", "--scope"},
+      {"--cost cheap", "--cost"},
+      {"--floor -1", "--floor"},
+      {"--theta 1.5", "--theta"},
+      {"--track-share 1.5 --kept-fraction 0.3", "--track-share"},
+      {"--track-share 0.5 --M 100", "--track-share needs --kept-fraction"},
+      {"--decide oldest", "--decide"},
+      {"--keyframe-culling sometimes", "--keyframe-culling"},
+      {"--M abc", "--M"},
+      {"--kept-fraction 1.5", "--kept-fraction"},
+      {"--M 100 --kept-fraction 0.3", "exclude each other"},
+      {"--seeds 0", "--seeds"},
+      {"--error-floor tum", "--error-floor"},
+  };
+  for (const auto& [flags, says] : cases) {
+    const RunOutput r = run(std::string(flags) + " --bal /nonexistent", /*stderr_only=*/true);
+    EXPECT_EQ(r.status, 2) << flags;
+    EXPECT_NE(r.stdout_text.find(says), std::string::npos) << flags << ": " << r.stdout_text;
+    EXPECT_EQ(r.stdout_text.find("cannot open"), std::string::npos) << flags << ": " << r.stdout_text;
+  }
+  const RunOutput missing = run("--trajectory /nonexistent/file.txt --format tum", true);
+  EXPECT_EQ(missing.status, 2);
+  EXPECT_NE(missing.stdout_text.find("/nonexistent/file.txt"), std::string::npos) << missing.stdout_text;
+  const RunOutput none = run("", true);
+  EXPECT_EQ(none.status, 2);
+  EXPECT_FALSE(none.stdout_text.empty());  // says what input it needs
 }
 
 }  // namespace

@@ -103,6 +103,7 @@ TEST(EvalTracking, MotionOnlyBaRecoversThePoseAndFlagsAWrongMatch) {
   const ke::PoseResult r = ke::optimize_pose(cam, obs, block.data());
   const ke::Pose got = ke::from_block(block.data());
   EXPECT_LT((got.t - truth.t).norm(), 1e-6);
+  EXPECT_LT(got.q.angularDistance(truth.q), 1e-6);
   EXPECT_TRUE(r.outlier[7]);
   EXPECT_EQ(r.inliers, 59);
 }

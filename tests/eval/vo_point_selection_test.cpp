@@ -10,6 +10,7 @@
 #include <gtest/gtest.h>
 
 #include "point_selection.hpp"
+#include "ssc.hpp"
 
 namespace vo = keepless::eval::vo;
 
@@ -56,6 +57,17 @@ TEST(VoBaselines, OneKeyframesAnmsIsSscOnItsImage) {
   add(&candidates, 0, 12, 100);
   const auto culls = vo::baseline_culls(vo::Selector::kAnms, candidates, 8, 1, 640, 480);
   ASSERT_EQ(culls.size(), 8u);
+  // What SSC keeps of the same points on the same image: 4 of 12.
+  std::vector<keepless::eval::SscPoint> points;
+  for (const vo::Candidate& c : candidates) points.push_back({c.u, c.v, c.response, c.id});
+  std::vector<keepless::core::PointId> kept;
+  for (std::uint32_t i : keepless::eval::ssc_select(points, 4, 640, 480)) kept.push_back(candidates[i].id);
+  ASSERT_EQ(kept.size(), 4u);
+  std::vector<keepless::core::PointId> expected;
+  for (const vo::Candidate& c : candidates) {
+    if (std::find(kept.begin(), kept.end(), c.id) == kept.end()) expected.push_back(c.id);
+  }
+  EXPECT_EQ(culls, expected);  // both ascending
   // The strongest response (id 111) survives SSC at any count.
   EXPECT_FALSE(std::binary_search(culls.begin(), culls.end(), keepless::core::PointId{111}));
 }
@@ -66,7 +78,11 @@ TEST(VoBaselines, EveryBaselineCullsExactlyTheCount) {
   add(&candidates, 2, 9, 200);
   for (const vo::Selector s : {vo::Selector::kRandom, vo::Selector::kLongestTrack, vo::Selector::kAnms}) {
     for (std::size_t cull : {std::size_t{0}, std::size_t{5}, std::size_t{18}, std::size_t{40}}) {
-      EXPECT_EQ(vo::baseline_culls(s, candidates, cull, 3, 640, 480).size(), std::min<std::size_t>(cull, 18));
+      std::vector<keepless::core::PointId> culls = vo::baseline_culls(s, candidates, cull, 3, 640, 480);
+      EXPECT_EQ(culls.size(), std::min<std::size_t>(cull, 18));
+      std::sort(culls.begin(), culls.end());
+      EXPECT_EQ(std::adjacent_find(culls.begin(), culls.end()), culls.end()) << "a point culled twice";
+      for (keepless::core::PointId id : culls) EXPECT_EQ(culled_in({id}, 100, 9) + culled_in({id}, 200, 9), 1u) << id;
     }
   }
 }

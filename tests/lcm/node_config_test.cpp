@@ -3,6 +3,7 @@
 
 #include <gtest/gtest.h>
 
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -25,6 +26,54 @@ ParseResult parse(std::vector<std::string> args, NodeConfig& c, std::string& err
   std::vector<const char*> argv;
   for (const auto& a : args) argv.push_back(a.c_str());
   return keepless::platform::parse_node_arguments(static_cast<int>(argv.size()), argv.data(), c, error);
+}
+
+// Every field a flag sets, as text: two configurations compare equal.
+std::string fields(const NodeConfig& c) {
+  const keepless::core::Params& p = c.params;
+  std::ostringstream s;
+  s << c.url << '|' << c.keyframe_channel << '|' << c.event_channel << '|' << c.decision_channel << '|'
+    << c.timing_channel << '|' << c.status_channel << '|' << c.event_ack_channel << '|' << c.window << '|'
+    << c.max_observations << '|' << c.max_event_ids << '|' << c.max_unmapped << '|' << c.max_points << '|'
+    << c.max_window_observations << '|' << c.max_pair_arcs << '|' << c.max_memory_mb << '|'
+    << c.max_sequence_jump << '|' << c.max_utime_jump_s << '|' << c.restart_confirm << '|'
+    << c.owner_timeout_s << '|' << c.cull_memory << '|' << c.defer_memory << '|' << c.budget_work_units << '|'
+    << c.latency_target_ms << '|' << c.cpus << '|' << c.mlock << '|' << c.queue_capacity << '|'
+    << c.status_period_ms << '|' << c.max_keyframes << '|' << c.quiet << '|' << p.pair_capacity << '|'
+    << p.theta << '|' << p.box_width << 'x' << p.box_height << '|' << int{p.cost_terms} << '|'
+    << p.spatial_weight << '|' << static_cast<int>(p.scope) << '|' << p.coverage_floor << '|'
+    << static_cast<int>(p.cost_model) << '|' << p.image_width << 'x' << p.image_height << '|'
+    << static_cast<int>(p.budget.kind) << '|' << p.budget.count << '|' << p.budget.fraction << '|'
+    << p.budget.track_share << '|' << p.budget.track_share_from << '|' << p.maturity_keyframes << '|'
+    << p.defer_keyframes << '|' << int{p.track_terms};
+  return s.str();
+}
+
+// Every "(default X)" of --help, given as the flag's value, leaves the
+// configuration as no flag does: the help and NodeConfig say the same.
+// Defaults that are not a value ("unlimited", "all four") are skipped.
+TEST(NodeConfig, EveryDefaultTheHelpNamesIsTheDefault) {
+  NodeConfig base;
+  std::string error;
+  ASSERT_EQ(parse({}, base, error), ParseResult::kOk) << error;
+  std::istringstream usage(keepless::platform::node_usage());
+  std::string line, flag;
+  int checked = 0;
+  while (std::getline(usage, line)) {
+    if (line.rfind("  --", 0) == 0) flag = line.substr(2, line.find(' ', 2) - 2);
+    const std::size_t at = line.find("(default ");
+    if (at == std::string::npos) continue;
+    const std::size_t from = at + 9;
+    std::string value = line.substr(from, line.find_first_of(" ;,)", from) - from);
+    if (!value.empty() && value.back() == ':') value.pop_back();  // "(default 0: off)"
+    if (value == "unlimited" || value == "all") continue;
+    SCOPED_TRACE(flag + " " + value);
+    NodeConfig c;
+    EXPECT_EQ(parse({flag, value}, c, error), ParseResult::kOk) << error;
+    EXPECT_EQ(fields(c), fields(base));
+    ++checked;
+  }
+  EXPECT_GE(checked, 30);  // the help's value defaults were found
 }
 
 TEST(NodeConfig, DefaultsMatchTheDocumentedOnes) {

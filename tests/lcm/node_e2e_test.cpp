@@ -167,12 +167,14 @@ TEST(NodeEndToEnd, EveryKeyframeGetsOneDecisionEqualToTheLibrary) {
 // The node's default configuration (latency target on, 5 ms; drain on)
 // over udpm, fed the normal VO pattern: a keyframe, at once a map event
 // deleting one of its points, then the next keyframe once the decision came.
-// Every keyframe is decided (before: a keyframe with the event queued behind
-// it was answered SKIPPED, 12 of 50 here), every event applied, and every
-// answer names the publisher. The bus is UDP on a shared host: a datagram
+// No keyframe is skipped (before: a keyframe with the event queued behind
+// it was answered SKIPPED, 12 of 50 here): each is solved, or answered
+// BUDGET_EXHAUSTED with nothing culled if its deadline fired (here ~50x
+// a decision's time, so that answer says the host stalled, not the node);
+// every event is applied, and every answer names the publisher. The bus is UDP on a shared host: a datagram
 // the kernel drops is not the node's doing, so losses are counted and
 // bounded, and every keyframe whose answer arrived must have been decided.
-TEST(NodeEndToEnd, TheDefaultConfigurationDecidesEveryKeyframe) {
+TEST(NodeEndToEnd, TheDefaultConfigurationSkipsNoKeyframe) {
   TempDir tmp;
   const std::string url = udpm(unique_port(3));
   lcm::LCM bus(url);
@@ -205,15 +207,21 @@ TEST(NodeEndToEnd, TheDefaultConfigurationDecidesEveryKeyframe) {
 
   const std::vector<Message> decisions = rec.on("KEEPLESS_DECISION");
   ASSERT_GE(decisions.size(), static_cast<std::size_t>(kPairs) * 9 / 10) << "more than 10 % lost\n" << node.log();
-  std::size_t decided = 0, skipped = 0;
+  std::size_t optimal = 0, exhausted = 0;
   for (const Message& m : decisions) {
     const auto d = decode<keepless::decision_t>(m);
     EXPECT_EQ(d.publisher_id, 77);
-    skipped += d.status == keepless::decision_t::STATUS_SKIPPED;
-    decided += d.status == keepless::decision_t::STATUS_OPTIMAL || d.status == keepless::decision_t::STATUS_BUDGET_EXHAUSTED;
+    EXPECT_TRUE(d.status == keepless::decision_t::STATUS_OPTIMAL ||
+                d.status == keepless::decision_t::STATUS_BUDGET_EXHAUSTED)
+        << "keyframe " << d.keyframe_id << " status " << int{d.status};
+    optimal += d.status == keepless::decision_t::STATUS_OPTIMAL;
+    if (d.status == keepless::decision_t::STATUS_BUDGET_EXHAUSTED) {
+      ++exhausted;
+      EXPECT_EQ(d.num_culled, 0) << "keyframe " << d.keyframe_id << ": a late decision culls nothing";
+    }
   }
-  EXPECT_EQ(skipped, 0u);
-  EXPECT_EQ(decided, decisions.size());
+  std::printf("default configuration: %zu answers, %zu solved, %zu past the deadline\n", decisions.size(), optimal,
+              exhausted);
   const std::vector<Message> acks = rec.on("KEEPLESS_MAP_EVENT_ACK");
   EXPECT_GE(acks.size(), static_cast<std::size_t>(kPairs) * 9 / 10);
   for (const Message& m : acks) {

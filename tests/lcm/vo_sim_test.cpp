@@ -41,15 +41,31 @@ TEST(VoSimTrajectory, KittiPosesAreCameraPosesInAZUpFrame) {
   EXPECT_EQ(poses[10].utime, 1000000);
 }
 
+// TUM lines are "t tx ty tz qx qy qz qw": the first pose is the file's first
+// line, the quaternion's scalar read last (its rotation written out here from
+// the unit quaternion), a proper rotation.
 TEST(VoSimTrajectory, TumGroundTruth) {
   const std::string path = kData + "evo/freiburg1_xyz-groundtruth.txt";
   if (!exists(path)) GTEST_SKIP() << "no data: " << path << " is missing";
   const std::vector<Pose> poses = load(path, TrajectoryFormat::kTum);
   ASSERT_EQ(poses.size(), 3000u);
-  for (const Pose& p : {poses.front(), poses.back()}) {
-    EXPECT_NEAR(std::fabs(p.rotation.m[0][0] * (p.rotation.m[1][1] * p.rotation.m[2][2] - p.rotation.m[1][2] * p.rotation.m[2][1]) -
-                          p.rotation.m[0][1] * (p.rotation.m[1][0] * p.rotation.m[2][2] - p.rotation.m[1][2] * p.rotation.m[2][0]) +
-                          p.rotation.m[0][2] * (p.rotation.m[1][0] * p.rotation.m[2][1] - p.rotation.m[1][1] * p.rotation.m[2][0])),
+  const Pose& p = poses.front();  // 1305031098.6659 1.3563 0.6305 1.6380 0.6132 0.5962 -0.3311 -0.3986
+  EXPECT_EQ(p.utime, 1305031098665900);
+  EXPECT_NEAR(p.centre.x, 1.3563, 1e-12);
+  EXPECT_NEAR(p.centre.y, 0.6305, 1e-12);
+  EXPECT_NEAR(p.centre.z, 1.6380, 1e-12);
+  double x = 0.6132, y = 0.5962, z = -0.3311, w = -0.3986;
+  const double n = std::sqrt(x * x + y * y + z * z + w * w);
+  x /= n, y /= n, z /= n, w /= n;
+  const double R[3][3] = {{1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)},
+                          {2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)},
+                          {2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)}};
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) EXPECT_NEAR(p.rotation.m[r][c], R[r][c], 1e-9) << r << "," << c;
+  for (const Pose& q : {poses.front(), poses.back()}) {
+    const auto& m = q.rotation.m;
+    EXPECT_NEAR(m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0]) +
+                    m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]),
                 1.0, 1e-6);
   }
 }

@@ -10,7 +10,7 @@
 //
 // The bound: keepless_maps_bench measured a largest centre deviation of
 // 0.061 m (RMS 0.033 m) for exactly this run on the 2-core dev machine
-// (README, "Offline: maps"); BA is deterministic, so the bound is that
+// (docs/development/tests.md); BA is deterministic, so the bound is that
 // figure with a 2.5x margin for other BLAS/Ceres builds. Random selection at
 // the same count measured 0.064 +- 0.008 m, so this is not a quality claim.
 

@@ -200,7 +200,11 @@ long parse_int(const std::string& flag, const std::string& v, long lo, long hi) 
 double parse_double(const std::string& flag, const std::string& v, double lo, double hi) {
   char* end = nullptr;
   const double x = std::strtod(v.c_str(), &end);
-  if (v.empty() || *end != '\0' || !(x >= lo && x <= hi)) fail(flag + ": expected a number in [" + std::to_string(lo) + ", " + std::to_string(hi) + "], got '" + v + "'");
+  if (v.empty() || *end != '\0' || !(x >= lo && x <= hi)) {
+    std::ostringstream range;  // shortest form: [0.01, 0.99], not [0.010000, 0.990000]
+    range << "[" << lo << ", " << hi << "]";
+    fail(flag + ": expected a number in " + range.str() + ", got '" + v + "'");
+  }
   return x;
 }
 
