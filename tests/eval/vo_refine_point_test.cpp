@@ -1,7 +1,8 @@
 // The real VO's structure-only refinement of an excluded point
 // (refine_point, deferred culling): with the poses held it moves a point
 // from a poor start back onto its observations, flags the observation that
-// does not fit as an outlier, and refuses a point behind a camera.
+// does not fit as an outlier, and refuses a point behind a camera; and the
+// motion-only refinement of a pose (refine_pose).
 
 #include <vector>
 
@@ -82,4 +83,70 @@ TEST(VoRefinePoint, RefusesWhenFewerThanTwoObservationsFit) {
   std::vector<bool> outlier;
   EXPECT_FALSE(vo::refine_point(cam, tcw, obs, &X, &outlier));
   EXPECT_EQ(X, truth);
+}
+
+// The motion-only counterpart (refine_pose, --defer-alternate): with the
+// points held it brings a perturbed pose back onto the observations and
+// flags the wrong match; against fewer than 10 fitting points it keeps the
+// pose it was given.
+namespace {
+
+std::vector<Eigen::Vector3d> scene(int n) {
+  std::vector<Eigen::Vector3d> X;
+  for (int i = 0; i < n; ++i) X.emplace_back(-4.0 + 0.37 * i, -1.5 + 0.11 * (i % 7), 8.0 + 0.9 * (i % 5));
+  return X;
+}
+
+Eigen::Isometry3d camera_pose() {
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear() = Eigen::AngleAxisd(0.1, Eigen::Vector3d(0.2, 1, 0.1).normalized()).toRotationMatrix();
+  T.translation() = Eigen::Vector3d(0.3, -0.1, 0.5);
+  return T;
+}
+
+std::vector<vo::BaObservation> observe(const vo::PinholeCamera& c, const Eigen::Isometry3d& T,
+                                       const std::vector<Eigen::Vector3d>& X) {
+  std::vector<vo::BaObservation> obs;
+  for (std::size_t i = 0; i < X.size(); ++i) {
+    vo::BaObservation o = project(c, T, X[i]);
+    o.point = static_cast<int>(i);
+    obs.push_back(o);
+  }
+  return obs;
+}
+
+Eigen::Isometry3d perturbed(const Eigen::Isometry3d& T) {
+  Eigen::Isometry3d d = Eigen::Isometry3d::Identity();
+  d.linear() = Eigen::AngleAxisd(0.02, Eigen::Vector3d(1, -0.5, 0.3).normalized()).toRotationMatrix();
+  d.translation() = Eigen::Vector3d(0.05, 0.03, -0.08);
+  return d * T;
+}
+
+}  // namespace
+
+TEST(VoRefinePose, RecoversThePoseAndFlagsTheOutlier) {
+  const vo::PinholeCamera cam = kitti_like();
+  const std::vector<Eigen::Vector3d> X = scene(30);
+  const Eigen::Isometry3d truth = camera_pose();
+  std::vector<vo::BaObservation> obs = observe(cam, truth, X);
+  obs[7].v += 50;  // a wrong match
+  Eigen::Isometry3d T = perturbed(truth);
+  std::vector<bool> outlier;
+  EXPECT_EQ(vo::refine_pose(cam, X, obs, &T, &outlier), 29);
+  EXPECT_LT((T.translation() - truth.translation()).norm(), 1e-6);
+  EXPECT_LT(Eigen::AngleAxisd(T.linear() * truth.linear().transpose()).angle(), 1e-8);
+  ASSERT_EQ(outlier.size(), obs.size());
+  for (std::size_t i = 0; i < obs.size(); ++i) EXPECT_EQ(outlier[i], i == 7) << i;
+}
+
+TEST(VoRefinePose, KeepsThePoseWhenTooFewPointsFit) {
+  const vo::PinholeCamera cam = kitti_like();
+  const std::vector<Eigen::Vector3d> X = scene(12);
+  std::vector<vo::BaObservation> obs = observe(cam, camera_pose(), X);
+  for (int i = 0; i < 4; ++i) obs[static_cast<std::size_t>(3 * i)].u += 80.0 + 20 * i;  // 8 of 12 fit
+  const Eigen::Isometry3d start = perturbed(camera_pose());
+  Eigen::Isometry3d T = start;
+  std::vector<bool> outlier;
+  EXPECT_LT(vo::refine_pose(cam, X, obs, &T, &outlier), 10);
+  EXPECT_TRUE(T.isApprox(start, 0));
 }

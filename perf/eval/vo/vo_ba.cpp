@@ -91,6 +91,43 @@ double chi2(const PinholeCamera& cam, const Eigen::Isometry3d& Tcw, const Eigen:
   return e * pyramid().inv_sigma2[static_cast<std::size_t>(o.level)];
 }
 
+namespace {
+
+// The weighted residual of one observation of the camera point p, and its
+// derivative with respect to p (rows u, v and, for RGB-D, u_r).
+struct Linearised {
+  Eigen::Matrix<double, 3, 3> J;
+  Eigen::Vector3d e;
+  int rows = 2;
+};
+
+Linearised linearise(const PinholeCamera& cam, const Eigen::Vector3d& p, const BaObservation& o) {
+  Linearised l;
+  const double iz = 1.0 / p.z(), w = 1.0 / pyramid().scale[static_cast<std::size_t>(o.level)];
+  const double pu = cam.fx * p.x() * iz + cam.cx;
+  l.J.row(0) << cam.fx * iz, 0, -cam.fx * p.x() * iz * iz;
+  l.J.row(1) << 0, cam.fy * iz, -cam.fy * p.y() * iz * iz;
+  l.e << pu - o.u, cam.fy * p.y() * iz + cam.cy - o.v, 0;
+  l.rows = o.ur >= 0 ? 3 : 2;
+  if (l.rows == 3) {
+    l.J.row(2) << cam.fx * iz, 0, (cam.bf - cam.fx * p.x()) * iz * iz;
+    l.e(2) = pu - cam.bf * iz - o.ur;
+  } else {
+    l.J.row(2).setZero();
+  }
+  l.J *= w;
+  l.e *= w;
+  return l;
+}
+
+// Huber's IRLS weight at the chi-square 95 % threshold (1 past the robust stage).
+double huber_weight(const Linearised& l, const BaObservation& o, bool robust) {
+  const double delta = std::sqrt(threshold(o)), norm = l.e.norm();
+  return robust && norm > delta ? delta / norm : 1.0;
+}
+
+}  // namespace
+
 bool refine_point(const PinholeCamera& cam, const std::vector<Eigen::Isometry3d>& tcw,
                   const std::vector<BaObservation>& obs, Eigen::Vector3d* X, std::vector<bool>* outlier) {
   outlier->assign(obs.size(), false);
@@ -101,26 +138,13 @@ bool refine_point(const PinholeCamera& cam, const std::vector<Eigen::Isometry3d>
       Eigen::Vector3d g = Eigen::Vector3d::Zero();
       for (std::size_t i = 0; i < obs.size(); ++i) {
         if ((*outlier)[i]) continue;
-        const BaObservation& o = obs[i];
         const Eigen::Vector3d p = tcw[i] * x;
         if (!(p.z() > 0)) return false;
-        const double iz = 1.0 / p.z(), w = 1.0 / pyramid().scale[static_cast<std::size_t>(o.level)];
-        const double pu = cam.fx * p.x() * iz + cam.cx;
-        Eigen::Matrix3d Jp = Eigen::Matrix3d::Zero();  // d(residual)/d(camera point), rows u, v, u_r
-        Jp.row(0) << cam.fx * iz, 0, -cam.fx * p.x() * iz * iz;
-        Jp.row(1) << 0, cam.fy * iz, -cam.fy * p.y() * iz * iz;
-        Eigen::Vector3d r(pu - o.u, cam.fy * p.y() * iz + cam.cy - o.v, 0);
-        const int rows = o.ur >= 0 ? 3 : 2;
-        if (rows == 3) {
-          Jp.row(2) << cam.fx * iz, 0, (cam.bf - cam.fx * p.x()) * iz * iz;
-          r(2) = pu - cam.bf * iz - o.ur;
-        }
-        const Eigen::Matrix<double, Eigen::Dynamic, 3, 0, 3, 3> J = w * Jp.topRows(rows) * tcw[i].linear();
-        const Eigen::Matrix<double, Eigen::Dynamic, 1, 0, 3, 1> e = w * r.head(rows);
-        const double delta = std::sqrt(threshold(o)), norm = e.norm();
-        const double rho = stage == 0 && norm > delta ? delta / norm : 1.0;  // Huber's IRLS weight
+        const Linearised l = linearise(cam, p, obs[i]);
+        const Eigen::Matrix3d J = l.J * tcw[i].linear();
+        const double rho = huber_weight(l, obs[i], stage == 0);
         H += rho * J.transpose() * J;
-        g += rho * J.transpose() * e;
+        g += rho * J.transpose() * l.e;
       }
       const Eigen::Vector3d dx = H.ldlt().solve(-g);
       if (!dx.allFinite()) return false;
@@ -137,6 +161,48 @@ bool refine_point(const PinholeCamera& cam, const std::vector<Eigen::Isometry3d>
   if (!x.allFinite()) return false;
   *X = x;
   return true;
+}
+
+int refine_pose(const PinholeCamera& cam, const std::vector<Eigen::Vector3d>& points,
+                const std::vector<BaObservation>& obs, Eigen::Isometry3d* Tcw, std::vector<bool>* outlier) {
+  outlier->assign(obs.size(), false);
+  Eigen::Isometry3d T = *Tcw;
+  int inliers = 0;
+  for (int stage = 0; stage < 2; ++stage) {
+    for (int it = 0; it < 5; ++it) {
+      Eigen::Matrix<double, 6, 6> H = Eigen::Matrix<double, 6, 6>::Zero();
+      Eigen::Matrix<double, 6, 1> g = Eigen::Matrix<double, 6, 1>::Zero();
+      for (std::size_t i = 0; i < obs.size(); ++i) {
+        if ((*outlier)[i]) continue;
+        const Eigen::Vector3d p = T * points[static_cast<std::size_t>(obs[i].point)];
+        if (!(p.z() > 0)) continue;
+        const Linearised l = linearise(cam, p, obs[i]);
+        Eigen::Matrix<double, 3, 6> dp;  // d(exp(delta) p)/d(delta), delta = (omega, v) on the left
+        dp.leftCols<3>() << 0, p.z(), -p.y(), -p.z(), 0, p.x(), p.y(), -p.x(), 0;
+        dp.rightCols<3>().setIdentity();
+        const Eigen::Matrix<double, 3, 6> J = l.J * dp;
+        const double rho = huber_weight(l, obs[i], stage == 0);
+        H += rho * J.transpose() * J;
+        g += rho * J.transpose() * l.e;
+      }
+      const Eigen::Matrix<double, 6, 1> d = H.ldlt().solve(-g);
+      if (!d.allFinite()) return 0;
+      const double a = d.head<3>().norm();
+      Eigen::Isometry3d step = Eigen::Isometry3d::Identity();
+      if (a > 1e-15) step.linear() = Eigen::AngleAxisd(a, d.head<3>() / a).toRotationMatrix();
+      step.translation() = d.tail<3>();
+      T = step * T;
+      if (d.norm() < 1e-10) break;
+    }
+    inliers = 0;
+    for (std::size_t i = 0; i < obs.size(); ++i) {
+      (*outlier)[i] = chi2(cam, T, points[static_cast<std::size_t>(obs[i].point)], obs[i]) > threshold(obs[i]);
+      inliers += (*outlier)[i] ? 0 : 1;
+    }
+    if (inliers < 10) return inliers;
+  }
+  if (T.matrix().allFinite()) *Tcw = T;
+  return inliers;
 }
 
 int optimize_pose(const PinholeCamera& cam, const std::vector<Eigen::Vector3d>& points,

@@ -56,6 +56,15 @@ std::vector<bool> solve_local_ba(const PinholeCamera& cam, LocalBaProblem* probl
 bool refine_point(const PinholeCamera& cam, const std::vector<Eigen::Isometry3d>& tcw,
                   const std::vector<BaObservation>& obs, Eigen::Vector3d* X, std::vector<bool>* outlier);
 
+// Motion-only refinement of one pose, the points held: refine_point's
+// Gauss-Newton on a left SE(3) increment (Huber, outliers classified, again
+// without the kernel on the inliers). A fraction of optimize_pose's cost
+// (no Ceres problem, 10 iterations instead of 40), for refining many poses
+// against points the local BA left out. Returns the inliers; the pose is
+// left as it was below 10.
+int refine_pose(const PinholeCamera& cam, const std::vector<Eigen::Vector3d>& points,
+                const std::vector<BaObservation>& obs, Eigen::Isometry3d* Tcw, std::vector<bool>* outlier);
+
 // chi2 of one observation (weighted squared error); +inf behind the camera.
 double chi2(const PinholeCamera& cam, const Eigen::Isometry3d& Tcw, const Eigen::Vector3d& X,
             const BaObservation& o);
