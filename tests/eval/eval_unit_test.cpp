@@ -65,6 +65,29 @@ TEST(EvalAlignment, Sim3RemovesAScaleErrorThatSe3Cannot) {
   }
 }
 
+// A straight road: the estimate's positions are the ground truth's but every
+// orientation is 5 degrees off in heading. The position error is Umeyama's,
+// zero: the orientations do not move the positions' alignment (they did
+// until 2026-12-05, charging 1.26 m here). ATE_r aligns the orientations
+// on such a road, so a constant offset is aligned away.
+TEST(EvalAlignment, OnAStraightRoadHeadingErrorIsNotPositionError) {
+  std::vector<ke::Pose> gt, est;
+  const Eigen::Quaterniond heading(Eigen::AngleAxisd(5.0 * 3.141592653589793 / 180.0, Eigen::Vector3d::UnitY()));
+  for (int i = 0; i < 50; ++i) {
+    ke::Pose g;
+    g.t = Eigen::Vector3d(0.01 * std::sin(0.3 * i), 0.002 * std::cos(0.7 * i), 1.0 * i);  // along z, nearly
+    gt.push_back(g);
+    ke::Pose e = g;
+    e.q = heading * g.q;
+    est.push_back(e);
+  }
+  for (bool with_scale : {true, false}) {
+    const ke::Ate ate = ke::absolute_trajectory_error(est, gt, with_scale);
+    EXPECT_LT(ate.rms_m, 1e-9) << with_scale;
+    EXPECT_LT(ate.rms_r_deg, 1e-6) << with_scale;
+  }
+}
+
 TEST(EvalTrajectory, ACulledKeyframeFollowsItsParentsCorrection) {
   // Keyframe 1 culled with parent 0, keyframe 2 culled later with parent 1:
   // after keyframe 0 moves, both follow, composing the stored relative poses.

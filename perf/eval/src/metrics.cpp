@@ -47,15 +47,17 @@ Ate absolute_trajectory_error(const std::vector<Pose>& estimate, const std::vect
     src[i] = estimate[i].t;
     dst[i] = ground_truth[i].t;
   }
-  Alignment a = umeyama(src, dst, with_scale);
+  const Alignment a = umeyama(src, dst, with_scale);
+  // Positions: Umeyama's least squares, as evo. Orientations: where the
+  // estimated positions are nearly collinear (a straight road) Umeyama
+  // leaves the rotation about their line to noise, which moves no position
+  // but every orientation; ATE_r then takes the rotation from the
+  // orientations (the chordal mean of Q_i P_i^-1).
+  Eigen::Matrix3d R_orient = a.R;
   {
-    // A near-linear trajectory (a straight road) leaves the rotation about
-    // its axis to noise; then the rotation comes from the orientations (the
-    // chordal mean of Q_i P_i^-1) and only s, t from the positions.
-    Eigen::Vector3d ms = Eigen::Vector3d::Zero(), md = Eigen::Vector3d::Zero();
-    for (std::size_t i = 0; i < n; ++i) { ms += src[i]; md += dst[i]; }
+    Eigen::Vector3d ms = Eigen::Vector3d::Zero();
+    for (std::size_t i = 0; i < n; ++i) ms += src[i];
     ms /= double(n);
-    md /= double(n);
     Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
     for (std::size_t i = 0; i < n; ++i) cov += (src[i] - ms) * (src[i] - ms).transpose();
     const Eigen::Vector3d ev = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(cov).eigenvalues();  // ascending
@@ -65,18 +67,10 @@ Ate absolute_trajectory_error(const std::vector<Pose>& estimate, const std::vect
       Eigen::JacobiSVD<Eigen::Matrix3d> svd(sum, Eigen::ComputeFullU | Eigen::ComputeFullV);
       Eigen::Matrix3d S = Eigen::Matrix3d::Identity();
       if ((svd.matrixU() * svd.matrixV().transpose()).determinant() < 0) S(2, 2) = -1;
-      a.R = svd.matrixU() * S * svd.matrixV().transpose();
-      double num = 0, den = 0;
-      for (std::size_t i = 0; i < n; ++i) {
-        const Eigen::Vector3d rs = a.R * (src[i] - ms);
-        num += rs.dot(dst[i] - md);
-        den += rs.squaredNorm();
-      }
-      a.s = (with_scale && den > 0) ? num / den : 1.0;
-      a.t = md - a.s * a.R * ms;
+      R_orient = svd.matrixU() * S * svd.matrixV().transpose();
     }
   }
-  const Eigen::Quaterniond qa(a.R);
+  const Eigen::Quaterniond qa(R_orient);
   double se = 0, sr = 0;
   for (std::size_t i = 0; i < n; ++i) {
     const Eigen::Vector3d p = a.s * (a.R * src[i]) + a.t;

@@ -29,6 +29,9 @@ struct Ate {
 
 // with_scale: Sim(3) alignment (evo's --align --correct_scale), for
 // monocular runs whose scale is not observable; otherwise SE(3) (--align).
+// rms_m is after Umeyama's alignment always; rms_r_deg too, but where the
+// estimated positions are nearly collinear (second eigenvalue of their
+// scatter < 1e-3 of the first) its rotation comes from the orientations.
 Ate absolute_trajectory_error(const std::vector<Pose>& estimate, const std::vector<Pose>& ground_truth,
                               bool with_scale);
 

@@ -114,13 +114,12 @@ RealRunResult Vo::run() {
     } else {
       const Eigen::Isometry3d before = last_.Tcw;
       tracked = track(cur);
-      if (tracked) {
-        velocity_ = cur.Tcw * before.inverse();
-        have_velocity_ = true;
-        last_ = cur;
-      } else {
-        have_velocity_ = false;
-      }
+      // The motion model is one frame's motion: after a lost frame, `before`
+      // is several frames back, so the frame relocalised gives none
+      // (ORB-SLAM2 clears mVelocity too).
+      have_velocity_ = tracked && was_tracked;
+      if (have_velocity_) velocity_ = cur.Tcw * before.inverse();
+      if (tracked) last_ = cur;
     }
     if (tracked) {
       ++result_.frames_tracked;

@@ -295,6 +295,15 @@ void Vo::remove_culls(const std::vector<core::PointId>& culls) {
     for (core::PointId id : culls) delete_cull(static_cast<int>(id));
     return;
   }
+  // An excluded point the map lost otherwise (a BA outlier, point or
+  // keyframe culling, a merge) is forgotten, as the node forgets a point the
+  // VO deletes or merges itself.
+  for (std::size_t p = 0; p < map_.points.size(); ++p) {
+    MapPoint& m = map_.points[p];
+    if (!m.excluded || !m.bad) continue;
+    m.excluded = false;
+    (void)deferred_.forget(static_cast<core::PointId>(p));
+  }
   // Out of local BA now, out of the map when the rule says (core::DeferredCulls).
   std::vector<core::PointId> excluded, deleted;
   opencv::defer_culls(culls, deferred_, &excluded, &deleted);
@@ -307,13 +316,13 @@ void Vo::remove_culls(const std::vector<core::PointId>& culls) {
     MapPoint& m = map_.points[static_cast<std::size_t>(id)];
     // Not before T unmatched keyframes (a refused cull, never excluded, goes at once).
     if (m.excluded && !m.bad && now - m.matched_tick < opt_.params.defer_keyframes) ++result_.defer_rule_violations;
+    result_.points_deleted_deferred += m.bad ? 0 : 1;
     delete_cull(static_cast<int>(id));
   }
   // Nor after: no excluded point the map still holds has gone T unmatched keyframes.
   for (const MapPoint& m : map_.points) {
     if (m.excluded && !m.bad && now - m.matched_tick >= opt_.params.defer_keyframes) ++result_.defer_rule_violations;
   }
-  result_.points_deleted_deferred += static_cast<std::int64_t>(deleted.size());
 }
 
 void Vo::delete_cull(int p) {
@@ -414,7 +423,7 @@ void Vo::refine_local_poses(const std::vector<int>& local) {
     }
     if (obs.size() < 15) continue;
     Eigen::Isometry3d T = f.Tcw;
-    if (optimize_pose(cam_, X, obs, &T, &outlier) >= 15) f.Tcw = T;
+    if (refine_pose(cam_, X, obs, &T, &outlier) >= 15) f.Tcw = T;
   }
 }
 

@@ -52,7 +52,14 @@ void Map::cull_remembered(int p) {
   MapPoint& m = points[static_cast<std::size_t>(p)];
   if (m.bad) return;
   m.culled_obs = m.obs;
-  for (const auto& o : m.obs) kfs[static_cast<std::size_t>(o.first)].culled.emplace_back(o.second, p);
+  for (const auto& o : m.obs) {
+    // One remembered cull per keypoint: a later point at the same keypoint,
+    // culled too, replaces the earlier one (redundant() counts keypoints).
+    auto& culled = kfs[static_cast<std::size_t>(o.first)].culled;
+    const auto same = std::find_if(culled.begin(), culled.end(), [&](const auto& c) { return c.first == o.second; });
+    if (same != culled.end()) same->second = p;
+    else culled.emplace_back(o.second, p);
+  }
   set_bad(p);
 }
 
