@@ -94,11 +94,10 @@ double chi2(const PinholeCamera& cam, const Eigen::Isometry3d& Tcw, const Eigen:
 namespace {
 
 // The weighted residual of one observation of the camera point p, and its
-// derivative with respect to p (rows u, v and, for RGB-D, u_r).
+// derivative with respect to p: rows u, v and u_r (zero for a monocular one).
 struct Linearised {
-  Eigen::Matrix<double, 3, 3> J;
+  Eigen::Matrix3d J;
   Eigen::Vector3d e;
-  int rows = 2;
 };
 
 Linearised linearise(const PinholeCamera& cam, const Eigen::Vector3d& p, const BaObservation& o) {
@@ -108,8 +107,7 @@ Linearised linearise(const PinholeCamera& cam, const Eigen::Vector3d& p, const B
   l.J.row(0) << cam.fx * iz, 0, -cam.fx * p.x() * iz * iz;
   l.J.row(1) << 0, cam.fy * iz, -cam.fy * p.y() * iz * iz;
   l.e << pu - o.u, cam.fy * p.y() * iz + cam.cy - o.v, 0;
-  l.rows = o.ur >= 0 ? 3 : 2;
-  if (l.rows == 3) {
+  if (o.ur >= 0) {
     l.J.row(2) << cam.fx * iz, 0, (cam.bf - cam.fx * p.x()) * iz * iz;
     l.e(2) = pu - cam.bf * iz - o.ur;
   } else {
