@@ -26,8 +26,9 @@ function(run_latency last_var)
   endif()
   string(STRIP "${out}" out)
   string(REGEX REPLACE ".*\n" "" last "${out}")
-  foreach(key workload decisions e2e_p50_ms e2e_p99_ms e2e_max_ms budget_exhausted
-              allocations_after_warmup footprint_bytes ours_scratch_median_ms incremental_median_ms
+  foreach(key workload decisions pinned mlock mlock_ok e2e_p50_ms e2e_p99_ms e2e_max_ms budget_exhausted
+              allocations_after_warmup footprint_bytes ours_scratch_median_ms ours_scratch_solve_median_ms
+              incremental_median_ms scratch_over_incremental
               lemon_ns_median_ms lemon_cs_median_ms closed_form_median_ms ours_zero_flow_median_ms
               slide_zero_flow_median_ms identical_decisions
               use scope maturity_keyframes defer_keyframes track_share track_share_from coverage_floor cost_model intrinsics_and_depths unmapped_per_kf floor_bound_decisions
@@ -56,8 +57,9 @@ function(run_latency last_var)
     message(FATAL_ERROR "unexpected run: ${last}")
   endif()
   string(JSON cpus GET "${last}" cpus)
+  string(JSON pinned GET "${last}" pinned)
   string(JSON lemon GET "${last}" lemon_ns_median_ms)
-  if(NOT cpus STREQUAL "0,1" OR NOT lemon GREATER 0)
+  if(NOT cpus STREQUAL "0,1" OR NOT pinned OR NOT lemon GREATER 0)
     message(FATAL_ERROR "expected a run pinned to CPUs 0,1 with LEMON timed: ${last}")
   endif()
   set(${last_var} "${last}" PARENT_SCOPE)

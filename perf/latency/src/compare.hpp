@@ -36,9 +36,12 @@ struct ArcList {
 void network_arcs(const core::Sparsifier& scratch, ArcList* out);
 
 // Each returns the elapsed nanoseconds on `clock`, and the answer (-1 when
-// the solve failed or, for ours, its start was not certified).
+// the solve failed or, for ours, its start was not certified). time_ours
+// counts loading the network, as LEMON's graph construction is counted;
+// `solve_ns` gets the start and the solve alone, what update() times.
 std::uint64_t time_ours(const ArcList& net, const solver::Clock& clock, solver::MinCostFlow& mcf,
-                        core::PairwiseStart& start, solver::Flow* value, solver::Cost* cost);
+                        core::PairwiseStart& start, solver::Flow* value, solver::Cost* cost,
+                        std::uint64_t* solve_ns);
 std::uint64_t time_ours_zero_flow(const ArcList& net, const solver::Clock& clock,
                                   solver::MinCostFlow& mcf, solver::Flow* value, solver::Cost* cost);
 
