@@ -53,7 +53,7 @@ int main(int argc, char** argv) {
   for (int i = 1; i + 1 < argc; ++i) {
     if (std::string(argv[i]) == "--workload" &&
         !keepless::perf::workload_spec(argv[i + 1], &spec)) {
-      return usage_error(std::string("--workload: expected small, orbslam, large or map, got '") + argv[i + 1] + "'");
+      return usage_error(keepless::perf::unknown_workload(argv[i + 1]));
     }
   }
   const std::string help =

@@ -293,6 +293,10 @@ std::uint64_t total_views(const std::vector<Track>& tracks) {
 
 }  // namespace
 
+std::string unknown_workload(const std::string& name) {
+  return "--workload: expected small, orbslam, large or map, got '" + name + "'";
+}
+
 bool workload_spec(const std::string& name, SyntheticSpec* spec) {
   if (name == "small") {
     spec->keyframes = 10, spec->points = 2000, spec->obs_per_kf = 600;

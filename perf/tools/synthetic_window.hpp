@@ -32,6 +32,8 @@ struct SyntheticSpec {
 
 // Presets: small, orbslam, large, map. False for an unknown name.
 bool workload_spec(const std::string& name, SyntheticSpec* spec);
+// The message for a --workload that workload_spec refused, naming the presets.
+std::string unknown_workload(const std::string& name);
 
 // Exactly spec.points points, each seen by >= 1 keyframe; point ids ascend
 // with the keyframe that first sees them. With spec.unmapped_per_kf > 0 the

@@ -172,9 +172,7 @@ struct Args {
   int max_keyframes = -1, keypoints = -1, window = -1, ba_iterations = -1, image_frames = -1;
   bool window_sizes = false;
   bool noise_free = false, baselines = true, ablation = true, ablation_all = false;
-  std::vector<keepless::eval::vo::Selector> vo_baselines = {keepless::eval::vo::Selector::kRandom,
-                                                            keepless::eval::vo::Selector::kLongestTrack,
-                                                            keepless::eval::vo::Selector::kAnms};  // --vo-baselines
+  std::vector<keepless::eval::vo::Selector> vo_baselines = keepless::eval::vo::VoEvalOptions{}.baselines;  // --vo-baselines
   keepless::core::Params policy;  // scope, coverage_floor, theta, cost_model, maturity_keyframes, track_terms, cost_terms (the real VO), spatial_weight; the rest is set per variant
   bool tracked_flags = false;     // --tracked-flags (the real VO)
   bool defer_fixed = false;       // --defer-fixed (the real VO)

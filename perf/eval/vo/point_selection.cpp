@@ -32,23 +32,23 @@ std::vector<core::PointId> baseline_culls(Selector selector, const std::vector<C
       });
       break;
     case Selector::kAnms: {
-      // Keyframes in the order they first appear, each with its candidates.
+      // Keyframes in the order they first appear, each with its candidates
+      // (indices into `candidates`) and their keypoints.
       std::vector<int> frames;
       std::vector<std::vector<std::uint32_t>> per;
+      std::vector<std::vector<SscPoint>> groups;
       for (std::uint32_t i = 0; i < n; ++i) {
-        auto at = std::find(frames.begin(), frames.end(), candidates[i].keyframe);
+        const Candidate& c = candidates[i];
+        auto at = std::find(frames.begin(), frames.end(), c.keyframe);
         if (at == frames.end()) {
-          frames.push_back(candidates[i].keyframe);
+          frames.push_back(c.keyframe);
           per.emplace_back();
+          groups.emplace_back();
           at = frames.end() - 1;
         }
-        per[static_cast<std::size_t>(at - frames.begin())].push_back(i);
-      }
-      std::vector<std::vector<SscPoint>> groups(per.size());
-      for (std::size_t k = 0; k < per.size(); ++k) {
-        for (std::uint32_t i : per[k]) {
-          groups[k].push_back({candidates[i].u, candidates[i].v, candidates[i].response, candidates[i].id});
-        }
+        const auto k = static_cast<std::size_t>(at - frames.begin());
+        per[k].push_back(i);
+        groups[k].push_back({c.u, c.v, c.response, c.id});
       }
       const auto chosen = ssc_select_shared(groups, static_cast<std::uint32_t>(n - cull), width, height);
       std::vector<bool> kept(n, false);

@@ -604,7 +604,7 @@ int main(int argc, char** argv) {
     const std::uint32_t measured = o.keyframes > 0 ? o.keyframes : (o.workload == "map" ? 3 : 1000);
     SyntheticSpec spec;
     if (!workload_spec(o.workload, &spec)) {
-      return cli::usage_error(kTool, "--workload: expected small, orbslam, large or map, got '" + o.workload + "'");
+      return cli::usage_error(kTool, unknown_workload(o.workload));
     }
     const std::uint32_t k = spec.keyframes;
     const std::uint32_t warmup = o.warmup > 0 ? o.warmup : k;
