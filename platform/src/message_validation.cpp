@@ -155,13 +155,13 @@ namespace {
 // (sequence, utime) strictly after (last_sequence, last_utime) within the
 // bounds. Differences in uint64: both operands are int64, so they cannot wrap.
 RejectReason follows(std::int64_t last_sequence, std::int64_t last_utime, std::int64_t sequence,
-                     std::int64_t utime, const OrderBounds& b) {
+                     std::int64_t utime, std::uint64_t max_sequence_jump, std::uint64_t max_utime_jump_us) {
   if (sequence <= last_sequence) return RejectReason::kOutOfOrder;
   if (utime < last_utime) return RejectReason::kUtimeBackwards;
-  if (static_cast<std::uint64_t>(sequence) - static_cast<std::uint64_t>(last_sequence) > b.max_sequence_jump) {
+  if (static_cast<std::uint64_t>(sequence) - static_cast<std::uint64_t>(last_sequence) > max_sequence_jump) {
     return RejectReason::kSequenceJump;
   }
-  if (static_cast<std::uint64_t>(utime) - static_cast<std::uint64_t>(last_utime) > b.max_utime_jump_us) {
+  if (static_cast<std::uint64_t>(utime) - static_cast<std::uint64_t>(last_utime) > max_utime_jump_us) {
     return RejectReason::kUtimeJump;
   }
   return RejectReason::kNone;
@@ -172,18 +172,45 @@ RejectReason follows(std::int64_t last_sequence, std::int64_t last_utime, std::i
 OrderTracker::OrderTracker(const OrderBounds& bounds) : bounds_(bounds) {}
 
 bool OrderTracker::continues(const Run& run, std::int64_t sequence, std::int64_t utime) const {
-  if (run.length == 0 || follows(run.sequence, run.utime, sequence, utime, bounds_) != RejectReason::kNone) {
+  if (run.length == 0 || follows(run.sequence, run.utime, sequence, utime, bounds_.max_sequence_jump,
+                                 bounds_.max_utime_jump_us) != RejectReason::kNone) {
     return false;
   }
   // A restarted VO counts up from near 0 in small steps: a straggler of the
   // old run, far above, neither extends nor completes the restart.
-  return &run != &restart_run_ || sequence - run.sequence <= kRestartMaxFirstSequence;
+  return !run.restart ||
+         static_cast<std::uint64_t>(sequence) - static_cast<std::uint64_t>(run.sequence) <=
+             static_cast<std::uint64_t>(kRestartMaxFirstSequence);
+}
+
+bool OrderTracker::repeats(std::int64_t sequence) const {
+  if (sequence == last_sequence_) return true;
+  for (const Run& r : runs_) {
+    if (r.length != 0 && r.sequence == sequence) return true;
+  }
+  return false;
+}
+
+int OrderTracker::extended_run(std::int64_t sequence, std::int64_t utime) const {
+  int best = -1;
+  for (std::size_t i = 0; i < kCandidateRuns; ++i) {
+    const Run& r = runs_[i];
+    if (!continues(r, sequence, utime)) continue;
+    if (best < 0 || r.length > runs_[best].length ||
+        (r.length == runs_[best].length && r.touched > runs_[best].touched)) {
+      best = static_cast<int>(i);
+    }
+  }
+  return best;
 }
 
 OrderTracker::Verdict OrderTracker::check(std::int64_t publisher, std::int64_t sequence, std::int64_t utime,
                                           std::uint64_t now_ns, bool keyframe) const {
   Verdict v;
   if (!owned_ || publisher != owner_) {
+    // Before the first keyframe no order can refuse a map event (a VO's
+    // start-up reset); it sets no owner and conflicts with none.
+    if (!owned_ && !keyframe) return v;
     const bool silent = owned_ && bounds_.owner_timeout_ns > 0 && now_ns >= last_heard_ns_ &&
                         now_ns - last_heard_ns_ >= bounds_.owner_timeout_ns;
     if (keyframe && (!owned_ || silent)) {
@@ -193,19 +220,26 @@ OrderTracker::Verdict OrderTracker::check(std::int64_t publisher, std::int64_t s
     }
     return v;
   }
-  v.reason = follows(last_sequence_, last_utime_, sequence, utime, bounds_);
-  if (v.reason == RejectReason::kNone || !keyframe) return v;
-  const auto confirms = [&](const Run& run) {
-    return continues(run, sequence, utime) && run.length + 1 >= bounds_.restart_confirm;
-  };
+  const std::uint64_t quiet_ns = now_ns >= last_heard_ns_ ? now_ns - last_heard_ns_ : 0;
+  // The utime may advance by the bound plus the node's time since the order
+  // last accepted anything: a VO that keyframes on motion pauses while parked.
+  const std::uint64_t quiet_us = quiet_ns / 1000;
+  const std::uint64_t utime_bound = bounds_.max_utime_jump_us > UINT64_MAX - quiet_us
+                                        ? UINT64_MAX
+                                        : bounds_.max_utime_jump_us + quiet_us;
+  v.reason = follows(last_sequence_, last_utime_, sequence, utime, bounds_.max_sequence_jump, utime_bound);
+  if (v.reason == RejectReason::kNone || !keyframe || repeats(sequence)) return v;
+  const int r = extended_run(sequence, utime);
+  if (r < 0 || runs_[r].length + 1 < bounds_.restart_confirm) return v;
   // A resync only of an order that has accepted nothing for a while: a live
-  // stream's late or retransmitted keyframes never take the order back.
-  const std::uint64_t silence =
-      bounds_.owner_timeout_ns > 0 ? bounds_.owner_timeout_ns : OrderBounds{}.owner_timeout_ns;
-  if (confirms(restart_run_)) {
+  // stream's late or retransmitted keyframes never take the order back. Its
+  // own short bound, so a long --owner-timeout-s does not lock the owner out.
+  const std::uint64_t silence = bounds_.owner_timeout_ns > 0 ? std::min(bounds_.owner_timeout_ns, kResyncSilenceNs)
+                                                             : kResyncSilenceNs;
+  if (runs_[r].restart) {
     v.reason = RejectReason::kNone;
     v.restart = true;
-  } else if (confirms(resync_run_) && now_ns >= last_heard_ns_ && now_ns - last_heard_ns_ >= silence) {
+  } else if (quiet_ns >= silence) {
     v.reason = RejectReason::kNone;
     v.resync = true;
   }
@@ -214,17 +248,21 @@ OrderTracker::Verdict OrderTracker::check(std::int64_t publisher, std::int64_t s
 
 void OrderTracker::accept(const Verdict& v, std::int64_t publisher, std::int64_t sequence, std::int64_t utime,
                           std::uint64_t now_ns) {
-  if (v.takeover || v.restart || v.resync || !owned_) {
+  if (!owned_ && !v.takeover) return;  // a map event before any keyframe (rule 1)
+  if (v.takeover || v.restart || v.resync) {
     if (v.takeover) {
       ++owners_seen_;
       if (owned_) ++takeovers_;
     }
     if (v.restart) ++restarts_;
     if (v.resync) ++resyncs_;
-    restart_run_ = resync_run_ = Run{};
+    for (Run& run : runs_) run = Run{};
   } else if (sequence > last_sequence_) {
     gaps_ += static_cast<std::uint64_t>(sequence) - static_cast<std::uint64_t>(last_sequence_) - 1;
   }
+  has_previous_ = owned_ && !v.takeover;
+  previous_sequence_ = last_sequence_;
+  previous_utime_ = last_utime_;
   owned_ = true;
   owner_ = publisher;
   last_sequence_ = sequence;
@@ -233,20 +271,38 @@ void OrderTracker::accept(const Verdict& v, std::int64_t publisher, std::int64_t
 }
 
 bool OrderTracker::extend_restart(std::int64_t publisher, std::int64_t sequence, std::int64_t utime) {
-  if (!owned_ || publisher != owner_ || sequence < 0) return false;
-  bool extended = false;
-  for (Run* run : {&restart_run_, &resync_run_}) {
-    const bool starts = (run == &restart_run_) == (sequence <= kRestartMaxFirstSequence);
-    if (continues(*run, sequence, utime)) {
-      *run = Run{run->length + 1, sequence, utime};
-    } else if (starts) {
-      *run = Run{1, sequence, utime};
-    } else {
-      continue;
-    }
-    extended = true;
+  // A duplicate (a datagram delivered twice) changes no run: extending
+  // one would let copies confirm it, starting one would displace one.
+  if (!owned_ || publisher != owner_ || repeats(sequence)) return false;
+  ++run_clock_;
+  const int e = extended_run(sequence, utime);
+  if (e >= 0) {
+    Run& run = runs_[e];
+    ++run.length;
+    run.sequence = sequence;
+    run.utime = utime;
+    run.touched = run_clock_;
+    return true;
   }
-  return extended;
+  // A new run replaces the shortest (the least recently extended of equals).
+  std::size_t slot = 0;
+  for (std::size_t i = 0; i < kCandidateRuns; ++i) {
+    const Run& r = runs_[i];
+    if (r.length < runs_[slot].length || (r.length == runs_[slot].length && r.touched < runs_[slot].touched)) {
+      slot = i;
+    }
+  }
+  // Low, and not continuing the order from before the last accepted message
+  // (that message would be the one the stream does not continue): a restart.
+  const bool continues_previous =
+      has_previous_ && follows(previous_sequence_, previous_utime_, sequence, utime, bounds_.max_sequence_jump,
+                               bounds_.max_utime_jump_us) == RejectReason::kNone;
+  runs_[slot].length = 1;
+  runs_[slot].restart = sequence >= 0 && sequence <= kRestartMaxFirstSequence && !continues_previous;
+  runs_[slot].sequence = sequence;
+  runs_[slot].utime = utime;
+  runs_[slot].touched = run_clock_;
+  return true;
 }
 
 RejectReason check_keyframe(const keepless::keyframe_t& msg, const core::Window& window,

@@ -318,7 +318,7 @@ struct Node::Impl {
       if (c.verdict.takeover || c.verdict.restart) decide_pending();
       r = admit_keyframe(c.verdict, &evicted);
     } else if (c.content == RejectReason::kNone && c.verdict.reason != RejectReason::kNotOwner) {
-      // Valid, refused by the order only: may be part of a restart.
+      // Valid, refused by the order only: may be part of a restart or a resync.
       (void)order.extend_restart(kf.publisher_id, kf.sequence, kf.utime);
     }
     const std::uint64_t t1 = clock->now_ns();

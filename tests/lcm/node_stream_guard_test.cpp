@@ -497,35 +497,62 @@ TEST_F(GuardOnMemq, MergedAppliedCountsOnlyMergesThatChangedSomething) {
 // included (a sequence with a bit flipped, a utime stepped ahead, an absurd
 // first message heard mid-run, a far-ahead map event). A run of
 // --restart-confirm valid keyframes in order among themselves, once the order
-// has accepted nothing for --owner-timeout-s, is a resync: it becomes the
-// order and the window is kept.
+// has accepted nothing for 1 s (or a shorter --owner-timeout-s), is a
+// resync: it becomes the order and the window is kept.
 class ResyncOnMemq : public GuardOnMemq {
  protected:
+  // How the owner's keyframes reach the node.
+  enum class Delivery {
+    kOnce,
+    kTwice,          // every datagram delivered twice
+    kWithStraggler,  // each followed by a late keyframe, 10 sequences back
+  };
+  // The owner's keyframe `s`: sequence base_ + s, id s, utime from s.
+  keepless::keyframe_t owner_keyframe(std::int64_t s) const {
+    keepless::keyframe_t m = kt::make_keyframe(base_ + s, s, kt::id_range(s * 5 % kPoints, 30));
+    m.utime = kt::make_keyframe(s, 0, {}).utime;
+    return m;
+  }
   // The owner's keyframes from..to at 10 Hz of node time.
-  void stream_at_10hz(std::int64_t from, std::int64_t to) {
+  void stream_at_10hz(std::int64_t from, std::int64_t to, Delivery delivery = Delivery::kOnce) {
     for (std::int64_t s = from; s <= to; ++s) {
       clock_.advance(100000000);
-      send(kt::make_keyframe(s, s, kt::id_range(s * 5 % kPoints, 30)));
+      send(owner_keyframe(s));
+      if (delivery == Delivery::kTwice) send(owner_keyframe(s));
+      if (delivery == Delivery::kWithStraggler) {
+        keepless::keyframe_t late = owner_keyframe(s - 10);  // valid: its id is not in the window
+        late.keyframe_id = 100000 + s;
+        send(late);
+      }
     }
   }
   // The owner's keyframe `s` with bit 19 of its sequence flipped (within
   // --max-sequence-jump), 0.1 s on: accepted, and it becomes the order.
   void send_flipped(std::int64_t s) {
-    keepless::keyframe_t flipped = kt::make_keyframe(s, s, kt::id_range(105, 30));
-    flipped.sequence = s + (1 << 19);
+    keepless::keyframe_t flipped = kt::make_keyframe(base_ + s + (1 << 19), s, kt::id_range(105, 30));
+    flipped.utime = kt::make_keyframe(s, 0, {}).utime;
     clock_.advance(100000000);
     send(flipped);
     ASSERT_EQ(decisions_.back().status, decision_t::STATUS_OPTIMAL);
   }
+  // The first answer to keyframe id `id` from decision `first` on (a copy's comes after it).
+  const decision_t* answer(std::int64_t id, std::size_t first) const {
+    for (std::size_t i = first; i < decisions_.size(); ++i) {
+      if (decisions_[i].keyframe_id == id) return &decisions_[i];
+    }
+    return nullptr;
+  }
   // After the poison: 4 s of the stream from `from` is served again within
   // the silence (1 s) and the run (3 keyframes), by a resync that keeps the
   // window (`window` keyframes with the resync's); then the owner's reset is honoured.
-  void expect_resynchronised(std::int64_t from, std::int32_t window = 4) {
+  void expect_resynchronised(std::int64_t from, std::int32_t window = 4, Delivery delivery = Delivery::kOnce) {
     const std::size_t first = decisions_.size();
-    stream_at_10hz(from, from + 39);
+    stream_at_10hz(from, from + 39, delivery);
     EXPECT_GE(count(decision_t::STATUS_OPTIMAL, first), 40u - 13u);
-    EXPECT_EQ(decisions_.back().status, decision_t::STATUS_OPTIMAL);
-    EXPECT_EQ(node_->order().last_sequence(), from + 39);
+    const decision_t* last = answer(from + 39, first);
+    ASSERT_NE(last, nullptr);
+    EXPECT_EQ(last->status, decision_t::STATUS_OPTIMAL);
+    EXPECT_EQ(node_->order().last_sequence(), base_ + from + 39);
     EXPECT_EQ(node_->order().resyncs(), 1u);
     EXPECT_EQ(node_->order().restarts(), 0u);
     EXPECT_EQ(status().stream_restarts, 1);
@@ -533,12 +560,14 @@ class ResyncOnMemq : public GuardOnMemq {
     while (resync < decisions_.size() && decisions_[resync].status != decision_t::STATUS_OPTIMAL) ++resync;
     ASSERT_LT(resync, decisions_.size());
     EXPECT_EQ(decisions_[resync].num_window_keyframes, window) << "a resync keeps the window";
-    keepless::map_event_t reset = kt::make_event(from + 40);
+    keepless::map_event_t reset = kt::make_event(base_ + from + 40);
+    reset.utime = kt::make_event(from + 40).utime;
     reset.reset = true;
     send(reset);
     EXPECT_EQ(acks_.back().status, map_event_ack_t::STATUS_APPLIED);
     EXPECT_EQ(node_->window().keyframe_count(), 0u);
   }
+  std::int64_t base_ = 0;  // added to every sequence of the owner
 };
 
 TEST_F(ResyncOnMemq, ASequenceWithABitFlippedIsOutvoted) {
@@ -615,6 +644,88 @@ TEST_F(ResyncOnMemq, LateKeyframesOfALiveStreamNeverResync) {
   EXPECT_EQ(rejected(RejectReason::kOutOfOrder), 40u);
   EXPECT_EQ(node_->order().resyncs(), 0u);
   EXPECT_EQ(node_->order().last_sequence(), 160);
+}
+
+// Review: a refused keyframe that did not continue the resync run replaced
+// it, so with every datagram delivered twice the run never grew past 1 and
+// one flipped sequence locked the owner out (0 decisions in 60 s). A
+// duplicate now changes no run. (From sequence 1 the copies of 1, 2, 3 were
+// also a restart run, and restarted the stream.)
+TEST_F(ResyncOnMemq, DuplicatedDatagramsDoNotBlockTheResync) {
+  stream_at_10hz(1, 20, Delivery::kTwice);
+  EXPECT_EQ(count(decision_t::STATUS_OPTIMAL), 20u);
+  EXPECT_EQ(rejected(RejectReason::kOutOfOrder), 20u) << "the copies are refused";
+  EXPECT_EQ(node_->order().restarts(), 0u);
+  send_flipped(21);
+  expect_resynchronised(22, 4, Delivery::kTwice);
+}
+
+// The same with a late keyframe (10 sequences back) after each one: each
+// straggler started a run of its own in place of the stream's.
+TEST_F(ResyncOnMemq, LateStragglersDoNotBlockTheResync) {
+  stream_at_10hz(101, 120);
+  send_flipped(121);
+  expect_resynchronised(122, 4, Delivery::kWithStraggler);
+}
+
+// Review: a VO numbering from a random 64-bit start (here negative) never
+// started a resync run, so one flipped sequence locked it out.
+TEST_F(ResyncOnMemq, NegativeSequencesAreResynchronised) {
+  base_ = -1000000000000;
+  stream_at_10hz(1, 20);
+  ASSERT_EQ(count(decision_t::STATUS_OPTIMAL), 20u);
+  send_flipped(21);
+  expect_resynchronised(22);
+}
+
+// Review: the resync waited for --owner-timeout-s, so with 30 s one flipped
+// sequence locked the owner out for 30 s. It waits 1 s at most.
+TEST_F(ResyncOnMemq, ALongOwnerTimeoutDoesNotDelayTheResync) {
+  NodeConfig c = default_config();
+  c.owner_timeout_s = 30;
+  make_node(c);
+  stream_at_10hz(1, 20);
+  send_flipped(21);
+  expect_resynchronised(22);
+  EXPECT_EQ(node_->order().owner(), 0) << "no takeover";
+}
+
+// Review: a flipped sequence while sequences were still <= 16 made the
+// stream's next keyframes look like a restart, clearing the window and the
+// cull memory. They continue the order from before the flipped one: a
+// resync, the window and the culls kept.
+TEST_F(ResyncOnMemq, AnEarlyFlippedSequenceIsResynchronisedNotARestart) {
+  stream_at_10hz(1, 5);
+  std::vector<std::uint64_t> culled;
+  for (std::uint64_t p = 0; p < kPoints; ++p) {
+    if (node_->cull_memory().contains(p)) culled.push_back(p);
+  }
+  ASSERT_FALSE(culled.empty()) << "the stream must cull";
+  send_flipped(6);
+  const std::size_t first = decisions_.size();
+  stream_at_10hz(7, 36);
+  EXPECT_GE(count(decision_t::STATUS_OPTIMAL, first), 30u - 13u);
+  EXPECT_EQ(decisions_.back().status, decision_t::STATUS_OPTIMAL);
+  EXPECT_EQ(node_->order().last_sequence(), 36);
+  EXPECT_EQ(node_->order().resyncs(), 1u);
+  EXPECT_EQ(node_->order().restarts(), 0u);
+  std::size_t resync = first;
+  while (resync < decisions_.size() && decisions_[resync].status != decision_t::STATUS_OPTIMAL) ++resync;
+  ASSERT_LT(resync, decisions_.size());
+  EXPECT_EQ(decisions_[resync].num_window_keyframes, 4) << "a resync keeps the window";
+  for (std::uint64_t p : culled) EXPECT_TRUE(node_->cull_memory().contains(p)) << "point " << p;
+}
+
+// A real restart early in a stream is still one: its first keyframe does
+// not follow the order before the last accepted message.
+TEST_F(ResyncOnMemq, AnEarlyRestartIsStillARestart) {
+  stream_at_10hz(1, 5);
+  const std::size_t first = decisions_.size();
+  for (std::int64_t s = 1; s <= 3; ++s) send(kt::make_keyframe(s, 500 + s, kt::id_range(300 + s, 20)));
+  EXPECT_EQ(count(decision_t::STATUS_OPTIMAL, first), 1u) << "served from its third keyframe";
+  EXPECT_EQ(node_->order().restarts(), 1u);
+  EXPECT_EQ(node_->window().keyframe_count(), 1u) << "the old run's keyframes left with the restart";
+  EXPECT_EQ(node_->cull_memory().size(), 0u);
 }
 
 }  // namespace

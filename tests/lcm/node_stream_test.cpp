@@ -90,6 +90,36 @@ TEST_F(StreamOnMemq, JumpBoundsAreConfigurable) {
   EXPECT_EQ(node_->order().last_sequence(), 11);
 }
 
+// Review: a VO that makes keyframes on motion, parked for 11 minutes (more
+// than --max-utime-jump-s), had its next valid keyframes refused
+// REJECT_UTIME_JUMP. The bound grows by the node's time since the order last
+// accepted a message; a utime step the node's clock does not cover is
+// still refused.
+TEST_F(StreamOnMemq, AUtimeAdvanceAfterAPauseOfTheNodesClockIsAccepted) {
+  const auto at = [](std::int64_t s, std::int64_t pause_us) {
+    keepless::keyframe_t m = kt::make_keyframe(s, s, kt::id_range(s * 5 % 400, 30));
+    m.utime += pause_us;
+    return m;
+  };
+  for (std::int64_t s = 1; s <= 20; ++s) {
+    clock_.advance(100000000);
+    send(at(s, 0));
+  }
+  const std::int64_t pause_us = 660ll * 1000000;
+  clock_.advance(static_cast<std::uint64_t>(pause_us) * 1000);
+  const std::size_t first = decisions_.size();
+  for (std::int64_t s = 21; s <= 25; ++s) {
+    clock_.advance(100000000);
+    send(at(s, pause_us));
+  }
+  EXPECT_EQ(accepted_since(first), 5u);
+  EXPECT_EQ(rejected(RejectReason::kUtimeJump), 0u);
+  EXPECT_EQ(node_->order().resyncs(), 0u);
+  EXPECT_EQ(node_->order().last_sequence(), 25);
+  send(at(26, pause_us + 700ll * 1000000));  // 700 s ahead, 0.1 s of node time at most
+  EXPECT_EQ(decisions_.back().reject_reason, keepless::status_t::REJECT_UTIME_JUMP);
+}
+
 // The first message has nothing to be checked against; if it is absurd, the
 // valid stream after it becomes the order after --restart-confirm messages.
 TEST_F(StreamOnMemq, APoisonedFirstMessageIsOutvotedByTheStream) {
@@ -205,6 +235,36 @@ TEST_F(StreamOnMemq, SequenceGapsAreCounted) {
   send(kt::make_keyframe(3, 4, {}));    // late: refused, not a gap
   EXPECT_EQ(node_->order().sequence_gaps(), 6u);
   EXPECT_EQ(status().sequence_gaps, 6);
+}
+
+// Review: a map event before any keyframe (a VO's start-up reset) was
+// refused REJECT_NOT_OWNER and counted as a publisher conflict. With no
+// owner it is applied to the empty window and sets no order.
+TEST_F(StreamOnMemq, AMapEventBeforeAnyKeyframeIsNoConflict) {
+  keepless::map_event_t reset = kt::make_event(5);
+  reset.reset = true;
+  send(reset);
+  ASSERT_EQ(acks_.size(), 1u);
+  EXPECT_EQ(acks_.back().status, map_event_ack_t::STATUS_APPLIED);
+  EXPECT_TRUE(acks_.back().reset);
+  keepless::map_event_t other = kt::make_event(9);
+  other.publisher_id = 4;
+  other.deleted_point_id = kt::id_range(0, 3);
+  send(other);
+  ASSERT_EQ(acks_.size(), 2u);
+  EXPECT_EQ(acks_.back().status, map_event_ack_t::STATUS_APPLIED);
+  EXPECT_EQ(node_->counters().messages_rejected, 0u);
+  keepless::status_t s = status();
+  EXPECT_EQ(s.stream_conflicts, 0);
+  EXPECT_EQ(s.publishers_active, 0);
+  EXPECT_FALSE(node_->order().owned());
+  send(kt::make_keyframe(1, 1, kt::id_range(0, 10)));  // below both events' sequences: they set no order
+  EXPECT_EQ(decisions_.back().status, decision_t::STATUS_OPTIMAL);
+  EXPECT_EQ(node_->order().owner(), 0);
+  EXPECT_EQ(node_->order().last_sequence(), 1);
+  s = status();
+  EXPECT_EQ(s.publishers_seen, 1);
+  EXPECT_EQ(s.stream_conflicts, 0);
 }
 
 // --- in-flight safety ----------------------------------------------------------

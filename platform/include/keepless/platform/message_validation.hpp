@@ -80,24 +80,31 @@ RejectReason check_map_event_bytes(const void* data, std::size_t size, const Mes
 //    messages are refused (kNotOwner) unless the owner has been silent for
 //    OrderBounds::owner_timeout_ns (0: never); then that publisher's next
 //    valid keyframe takes the window over (cleared first). Map events never
-//    take over.
+//    take over; before the first keyframe there is no order to refuse them
+//    by, so they are applied to the empty window and set nothing.
 // 2. The owner's order: sequence strictly increasing, utime never
-//    decreasing, neither jumping further than the bounds.
+//    decreasing, neither jumping further than the bounds; the utime bound
+//    grows by the time since the order last accepted a message (a VO that
+//    makes keyframes on motion may pause for longer than the bound).
 // 3. A refused or invalid message changes nothing. The one exception is the
-//    two candidate runs: owner keyframes valid against the window but
-//    refused by the order, each in order with its run's last one. The
-//    restart run starts at a sequence <= kRestartMaxFirstSequence:
-//    `restart_confirm` keyframes are a restart (the last one is accepted,
-//    the window and the cull memory are cleared). The resync run starts
-//    above it: `restart_confirm` keyframes, once the order has accepted
-//    nothing for the resync silence (owner_timeout_ns, or 1 s when that is
-//    0), are a resync: the last one is accepted and becomes the order, the
-//    window kept. A resync undoes an order set by one message the stream
-//    does not continue (a corrupted sequence, a clock step, a first message
-//    heard mid-run); without it such a message locked the owner out. Each
-//    run is replaced only by a keyframe that could start it, and the restart
-//    run is continued only in steps of at most kRestartMaxFirstSequence, so
-//    stragglers of an old run never break or complete a restart.
+//    candidate runs (kCandidateRuns of them): owner keyframes valid against
+//    the window but refused by the order, each in order with its run's
+//    last one. A keyframe extends the longest run it continues; one that
+//    continues none starts a run in place of the shortest (the least
+//    recently extended of equals); one with the sequence of the last
+//    accepted message or of a run's last keyframe (a duplicate) does neither. A restart run starts at a sequence in
+//    0..kRestartMaxFirstSequence that does not follow the order as it was
+//    before the last accepted message, and is continued only in steps of at
+//    most kRestartMaxFirstSequence (stragglers of an old run never break or
+//    complete it): `restart_confirm` keyframes are a restart (the last one
+//    is accepted, the window and the cull memory are cleared). Every other
+//    run is a resync run: `restart_confirm` keyframes, once the order has
+//    accepted nothing for kResyncSilenceNs (or owner_timeout_ns if shorter
+//    and not 0), are a resync: the last one is accepted and becomes the
+//    order, the window kept. A resync undoes an order set by one message the
+//    stream does not continue (a corrupted sequence, a clock step, a first
+//    message heard mid-run), early in a stream too; without it such a
+//    message locked the owner out.
 // 4. A reset is honoured only from the owner, in order.
 // 5. Only a newer accepted keyframe of the owner supersedes a queued one
 //    (Node's drain).
@@ -109,6 +116,11 @@ struct OrderBounds {
 };
 // A restart candidate starts at a sequence no larger than this.
 constexpr std::int64_t kRestartMaxFirstSequence = 16;
+// Candidate runs held at once: a duplicate or straggler starts its own run
+// instead of replacing the stream's.
+constexpr std::size_t kCandidateRuns = 4;
+// The longest silence of the order a resync waits for (rule 3).
+constexpr std::uint64_t kResyncSilenceNs = 1000000000ull;
 
 // The owner and its order (rules 1-3 above). check() is pure; the node
 // calls accept() for a message it accepted, extend_restart() for a valid
@@ -125,7 +137,8 @@ class OrderTracker {
   };
   [[nodiscard]] Verdict check(std::int64_t publisher, std::int64_t sequence, std::int64_t utime,
                               std::uint64_t now_ns, bool keyframe) const;
-  // The message passed every check.
+  // The message passed every check. A map event accepted before any owner
+  // (rule 1) sets nothing.
   void accept(const Verdict& v, std::int64_t publisher, std::int64_t sequence, std::int64_t utime,
               std::uint64_t now_ns);
   // An owner keyframe, valid against the window, refused by the order:
@@ -146,10 +159,16 @@ class OrderTracker {
 
  private:
   struct Run {
-    std::uint32_t length = 0;
+    std::uint32_t length = 0;  // 0: the slot is free
+    bool restart = false;      // a restart run, else a resync run
     std::int64_t sequence = 0, utime = 0;  // its last keyframe's
+    std::uint64_t touched = 0;             // extend_restart() call that last started or extended it
   };
   bool continues(const Run& run, std::int64_t sequence, std::int64_t utime) const;
+  // The sequence of the last accepted message or of a run's last keyframe.
+  bool repeats(std::int64_t sequence) const;
+  // The run the keyframe would extend, or -1.
+  int extended_run(std::int64_t sequence, std::int64_t utime) const;
 
   OrderBounds bounds_;
   bool owned_ = false;
@@ -157,7 +176,12 @@ class OrderTracker {
   std::int64_t last_sequence_ = -1;
   std::int64_t last_utime_ = 0;
   std::uint64_t last_heard_ns_ = 0;
-  Run restart_run_, resync_run_;  // the candidates (rule 3)
+  // The order before the last accepted message (none after a takeover):
+  // a low run that follows it continues the stream, so it is no restart.
+  bool has_previous_ = false;
+  std::int64_t previous_sequence_ = 0, previous_utime_ = 0;
+  Run runs_[kCandidateRuns];  // the candidates (rule 3)
+  std::uint64_t run_clock_ = 0;
   std::uint64_t gaps_ = 0, restarts_ = 0, resyncs_ = 0, takeovers_ = 0, owners_seen_ = 0;
 };
 
