@@ -56,6 +56,13 @@ struct Sparsifier::Impl {
   bool resume = false;              // the last update stopped for budget: carry on from its state
   bool resumed = false;             // the last update was such a resumption
   bool deferred = false;            // the last update left the network for later
+  // Scope::kNewest's turns: the id of the last keyframe a call decided, and
+  // whether a turn was missed since (a call that decided nothing, or a
+  // keyframe answered without a call, note_undecided()): then the next call
+  // that decides takes the keyframes after that one too.
+  KeyframeId last_decided = 0;
+  bool has_decided = false;
+  bool missed = false;
   // What update() expects its stages to take, on the budget's clock, to plan
   // against a deadline. A solve counts only when it finished: a stopped one
   // says nothing of what a whole one needs.
@@ -94,6 +101,25 @@ struct Sparsifier::Impl {
   StageTimes times;
 
   std::uint64_t now() const { return clock != nullptr ? clock->now_ns() : 0; }
+
+  Status run(const Window& window, const solver::Budget& budget);
+  Status update(const Window& window, const solver::Budget& budget);
+
+  // After every run()/update(): only a call that decided (kOk) takes the
+  // keyframe's turn; a deferred, stopped or refused one leaves it (and the
+  // ones before it not decided yet) to the next call that decides.
+  void end_turn(const Window& window, Status r) {
+    if (params.scope != Scope::kNewest) return;
+    if (r != Status::kOk) {
+      missed = true;
+      return;
+    }
+    const std::uint32_t k = window.keyframe_count();
+    if (k <= params.maturity_keyframes) return;  // nothing to decide yet
+    last_decided = window.keyframe(k - 1 - params.maturity_keyframes).id;
+    has_decided = true;
+    missed = false;
+  }
 
   Impl(const Capacities& c, const Params& p, SolveMode m, Start st)
       : caps(c),
@@ -336,13 +362,24 @@ struct Sparsifier::Impl {
 
   // The tracking guard, then the scope: with the guard the scope decides the
   // keyframe that just became A old (while the window holds A keyframes or
-  // fewer, the guard skipped all).
+  // fewer, the guard skipped all). After a missed turn it also decides the
+  // keyframes between the last one decided and that one (all before it if
+  // the last one decided left the window): the turn is kept by keyframe id,
+  // not by slot, as a slot passes on when the window slides. Without a
+  // missed turn the scope is that keyframe alone, whatever the window did.
   template <typename Net>
   void protect_and_scope(const Window& window, const Net& net, std::uint32_t k) {
     const std::uint32_t maturity = params.maturity_keyframes;
     if (maturity > 0) net.point_slots(slots_at.data(), slots.data());
     protect_tracking(window, k);
-    if (params.scope == Scope::kNewest && k > maturity) restrict_to_newest(window, k - 1 - maturity);
+    if (params.scope != Scope::kNewest || k <= maturity) return;
+    const std::uint32_t decided = k - 1 - maturity;
+    std::uint32_t from = decided;
+    if (missed) {
+      const std::int32_t last = has_decided ? window.find_keyframe(last_decided) : -1;
+      from = last < 0 ? 0 : std::min(static_cast<std::uint32_t>(last) + 1, decided);
+    }
+    restrict_to_slots(window, from, decided);
   }
 
   // Turns a decided point into a skip, as the policies report skips (with a
@@ -389,19 +426,23 @@ struct Sparsifier::Impl {
     }
   }
 
-  // The decided keyframe's points are found by id among the decisions
-  // (ascending id): its observations, not every point's keyframes, are read.
-  void restrict_to_newest(const Window& window, std::uint32_t newest) {
+  // The decided keyframes' (slots from .. to) points are found by id among
+  // the decisions (ascending id): their observations, not every point's
+  // keyframes, are read.
+  void restrict_to_slots(const Window& window, std::uint32_t from, std::uint32_t to) {
     std::uint8_t* seen = in_scope.data();
     std::fill(seen, seen + count, std::uint8_t{0});
-    const Observation* obs = window.observations(newest);
     const PointDecision* first = decisions.data();
-    for (std::uint32_t o = 0; o < window.observation_count(newest); ++o) {
-      const PointDecision* at = std::lower_bound(
-          first, first + count, obs[o].point,
-          [](const PointDecision& d, PointId id) { return d.point < id; });
-      seen[at - first] = 1;  // every window point has a decision
+    for (std::uint32_t s = from; s <= to; ++s) {
+      const Observation* obs = window.observations(s);
+      for (std::uint32_t o = 0; o < window.observation_count(s); ++o) {
+        const PointDecision* at = std::lower_bound(
+            first, first + count, obs[o].point,
+            [](const PointDecision& d, PointId id) { return d.point < id; });
+        seen[at - first] = 1;  // every window point has a decision
+      }
     }
+    summary.caught_up = to - from;
     for (std::uint32_t i = 0; i < count; ++i) {
       PointDecision& d = decisions[i];
       if (d.verdict == Verdict::kSkip || seen[i]) continue;
@@ -516,7 +557,24 @@ Status Sparsifier::validate(const Params& p) {
 }
 
 Status Sparsifier::run(const Window& window, const solver::Budget& budget) {
+  const Status r = impl_->run(window, budget);
+  impl_->end_turn(window, r);
+  return r;
+}
+
+Status Sparsifier::update(const Window& window, const solver::Budget& budget) {
   Impl& s = *impl_;
+  const Status r = s.incremental ? s.update(window, budget) : s.run(window, budget);
+  s.end_turn(window, r);
+  return r;
+}
+
+void Sparsifier::note_undecided() {
+  if (impl_->params.scope == Scope::kNewest) impl_->missed = true;
+}
+
+Status Sparsifier::Impl::run(const Window& window, const solver::Budget& budget) {
+  Impl& s = *this;
   s.begin_call();
   if (Status v = validate(s.params); v != Status::kOk) return v;
   if (!s.network) s.network = std::make_unique<PaperNetwork>(s.caps);  // kIncremental's first run()
@@ -548,9 +606,8 @@ Status Sparsifier::run(const Window& window, const solver::Budget& budget) {
   return result;
 }
 
-Status Sparsifier::update(const Window& window, const solver::Budget& budget) {
-  Impl& s = *impl_;
-  if (!s.incremental) return run(window, budget);
+Status Sparsifier::Impl::update(const Window& window, const solver::Budget& budget) {
+  Impl& s = *this;
   s.begin_call();
   if (Status v = validate(s.params); v != Status::kOk) return v;
   IncrementalNetwork& net = *s.incremental;
@@ -658,6 +715,7 @@ const std::uint32_t* Sparsifier::keep_thresholds() const {
 }
 void Sparsifier::forget_history() {
   if (impl_->fraction) impl_->fraction->clear();
+  impl_->has_decided = impl_->missed = false;
 }
 const Params& Sparsifier::params() const { return impl_->params; }
 const PaperNetwork& Sparsifier::network() const {

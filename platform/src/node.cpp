@@ -360,6 +360,7 @@ struct Node::Impl {
     std::copy_n(pending_window.begin(), pending_keyframes, decision.window_keyframe_id.begin());
     decision.num_window_keyframes = static_cast<std::int32_t>(pending_keyframes);
     publish_decision();
+    sparsifier.note_undecided();  // the next decided keyframe takes its turn (Scope::kNewest)
     const std::uint64_t t = clock->now_ns();
     finish_timing(pending, pending_arrival, pending_t0, pending_t1, t, t, 0, 0);
   }
@@ -379,11 +380,13 @@ struct Node::Impl {
       budget.clock = clock;
       budget.deadline_ns = arrival + static_cast<std::uint64_t>(config.latency_target_ms * 1e6);
     }
-    // A stop for budget culls nothing; the next keyframe's update() catches up.
+    // A stop for budget culls nothing; the next keyframe's update() catches up
+    // (with --scope newest it decides the missed keyframes' points too).
     // A window the push had to shorten is not decided: the keyframe is held,
-    // the next ones are decided as usual.
+    // and its turn passes to the next one decided, as a skipped one's does.
     const core::Status run =
         evicted > 0 ? core::Status::kCapacityExceeded : sparsifier.update(sliding.window(), budget);
+    if (evicted > 0) sparsifier.note_undecided();
     const std::uint64_t t3 = clock->now_ns();
     std::uint32_t n_culled = fill_decision(decision, req, sliding.window(), sparsifier, run);
     std::uint32_t n_deleted = 0;

@@ -65,13 +65,20 @@ TEST(IncrementalZeroAllocation, UpdateAllocatesNothing) {
     p.budget = b;
     budgeted.push_back(std::make_unique<Sparsifier>(caps, p, SolveMode::kIncremental));
   }
+  // Scope::kNewest, whose missed turns (deferred calls, note_undecided())
+  // the next call that decides catches up.
+  Params newest_params;
+  newest_params.scope = Scope::kNewest;
+  newest_params.maturity_keyframes = 2;
+  Sparsifier newest(caps, newest_params, SolveMode::kIncremental);
   // Warm-up: one stream's first window.
   for (std::size_t i = 0; i < 4; ++i) ASSERT_EQ(add(window, streams[0][i]), Status::kOk);
   ASSERT_EQ(sparsifier.update(window), Status::kOk);
+  ASSERT_EQ(newest.update(window), Status::kOk);
   for (auto& b : budgeted) ASSERT_EQ(b->update(window), Status::kOk);
   window.clear();
 
-  std::uint64_t updates = 0, ok = 0, stopped = 0, budget_ok = 0;
+  std::uint64_t updates = 0, ok = 0, stopped = 0, budget_ok = 0, caught_up = 0;
   solver::SteadyClock clock;
   test::AllocationCounter counter;
   for (const auto& frames : streams) {
@@ -86,6 +93,12 @@ TEST(IncrementalZeroAllocation, UpdateAllocatesNothing) {
       }
       const Status s = sparsifier.update(window, budget);
       for (auto& b : budgeted) budget_ok += b->update(window, budget) == Status::kOk;
+      if (i % 11 == 5) {
+        newest.note_undecided();
+      } else {
+        (void)newest.update(window, budget);
+        caught_up += newest.summary().caught_up;
+      }
       ok += s == Status::kOk;
       stopped += s == Status::kBudgetExhausted;
       ++updates;
@@ -93,12 +106,15 @@ TEST(IncrementalZeroAllocation, UpdateAllocatesNothing) {
     window.clear();
     (void)sparsifier.update(window);
     for (auto& b : budgeted) (void)b->update(window);
+    (void)newest.update(window);
+    newest.forget_history();
   }
   EXPECT_EQ(counter.stop(), 0u);
   EXPECT_GT(updates, 200u);
   EXPECT_GT(ok, 100u);
   EXPECT_GT(stopped, 20u);
   EXPECT_GT(budget_ok, 300u);
+  EXPECT_GT(caught_up, 20u);
 }
 
 }  // namespace

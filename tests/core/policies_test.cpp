@@ -389,6 +389,117 @@ TEST(Policies, NewestScopeSkipsTheRest) {
   EXPECT_TRUE(agrees(s, test::reference_decide(test::ref_frames_of(w), p)));
 }
 
+// Keyframe f of a stream makes 20 points and sees the previous keyframe's
+// 20 again: only keyframe f's scope (A = 0) decides keyframe f - 1's points.
+void add_chained(Window& w, std::uint32_t f, std::uint32_t window_keyframes) {
+  if (w.keyframe_count() == window_keyframes) {
+    ASSERT_EQ(w.remove_keyframe(w.keyframe(0).id), Status::kOk);
+  }
+  std::vector<Observation> obs;
+  for (std::uint32_t i = 0; i < 20; ++i) obs.push_back({PointId{100} * f + i, 10.0 * i, 10.0 * i, 0});
+  for (std::uint32_t i = 0; f > 0 && i < 20; ++i) {
+    obs.push_back({PointId{100} * (f - 1) + i, 10.0 * i + 3, 10.0 * i, 0});
+  }
+  Keyframe kf;
+  kf.id = 1000 + f;
+  kf.centre[0] = f;
+  ASSERT_EQ(w.add_keyframe(kf, obs.data(), static_cast<std::uint32_t>(obs.size())), Status::kOk);
+}
+
+void count_decided(const Sparsifier& s, std::map<PointId, int>* decided) {
+  for (std::uint32_t i = 0; i < s.decision_count(); ++i) {
+    if (s.decisions()[i].verdict != Verdict::kSkip) ++(*decided)[s.decisions()[i].point];
+  }
+}
+
+struct LateClock : solver::Clock {
+  std::uint64_t now_ns() const override { return 100; }
+};
+
+// A missed turn (an update() deferred on its deadline, or a keyframe the
+// caller answered without a call, note_undecided()) passes to the next call
+// that decides: it decides the missed keyframes' points too, and every point
+// the never-missing Sparsifier decides is decided. After it, and when no
+// turn is missed, the decisions are the never-missing one's.
+TEST(Policies, NewestScopeCatchesUpAMissedTurn) {
+  for (std::uint32_t maturity : {0u, 2u}) {
+    for (int how = 0; how < 3; ++how) {  // deferred update(), note_undecided() + update(), + run()
+      Params p;
+      p.scope = Scope::kNewest;
+      p.pair_capacity = 3;
+      p.maturity_keyframes = maturity;
+      const Capacities caps{6, 2000, 8000, 20000, 0};
+      Sparsifier all(caps, p, SolveMode::kIncremental);
+      Sparsifier missing(caps, p, how == 2 ? SolveMode::kFromScratch : SolveMode::kIncremental);
+      Window w(caps);
+      std::map<PointId, int> by_all, by_missing;
+      const LateClock late;
+      for (std::uint32_t f = 0; f < 14; ++f) {
+        add_chained(w, f, 5);
+        ASSERT_EQ(all.update(w), Status::kOk);
+        EXPECT_EQ(all.summary().caught_up, 0u);
+        count_decided(all, &by_all);
+        if (f == 6 || f == 7) {  // two turns in a row
+          if (how == 0) {
+            solver::Budget b;
+            b.clock = &late;
+            b.deadline_ns = 50;
+            ASSERT_EQ(missing.update(w, b), Status::kBudgetExhausted);
+            ASSERT_TRUE(missing.deferred());
+          } else {
+            missing.note_undecided();
+          }
+          continue;
+        }
+        ASSERT_EQ(how == 2 ? missing.run(w) : missing.update(w), Status::kOk);
+        count_decided(missing, &by_missing);
+        EXPECT_EQ(missing.summary().caught_up, f == 8 ? 2u : 0u) << "keyframe " << f;
+        if (f == 8) continue;
+        // Not catching up: the same scope, so the same decisions.
+        ASSERT_EQ(missing.decision_count(), all.decision_count());
+        for (std::uint32_t i = 0; i < all.decision_count(); ++i) {
+          EXPECT_EQ(missing.decisions()[i].verdict, all.decisions()[i].verdict) << f;
+          EXPECT_EQ(missing.decisions()[i].flow, all.decisions()[i].flow) << f;
+        }
+      }
+      EXPECT_FALSE(by_all.empty());
+      for (const auto& [point, n] : by_all) {
+        EXPECT_EQ(by_missing.count(point), 1u) << "point " << point << " never decided, maturity " << maturity;
+      }
+      for (const auto& [point, n] : by_missing) EXPECT_EQ(by_all.count(point), 1u) << point;
+    }
+  }
+}
+
+// When the last keyframe decided left the window, the catch-up decides
+// every keyframe up to the scope's; a new map (forget_history) forgets.
+TEST(Policies, NewestScopeCatchesUpFromTheOldestWhenTheLastDecidedLeft) {
+  Params p;
+  p.scope = Scope::kNewest;
+  p.pair_capacity = 3;
+  const Capacities caps{6, 2000, 8000, 20000, 0};
+  Sparsifier s(caps, p);
+  Window w(caps);
+  for (std::uint32_t f = 0; f < 3; ++f) {
+    add_chained(w, f, 5);
+    ASSERT_EQ(s.run(w), Status::kOk);
+  }
+  for (std::uint32_t f = 3; f < 9; ++f) {  // keyframe 1002, the last decided, leaves
+    add_chained(w, f, 5);
+    s.note_undecided();
+  }
+  add_chained(w, 9, 5);
+  ASSERT_EQ(s.run(w), Status::kOk);
+  EXPECT_EQ(s.summary().caught_up, 4u);  // slots 0 .. 3 besides the newest
+  EXPECT_EQ(s.summary().out_of_scope, 0u);
+  EXPECT_EQ(s.summary().skipped, 40u);  // seen once: keyframe 9's own, and 400.. (keyframe 4 left)
+  s.note_undecided();
+  s.forget_history();  // a new map: nothing missed
+  add_chained(w, 10, 5);
+  ASSERT_EQ(s.run(w), Status::kOk);
+  EXPECT_EQ(s.summary().caught_up, 0u);
+}
+
 TEST(Policies, InvalidParams) {
   Params p;
   p.cost_model = CostModel::kAuthors;

@@ -348,4 +348,26 @@ TEST_F(StreamOnMemq, QueuedKeyframesAreSkippedAndTheNewestDecided) {
   EXPECT_EQ(status().keyframes_skipped, 5);
 }
 
+// With --scope newest a skipped keyframe's turn passes to the decided one
+// (Sparsifier::note_undecided): the newest decides the points of the
+// keyframes skipped before it too, not only its own.
+TEST_F(StreamOnMemq, SkippedKeyframesPassTheirTurnToTheDecidedOne) {
+  NodeConfig c = default_config();
+  c.latency_target_ms = 60000;  // drains, but never fires
+  c.params.scope = keepless::core::Scope::kNewest;
+  make_node(c);
+  for (int i = 0; i < 4; ++i) {  // keyframe i sees 10i .. 10i + 19: each shares 10 with the next
+    const std::vector<std::uint8_t> b = kt::encode(kt::make_keyframe(i + 1, i, kt::id_range(10 * i, 20)));
+    bus_->publish(c.keyframe_channel, b.data(), static_cast<unsigned>(b.size()));  // queued, not handled
+  }
+  ASSERT_GT(node_->spin_once(0), 0);
+  pump();
+  ASSERT_EQ(decisions_.size(), 4u);
+  const decision_t& d = decisions_[3];
+  EXPECT_EQ(d.status, decision_t::STATUS_OPTIMAL);
+  EXPECT_EQ(d.evaluated, 30);  // 10 .. 39
+  EXPECT_EQ(d.kept + d.culled, d.evaluated) << "the skipped keyframes' points are decided too";
+  EXPECT_EQ(d.skipped, d.points - d.evaluated);
+}
+
 }  // namespace

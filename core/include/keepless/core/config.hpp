@@ -44,7 +44,9 @@ enum CostTerm : std::uint8_t { kConnectivityCost = 1, kSpatialCost = 2, kBaselin
 // points before each local BA); the others are skipped. The network is the
 // whole window's either way (the newest keyframe's points compete for the
 // pairs' M with every window point), so the scope is a pass over the exact
-// optimum and run() and update() share it.
+// optimum and run() and update() share it. A keyframe whose turn was missed
+// (its call deferred or refused, or never made) is decided by the next call
+// that decides (Sparsifier, Summary::caught_up).
 enum class Scope : std::uint8_t { kWindow, kNewest };
 
 // How the point -> pair costs (and the pair -> sink costs) are computed.

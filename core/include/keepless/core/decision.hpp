@@ -34,6 +34,10 @@ struct Summary {
   // Params::scope: evaluated points skipped because the newest keyframe does
   // not observe them (counted in `skipped`).
   std::uint32_t out_of_scope = 0;
+  // Scope::kNewest: keyframes decided besides the scope's own one, whose
+  // turns were missed (Sparsifier::note_undecided, a call that did not
+  // return kOk); 0 while every call decides.
+  std::uint32_t caught_up = 0;
   // Params::coverage_floor: keyframes below the floor when their turn came
   // (the floor bound), the culled points promoted back to keep, and the
   // keyframes still below it with every evaluated point of theirs kept.

@@ -19,7 +19,11 @@
 // Params::scope = kNewest (deciding the keyframe maturity_keyframes before
 // the newest) turns every evaluated point the
 // decided keyframe does not observe into a skip (flow and capacity reported
-// as 0, Summary::out_of_scope); Params::coverage_floor = L then promotes
+// as 0, Summary::out_of_scope); after a missed turn (a call that did not
+// return kOk, or note_undecided()) the next call that decides also decides
+// the keyframes between the last one decided (by id) and that one, or all
+// before it if the last one decided left the window (Summary::caught_up).
+// Params::coverage_floor = L then promotes
 // culled points back to keep, keyframe by keyframe from the oldest, until
 // each keyframe has L evaluated points not culled or none of its evaluated
 // points is culled (Summary::floor_*). A promoted point keeps its flow, so
@@ -111,9 +115,14 @@ class Sparsifier {
   [[nodiscard]] Status update(const Window& window, const solver::Budget& budget = {});
   // The last update() was deferred (see above).
   bool deferred() const;
+  // Scope::kNewest: the caller answered a keyframe without calling run() or
+  // update() (e.g. a drain superseded it): its turn is missed, like a call
+  // that did not return kOk, so the next call that decides also decides the
+  // keyframes after the last one decided. Without it, only calls are seen.
+  void note_undecided();
   // A new map (the caller cleared its window): a kept fraction counts its
   // points from nothing again, so reused point ids are not taken for points
-  // an earlier map kept.
+  // an earlier map kept; Scope::kNewest forgets its last decided keyframe.
   void forget_history();
 
   // Times the stages of each run()/update() on `clock` (null: not timed).
