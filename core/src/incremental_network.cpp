@@ -826,6 +826,9 @@ Status IncrementalNetwork::Impl::relist() {
 Status IncrementalNetwork::Impl::connect(solver::MinCostFlow& solver) {
   std::uint32_t new_m = caps.max_keyframes;
   while (new_m > 0 && views_count[new_m] == 0) --new_m;
+  // c_m(2) would pass the solver's cost bound (kMaxPointViews); update()'s
+  // caller clears the network on any refusal.
+  if ((params.cost_terms & kConnectivityCost) && new_m > kMaxPointViews) return Status::kCapacityExceeded;
   const bool cm_changed = new_m != m || changes.rebuilt;
   if (cm_changed) {
     m = new_m;

@@ -141,6 +141,8 @@ Status PaperNetwork::build(const Window& window, const Params& params,
     r = end;
   }
   if (pair_arcs > n.caps.max_pair_arcs) return Status::kCapacityExceeded;
+  // c_m(2) would pass the solver's cost bound (kMaxPointViews).
+  if ((params.cost_terms & kConnectivityCost) && m > kMaxPointViews) return Status::kCapacityExceeded;
 
   // Pairs that share at least one evaluated point, numbered in (j, k) order.
   std::fill(n.pair_of.begin(), n.pair_of.begin() + std::size_t{k} * k, -1);

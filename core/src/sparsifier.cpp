@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <memory>
 #include <vector>
 
@@ -520,7 +521,9 @@ Sparsifier::Sparsifier(const Capacities& capacities, const Params& params, Solve
 Sparsifier::~Sparsifier() = default;
 
 Status Sparsifier::validate(const Params& p) {
-  if (p.pair_capacity < 1) return Status::kInvalidArgument;
+  // M is an arc capacity, which the solver holds in 32 bits (with a budget too:
+  // the thresholds' solves run at M* up to it).
+  if (p.pair_capacity < 1 || p.pair_capacity > INT32_MAX) return Status::kInvalidArgument;
   if (!std::isfinite(p.theta) || p.theta < 0.0 || p.theta > 1.0) return Status::kInvalidArgument;
   if (p.box_width < 0 || p.box_height < 0) return Status::kInvalidArgument;
   if (p.spatial_weight < 1 || p.spatial_weight > kMaxSpatialWeight) return Status::kInvalidArgument;

@@ -348,6 +348,11 @@ int run(const Options& opt) {
   if (caps.max_observations == 0) caps.max_observations = 1;
   if (caps.max_pair_arcs == 0) caps.max_pair_arcs = 1;
 
+  // One window: a point seen by more than core::kMaxPointViews keyframes is refused by name.
+  if (const std::string why = keepless::sparsify::point_views_refusal(file, opt.params, opt.window); !why.empty()) {
+    std::fprintf(stderr, "%s\n", why.c_str());
+    return kExitInput;
+  }
   const std::uint64_t t_build = keepless::platform::monotonic_ns();
   return decide_window(opt, file, caps, model.bytes(caps), parse_ms, t_build);
 }

@@ -76,6 +76,23 @@ TEST(ConnectivityCost, HandTables) {
   EXPECT_EQ(t[2], 30);
 }
 
+// The ceilings compound: c_m(2) grows about as m^3/10 (not m^2/2), and
+// kMaxPointViews is the largest m whose c_m(2) is within the solver's arc
+// cost bound 2^30.
+TEST(ConnectivityCost, GrowthAndTheSolversCostBound) {
+  std::vector<std::int64_t> t(kMaxPointViews + 2);
+  connectivity_costs(20, t.data());
+  EXPECT_EQ(t[2], 840);
+  connectivity_costs(1024, t.data());
+  EXPECT_EQ(t[2], 108107574);
+  connectivity_costs(kMaxPointViews, t.data());
+  EXPECT_EQ(t[2], 1071887514);
+  EXPECT_LE(t[2], std::int64_t{1} << 30);
+  connectivity_costs(kMaxPointViews + 1, t.data());
+  EXPECT_EQ(t[2], 1074123210);
+  EXPECT_GT(t[2], std::int64_t{1} << 30);
+}
+
 TEST(ConnectivityCost, TooFewViewsWritesNothing) {
   std::int64_t t[3] = {-7, -7, -7};
   connectivity_costs(0, t);

@@ -8,6 +8,8 @@
 #include <filesystem>
 #include <new>
 #include <numeric>
+#include <string>
+#include <utility>
 
 #include "keepless/core/keep_thresholds.hpp"
 #include "keepless/io/atomic_file.hpp"
@@ -123,7 +125,7 @@ bool check_centres(const ModelOptions& opt, const Loaded& m, std::string* error)
 
 // The model's own limits: the window file's reader checks them itself. The
 // pair arcs bound the whole mode's one window (a replay window of K images
-// holds fewer).
+// holds fewer), and so do a point's views (core::kMaxPointViews).
 bool check_limits(const ModelOptions& opt, Mode mode, const Loaded& m, std::string* error) {
   const core::Capacities& n = m.keyframes.file.needs;
   const auto over = [&](std::uint64_t have, std::uint32_t limit, const char* what, const char* flag) {
@@ -131,12 +133,18 @@ bool check_limits(const ModelOptions& opt, Mode mode, const Loaded& m, std::stri
     *error = opt.path + ":0: " + std::to_string(have) + " " + what + " exceed " + flag + " " + std::to_string(limit);
     return true;
   };
-  return !(over(m.keyframes.file.keyframes.size(), opt.limits.max_keyframes, "images", "--max-keyframes") ||
-           over(m.model_points, opt.limits.max_points, "points", "--max-points") ||
-           over(n.max_observations, opt.limits.max_observations, "observations", "--max-observations") ||
-           (mode == Mode::kWhole && opt.input != Input::kWindow &&
-            over(n.max_pair_arcs, opt.limits.max_pair_arcs, "pair arcs in the whole mode's window",
-                 "--max-pair-arcs")));
+  if (over(m.keyframes.file.keyframes.size(), opt.limits.max_keyframes, "images", "--max-keyframes") ||
+      over(m.model_points, opt.limits.max_points, "points", "--max-points") ||
+      over(n.max_observations, opt.limits.max_observations, "observations", "--max-observations") ||
+      (mode == Mode::kWhole && opt.input != Input::kWindow &&
+       over(n.max_pair_arcs, opt.limits.max_pair_arcs, "pair arcs in the whole mode's window", "--max-pair-arcs"))) {
+    return false;
+  }
+  if (mode != Mode::kWhole) return true;
+  std::string why = point_views_refusal(m.keyframes.file, opt.params, opt.path);
+  if (why.empty()) return true;
+  *error = std::move(why);
+  return false;
 }
 
 bool is_culled(const std::vector<core::PointDecision>& decisions, core::PointId p) {

@@ -212,6 +212,31 @@ core::Status replay(const core::WindowFile& f, const core::Params& params, std::
 
 const char* to_string(Mode mode) { return mode == Mode::kReplay ? "replay" : "whole"; }
 
+std::string point_views_refusal(const core::WindowFile& keyframes, const core::Params& params,
+                                const std::string& name) {
+  if (!(params.cost_terms & core::kConnectivityCost) || keyframes.keyframes.size() <= core::kMaxPointViews) return "";
+  std::vector<core::PointId> ids;
+  ids.reserve(keyframes.needs.max_observations);
+  for (const auto& obs : keyframes.observations) {
+    for (const core::Observation& o : obs) ids.push_back(o.point);
+  }
+  std::sort(ids.begin(), ids.end());
+  std::size_t most = 0;
+  core::PointId point = 0;
+  for (std::size_t i = 0, j = 0; i < ids.size(); i = j) {
+    while (j < ids.size() && ids[j] == ids[i]) ++j;
+    if (j - i > most) {
+      most = j - i;
+      point = ids[i];
+    }
+  }
+  if (most <= core::kMaxPointViews) return "";
+  return name + ":0: point " + std::to_string(point) + " is seen by " + std::to_string(most) +
+         " images, above the " + std::to_string(core::kMaxPointViews) +
+         " one window can price (core::kMaxPointViews: its connectivity cost c_m(2) would pass the solver's cost "
+         "bound 2^30); --mode replay decides windows of --K images, or --cost-terms without c_c";
+}
+
 core::Capacities decision_capacities(const core::WindowFile& keyframes, Mode mode, std::uint32_t K) {
   return mode == Mode::kWhole ? at_least_one(keyframes.needs) : replay_capacities(keyframes, K);
 }

@@ -68,6 +68,12 @@ core::Capacities decision_capacities(const core::WindowFile& keyframes, Mode mod
 // allocating them (platform::MemoryModel).
 double decision_bytes(const core::WindowFile& keyframes, Mode mode, const core::Params& params, std::uint32_t K);
 
+// Whole mode's one window holds every image: with c_c on, a point seen by
+// more than core::kMaxPointViews of them cannot be priced (its c_m(2) would
+// pass the solver's cost bound). The refusal naming the limit, or "".
+std::string point_views_refusal(const core::WindowFile& keyframes, const core::Params& params,
+                                const std::string& name);
+
 // The index of `point` in decisions (ascending ids), or -1.
 std::int64_t find_decision(const std::vector<core::PointDecision>& decisions, core::PointId point);
 

@@ -133,6 +133,13 @@ const char* to_string(BudgetKind kind);
 
 constexpr std::int32_t kMaxSpatialWeight = 1 << 16;
 
+// The most window keyframes one point may be seen by (m, the largest n of
+// the connectivity cost c_m(n), keepless/core/costs.hpp) while c_c is on:
+// c_m(2) grows about as m^3/10 and at m = 2201 (1074123210) passes the
+// solver's arc cost bound 2^30 (c_2200(2) = 1071887514 fits). A window with
+// a point seen by more is refused, kCapacityExceeded, before any solve.
+constexpr std::uint32_t kMaxPointViews = 2200;
+
 // The paper's section III-B parameters, and the decision policies around them.
 struct Params {
   std::int64_t pair_capacity = 100;  // M
@@ -144,9 +151,10 @@ struct Params {
   std::uint8_t cost_terms = kConnectivityCost | kSpatialCost | kBaselineCost;
   // Beyond the paper: the point -> pair cost (c_s, or the cost model's
   // replacement) is multiplied by it, 1 .. kMaxSpatialWeight. 1 is the
-  // paper's; c_c (up to ~m^2/2 for a two-view point) otherwise outranks c_s
-  // (0 .. ~4), so a pair prefers the points with the most window views and
-  // c_s only breaks their ties. No weight tried beat 1 on both real
+  // paper's; c_c otherwise outranks c_s (0 .. ~4): c_m(n) is 1 at n = m
+  // (the most views of a window point) and grows to about m^3/10 at n = 2
+  // (840 at m = 20; 2, 3, 4 .. for the longest tracks), so a pair prefers
+  // the points with the most window views and c_s mostly breaks their ties. No weight tried beat 1 on both real
   // monocular sequences (docs/design/policies.md).
   std::int32_t spatial_weight = 1;
   Scope scope = Scope::kWindow;

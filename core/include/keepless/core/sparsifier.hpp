@@ -85,14 +85,16 @@ class Sparsifier {
   Sparsifier(const Sparsifier&) = delete;
   Sparsifier& operator=(const Sparsifier&) = delete;
 
-  // kInvalidArgument for bad Params (M < 1, theta outside [0,1], box < 0,
+  // kInvalidArgument for bad Params (M outside 1 .. INT32_MAX, the solver's
+  // arc capacities, also with a budget; theta outside [0,1], box < 0,
   // an unknown scope or cost model, kAuthors with an image side <= 0).
   [[nodiscard]] static Status validate(const Params& params);
 
   // Decides every point of `window` (within Params::scope). On
   // kBudgetExhausted the decisions keep every evaluated point (nothing is
   // culled on an unfinished solve, so the floor has nothing to do). Any other
-  // status but kOk (kCapacityExceeded, kInvalidArgument) leaves no decisions
+  // status but kOk (kCapacityExceeded, also for a point seen by more than
+  // kMaxPointViews window keyframes while c_c is on; kInvalidArgument) leaves no decisions
   // (decision_count() 0, kept_at() 0), and update()'s next call rebuilds its
   // network from the window it is given.
   [[nodiscard]] Status run(const Window& window, const solver::Budget& budget = {});
