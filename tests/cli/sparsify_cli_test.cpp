@@ -238,6 +238,22 @@ TEST_F(SparsifyCliTest, CapacityExceededOnTheLineThatCrossesIt) {
   EXPECT_EQ(r.status, 0) << r.err;
 }
 
+// One window prices a point's views up to core::kMaxPointViews (c_m(2) would
+// pass the solver's cost bound): a point seen by more is refused by name
+// before any network is built (the boundary values: ConnectivityCost tests).
+TEST_F(SparsifyCliTest, APointSeenByMoreImagesThanOneWindowCanPriceIsRefusedByName) {
+  const std::uint32_t k = core::kMaxPointViews + 1;
+  std::string text;
+  for (std::uint32_t i = 1; i <= k; ++i) text += "kf " + std::to_string(i) + " " + std::to_string(i) + " 0 0\n";
+  for (std::uint32_t i = 1; i <= k; ++i) text += "obs " + std::to_string(i) + " 7 10 10\n";
+  text += "obs 1 8 200 200\nobs 2 8 200 200\n";
+  const std::string path = write("views.txt", text);
+  const Result r = sparsify({"--window", path});
+  EXPECT_EQ(r.status, 2) << r.err;
+  EXPECT_NE(r.err.find(path + ":0: point 7 is seen by 2201 images, above the 2200"), std::string::npos) << r.err;
+  EXPECT_EQ(count_lines(r.err), 1u) << r.err;
+}
+
 TEST_F(SparsifyCliTest, FlagErrorsPrintOneUsageLine) {
   const std::string window = write("w.txt", kGoodHead);
   const std::string out = path("decisions.txt");

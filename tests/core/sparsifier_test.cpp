@@ -268,34 +268,6 @@ TEST(Sparsifier, PairArcCapacityIsCheckedAtBuild) {
   EXPECT_EQ(narrow.run(w), Status::kCapacityExceeded);
 }
 
-// c_m(2) for a point seen by m keyframes passes the solver's arc cost bound
-// beyond kMaxPointViews: such a window is refused as over a capacity
-// (kCapacityExceeded, not kInvalidArgument), by run() and update() alike; at
-// the limit it is decided. (About 1 GB: the point's 2.4 million pair arcs.)
-TEST(Sparsifier, APointSeenByMoreThanMaxPointViewsIsRefused) {
-  const std::uint32_t k = kMaxPointViews + 1;
-  const Capacities caps{k, 8, 3 * k, k * (k - 1) / 2 + 4, 0};
-  Window w(caps);
-  const auto add_view = [&w](std::uint32_t i) {
-    std::vector<Observation> o = {{1, 10, 10}};
-    if (i < 2) o.push_back({2, 20, 20});  // a two-view point: c_m(2)
-    return add(w, i, static_cast<double>(i), 0, 0, o);
-  };
-  for (std::uint32_t i = 0; i < kMaxPointViews; ++i) ASSERT_EQ(add_view(i), Status::kOk);
-  Params p;
-  p.pair_capacity = 1;
-  for (SolveMode mode : {SolveMode::kFromScratch, SolveMode::kIncremental}) {
-    Sparsifier s(caps, p, mode);
-    EXPECT_EQ(s.update(w), Status::kOk);  // at the limit
-    EXPECT_EQ(s.decision_count(), 2u);
-    ASSERT_EQ(add_view(kMaxPointViews), Status::kOk);
-    EXPECT_EQ(s.update(w), Status::kCapacityExceeded);  // one past it
-    EXPECT_EQ(s.decision_count(), 0u);
-    ASSERT_EQ(w.remove_keyframe(kMaxPointViews), Status::kOk);
-    EXPECT_EQ(s.update(w), Status::kOk);  // the next call rebuilds
-  }
-}
-
 // A keyframe beyond the per-keyframe scratch (max_keyframe_observations) of
 // either network is refused before it is scored, never overrun; within it the
 // decisions are those of a sparsifier without the limit.
