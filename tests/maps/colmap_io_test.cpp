@@ -357,6 +357,7 @@ TEST_F(ColmapBinaryErrors, BrokenIdsAndReferencesAreRefusedWhereTheyAre) {
   };
   const Case cases[] = {
       {0, "model_id", 12, "unknown camera model id 12"},
+      {0, "camera_id", 0xFFFFFFFFu, "camera id 4294967295 is COLMAP's invalid id"},
       {1, "point3D_id", 99, "names unknown point3D 99"},
       {2, "track_idx", 1000, "has no 2D point 1000"},
       {2, "track_image", 77, "unknown image 77"},
@@ -485,6 +486,25 @@ TEST(ColmapText, FilesCutAtEveryLineAreRefused) {
       text += lines[l] + "\n";
     }
   }
+}
+
+// Old Mac line endings made each file one '#' line: an empty model, read
+// without a word. CRLF stays accepted.
+TEST(ColmapText, ACarriageReturnWithoutALineFeedIsRefusedOnItsLine) {
+  io::ColmapFiles f = io::format_colmap(small_model(), io::ColmapFormat::kText);
+  io::ColmapFiles crlf = f;
+  for (std::string* t : {&crlf.cameras, &crlf.images, &crlf.points3D}) {
+    std::string out;
+    for (const char c : *t) out += c == '\n' ? std::string("\r\n") : std::string(1, c);
+    *t = out;
+  }
+  io::ColmapModel m;
+  std::string error;
+  EXPECT_TRUE(io::parse_colmap("D", crlf, io::ColmapFormat::kText, &m, &error)) << error;
+  EXPECT_EQ(m.images.size(), small_model().images.size());
+  std::replace(f.images.begin(), f.images.end(), '\n', '\r');
+  EXPECT_EQ(error_of(f, io::ColmapFormat::kText),
+            "D/images.txt:1: a carriage return not followed by a line feed (lines end in \\n or \\r\\n)");
 }
 
 TEST(ColmapText, ModelNamesAndParameterCountsAreChecked) {

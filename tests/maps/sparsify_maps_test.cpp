@@ -355,14 +355,18 @@ TEST_F(SparsifyMaps, ABadModelExitsTwoWithOneLineAndWritesNothing) {
   r = sparsify({"--colmap", fixture("sparse"), "--sim3", path("sim3.txt")});
   EXPECT_EQ(r.status, 2);
   EXPECT_EQ(r.err, path("sim3.txt") + ":2: expected 13 numbers (s, R row-major, t), got 3\n");
-  // Text into a directory holding a binary model: refused, nothing changed.
+  // Text into a directory holding a binary model: refused before any output,
+  // so an earlier decisions file is left as it was.
   fs::create_directories(path("has_bin"));
   maps_test::write_all(path("has_bin/images.bin"), "old");
-  r = sparsify({"--colmap", fixture("sparse"), "--out", path("has_bin"), "--out-format", "txt"});
+  maps_test::write_all(path("earlier_decisions.txt"), "earlier run\n");
+  r = sparsify({"--colmap", fixture("sparse"), "--out", path("has_bin"), "--out-format", "txt", "--decisions",
+                path("earlier_decisions.txt")});
   EXPECT_EQ(r.status, 2);
   EXPECT_EQ(r.err, path("has_bin") + "/images.bin:0: a model in the other format is already there; write to another "
                                      "directory\n");
   EXPECT_FALSE(fs::exists(path("has_bin/images.txt")));
+  EXPECT_EQ(maps_test::read_all(path("earlier_decisions.txt")), "earlier run\n");
   r = sparsify({"--bal", path("x"), "--order", "name"});
   EXPECT_EQ(r.status, 2);
   r = sparsify({"--colmap", fixture("sparse"), "--mode", "all"});

@@ -545,6 +545,13 @@ int run_model(const ModelOptions& opt) {
     kept += d.verdict == core::Verdict::kKeep;
   }
 
+  // The model's refusals come before any output is written: a refused run
+  // leaves an earlier decisions file as it was.
+  if (!opt.out.empty() && opt.input == Input::kColmap &&
+      !io::colmap_model_writable(opt.out, m.colmap, out_format(opt, m), &error)) {
+    std::fprintf(stderr, "%s\n", error.c_str());
+    return kExitInput;
+  }
   if (!opt.decisions.empty() &&
       !io::write_file_atomically(opt.decisions, format_decisions(r.decisions.data(), r.decisions.size()), &error)) {
     std::fprintf(stderr, "%s\n", error.c_str());

@@ -43,6 +43,10 @@ bool check_model(const detail::FileNames& names, const detail::Positions& pos, c
   std::unordered_map<std::string, std::uint32_t> names_seen;  // image name -> id
   std::unordered_map<std::uint64_t, std::size_t> points;
   for (std::size_t i = 0; i < m.cameras.size(); ++i) {
+    // COLMAP's kInvalidCameraId: its reader aborts on a model holding it.
+    if (m.cameras[i].id == 0xFFFFFFFFu) {
+      return fail(names.cameras, pos.camera[i], "camera id 4294967295 is COLMAP's invalid id");
+    }
     if (!cameras.emplace(m.cameras[i].id, i).second) {
       return fail(names.cameras, pos.camera[i], "duplicate camera id " + std::to_string(m.cameras[i].id));
     }
@@ -146,6 +150,11 @@ bool exists(const std::string& path) {
   return ::stat(path.c_str(), &st) == 0;
 }
 
+std::string without_trailing_slashes(std::string dir) {  // "out/" is the folder out
+  while (dir.size() > 1 && dir.back() == '/') dir.pop_back();
+  return dir;
+}
+
 }  // namespace
 
 namespace detail {
@@ -228,10 +237,9 @@ bool read_colmap_model(const std::string& dir, ColmapModel* out, ColmapFormat* f
   return parse_colmap(dir, files, *format, out, error);
 }
 
-bool write_colmap_model(const std::string& dir_as_given, const ColmapModel& model, ColmapFormat format,
-                        std::string* error) {
-  std::string dir = dir_as_given;  // "out/" is the folder out
-  while (dir.size() > 1 && dir.back() == '/') dir.pop_back();
+bool colmap_model_writable(const std::string& dir_as_given, const ColmapModel& model, ColmapFormat format,
+                           std::string* error) {
+  const std::string dir = without_trailing_slashes(dir_as_given);
   // COLMAP's text reader ends a name at its first space: such a name only survives in binary.
   if (format == ColmapFormat::kText) {
     for (const ColmapImage& im : model.images) {
@@ -242,6 +250,23 @@ bool write_colmap_model(const std::string& dir_as_given, const ColmapModel& mode
       }
     }
   }
+  // The other format's files beside ours would be what COLMAP (and
+  // read_colmap_model) reads first, or be read instead of ours.
+  const detail::FileNames other =
+      detail::file_names(dir, format == ColmapFormat::kBinary ? ColmapFormat::kText : ColmapFormat::kBinary);
+  for (const std::string* f : {&other.cameras, &other.images, &other.points3D}) {
+    if (exists(*f)) {
+      *error = *f + ":0: a model in the other format is already there; write to another directory";
+      return false;
+    }
+  }
+  return true;
+}
+
+bool write_colmap_model(const std::string& dir_as_given, const ColmapModel& model, ColmapFormat format,
+                        std::string* error) {
+  const std::string dir = without_trailing_slashes(dir_as_given);
+  if (!colmap_model_writable(dir, model, format, error)) return false;
   const ColmapFiles files = format_colmap(model, format);
   // Staged on DIR's own file system: beside a new DIR, inside an existing one
   // (which may be a mount point), so the renames never cross devices.
@@ -263,16 +288,6 @@ bool write_colmap_model(const std::string& dir_as_given, const ColmapModel& mode
     ::rmdir(tmp.c_str());
     return false;
   };
-  // The other format's files beside ours would be what COLMAP (and
-  // read_colmap_model) reads first, or be read instead of ours.
-  const detail::FileNames other =
-      detail::file_names(dir, format == ColmapFormat::kBinary ? ColmapFormat::kText : ColmapFormat::kBinary);
-  for (const std::string* f : {&other.cameras, &other.images, &other.points3D}) {
-    if (exists(*f)) {
-      *error = *f + ":0: a model in the other format is already there; write to another directory";
-      return false;
-    }
-  }
   if (::mkdir(tmp.c_str(), 0777) != 0) {
     // The staging folder is ours; what the user can act on is the model's.
     if (errno == ENOENT) {

@@ -7,10 +7,12 @@
 // Numbers are written as COLMAP writes them (std::ostream, precision 17 =
 // "%.17g"), so a model COLMAP wrote comes back byte for byte.
 
+#include <algorithm>
 #include <cinttypes>
 #include <cmath>
 #include <cstdlib>
 #include <cstdio>
+#include <string>
 #include <string_view>
 
 #include "colmap_parse.hpp"
@@ -167,6 +169,14 @@ class Fields {
 // the first false.
 template <typename Parse>
 bool for_each_record(const std::string& name, const std::string& text, std::string* error, Parse parse) {
+  // Lines end in \n (or \r\n): a file of old Mac line endings would be one
+  // comment line, an empty model.
+  for (std::size_t cr = text.find('\r'); cr != std::string::npos; cr = text.find('\r', cr + 1)) {
+    if (cr + 1 == text.size() || text[cr + 1] == '\n') continue;
+    const auto line = std::count(text.begin(), text.begin() + static_cast<std::ptrdiff_t>(cr), '\n') + 1;
+    *error = name + ":" + std::to_string(line) + ": a carriage return not followed by a line feed (lines end in \\n or \\r\\n)";
+    return false;
+  }
   Lines lines(text);
   std::string_view line;
   std::uint64_t number = 0;

@@ -109,6 +109,10 @@ bool read_colmap_model(const std::string& dir, ColmapModel* out, ColmapFormat* f
 // Refused when DIR holds a file of the other format (it would shadow ours),
 // and in text when an image name holds a blank (COLMAP's text reader would
 // cut it there).
+// write_colmap_model's refusals, checked before it writes anything (a caller
+// writing other outputs first checks them before those, too).
+bool colmap_model_writable(const std::string& dir, const ColmapModel& model, ColmapFormat format,
+                           std::string* error);
 bool write_colmap_model(const std::string& dir, const ColmapModel& model, ColmapFormat format,
                         std::string* error);
 
