@@ -632,12 +632,20 @@ TEST_F(SparsifyMaps, MaxMemoryIsHonouredOnEveryInputPath) {
     }
     return w;
   }());
+  {
+    std::string values = "1 1 1\n";
+    for (int i = 0; i < 500000; ++i) values += "0\n";
+    maps_test::write_all(path("short_values.txt"), values);
+  }
   const Case cases[] = {
       {{"--colmap", fixture("sparse"), "--max-memory-mb", "10"}, fixture("sparse") + ": reading this model needs about "},
       {{"--colmap", fixture("sparse"), "--max-memory-mb", "50"}, fixture("sparse") + ": deciding needs about "},
       {{"--colmap", fixture("sparse"), "--mode", "whole", "--max-memory-mb", "50"},
        fixture("sparse") + ": deciding needs about "},
       {{"--bal", bal, "--max-memory-mb", "1"}, bal + ": reading this model needs about "},
+      // 1 MB of one-digit values: 12 MB by its bytes, about 51 MB by its tokens.
+      {{"--bal", path("short_values.txt"), "--max-memory-mb", "20"},
+       path("short_values.txt") + ": reading this model needs about 49 MB (its 1,000,006 bytes of files, 500,003 numbers and names)"},
       // A window file's reader checks record by record (with the whole-mode
       // decision's memory); replay's windows are checked once it is read.
       // (Both fit in 100 MB: replay needs about 98 MB.)

@@ -11,6 +11,8 @@
 #include <string>
 #include <utility>
 
+#include <unistd.h>
+
 #include "keepless/core/keep_thresholds.hpp"
 #include "keepless/io/atomic_file.hpp"
 #include "keepless/io/bal_problem.hpp"
@@ -18,6 +20,7 @@
 #include "keepless/platform/window_file_io.hpp"
 #include "keepless/platform/memory_estimate.hpp"
 #include "keepless/platform/monotonic_clock.hpp"
+#include "keepless/platform/regular_file.hpp"
 #include "sparsify/exact_count.hpp"
 
 namespace keepless::sparsify {
@@ -219,6 +222,27 @@ std::uint64_t total_size(const std::vector<std::string>& files) {
   std::uint64_t n = 0;
   for (const std::string& f : files) n += file_size(f);
   return n;
+}
+
+// Whitespace-separated tokens of the files, read in chunks (nothing held);
+// a file that cannot be opened counts none (reading it reports why).
+std::uint64_t count_tokens(const std::vector<std::string>& files) {
+  std::uint64_t tokens = 0;
+  char buf[1 << 16];
+  for (const std::string& f : files) {
+    platform::RegularFile file;
+    std::string problem;
+    if (!platform::open_regular_file(f, &file, &problem)) continue;
+    bool in_token = false;
+    for (ssize_t n; (n = ::read(file.fd, buf, sizeof buf)) > 0;) {
+      for (ssize_t i = 0; i < n; ++i) {
+        const bool blank = buf[i] == ' ' || buf[i] == '\n' || buf[i] == '\t' || buf[i] == '\r';
+        tokens += !blank && !in_token;
+        in_token = !blank;
+      }
+    }
+  }
+  return tokens;
 }
 
 // a is b or lies inside it (both resolved).
@@ -454,16 +478,24 @@ int run_model(const ModelOptions& opt) {
                                              : (opt.input == Input::kWindow ? 0 : kDefaultFloor);
 
   // --max-memory-mb, estimated before allocating: reading a COLMAP or BAL
-  // model holds its files and the parsed model (a read factor x the files);
-  // a window file is checked record by record by its reader (whole mode:
-  // with the decision's memory too; replay: after reading, below).
+  // model holds its files and the parsed model (ReadCost: per byte, and per
+  // token of a text model, counted first); a window file is checked record
+  // by record by its reader (whole mode: with the decision's memory too;
+  // replay: after reading, below).
   const double limit = static_cast<double>(opt.max_memory_mb) * 1048576.0;
-  const std::uint64_t input_bytes = total_size(model_files(opt.input, opt.path));
-  const double read_factor = opt.input == Input::kBal ? kBalReadFactor : kColmapReadFactor;
-  const double read_need = opt.input == Input::kWindow ? 0.0 : read_factor * static_cast<double>(input_bytes);
+  const std::vector<std::string> inputs = model_files(opt.input, opt.path);
+  const std::uint64_t input_bytes = total_size(inputs);
+  const bool text = opt.input == Input::kBal || (opt.input == Input::kColmap && inputs[0].size() > 4 &&
+                                                 inputs[0].compare(inputs[0].size() - 4, 4, ".txt") == 0);
+  const ReadCost cost = opt.input == Input::kBal ? kBalRead : (text ? kColmapTextRead : kColmapBinaryRead);
+  const std::uint64_t tokens = text && opt.input != Input::kWindow ? count_tokens(inputs) : 0;
+  const double read_need = opt.input == Input::kWindow ? 0.0
+                                                       : cost.per_byte * static_cast<double>(input_bytes) +
+                                                             cost.per_token * static_cast<double>(tokens);
   if (read_need > limit) {
-    std::fprintf(stderr, "%s: reading this model needs about %s (%.0f x its %s bytes of files), above --max-memory-mb %llu\n",
-                 opt.path.c_str(), megabytes(read_need).c_str(), read_factor, grouped(input_bytes).c_str(),
+    const std::string words = text ? ", " + grouped(tokens) + " numbers and names" : "";
+    std::fprintf(stderr, "%s: reading this model needs about %s (its %s bytes of files%s), above --max-memory-mb %llu\n",
+                 opt.path.c_str(), megabytes(read_need).c_str(), grouped(input_bytes).c_str(), words.c_str(),
                  static_cast<unsigned long long>(opt.max_memory_mb));
     return kExitInput;
   }

@@ -58,14 +58,23 @@ constexpr std::uint32_t kDefaultFloor = 30;
 // on the KITTI 06 fixture: M = 200); below it keepless_sparsify warns.
 constexpr std::int64_t kEvidenceM = 200;
 
-// Reading a model holds at most about this many times its files' bytes (the
-// files, the parsed model and its keyframes), checked against
-// --max-memory-mb before reading. Measured peaks (reading and deciding in
-// replay): COLMAP 3.3x (the fixture, binary or text; a 34 MB text model
-// whose one POINTS2D line holds 3 M points), BAL 8.5x (the zenslam problem)
-// and 10.8x (3 M observations on 8-byte lines).
-constexpr double kColmapReadFactor = 6.0;
-constexpr double kBalReadFactor = 12.0;
+// What reading a model holds at most (the files, the parsed model and its
+// keyframes), checked against --max-memory-mb before reading: bytes per
+// byte of its files, plus, for text, bytes per whitespace-separated token
+// (a text model of short tokens holds more per byte: each value is kept
+// with its text). Measured peaks of the whole run (RSS, with the program's
+// own ~7 MB): COLMAP binary 6.5x the fixture's bytes (3.3x its reading and
+// deciding alone); COLMAP text, the fixture 3.9x, 300,000 images of short
+// lines 18x (about 55 bytes a token); BAL, the zenslam problem 14x,
+// 240,000 short tokens 25x and 24-digit ones 11x (about 80 bytes a token),
+// 4.5 M one-digit values 33x.
+struct ReadCost {
+  double per_byte;
+  double per_token;
+};
+constexpr ReadCost kColmapBinaryRead{6.0, 0.0};
+constexpr ReadCost kColmapTextRead{3.0, 60.0};
+constexpr ReadCost kBalRead{6.0, 90.0};
 
 // --decisions' contents: "<point_id> <keep|cull|skip> <flow> <capacity>" a line.
 std::string format_decisions(const core::PointDecision* decisions, std::size_t n);
