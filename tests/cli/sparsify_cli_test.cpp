@@ -248,10 +248,15 @@ TEST_F(SparsifyCliTest, APointSeenByMoreImagesThanOneWindowCanPriceIsRefusedByNa
   for (std::uint32_t i = 1; i <= k; ++i) text += "obs " + std::to_string(i) + " 7 10 10\n";
   text += "obs 1 8 200 200\nobs 2 8 200 200\n";
   const std::string path = write("views.txt", text);
-  const Result r = sparsify({"--window", path});
-  EXPECT_EQ(r.status, 2) << r.err;
-  EXPECT_NE(r.err.find(path + ":0: point 7 is seen by 2201 images, above the 2200"), std::string::npos) << r.err;
-  EXPECT_EQ(count_lines(r.err), 1u) << r.err;
+  // The whole mode's one window, and replay windows of --K 2201 images.
+  for (const std::vector<std::string>& mode : {std::vector<std::string>{}, {"--mode", "replay", "--K", "2201"}}) {
+    std::vector<std::string> args = {"--window", path};
+    args.insert(args.end(), mode.begin(), mode.end());
+    const Result r = sparsify(args);
+    EXPECT_EQ(r.status, 2) << r.err;
+    EXPECT_NE(r.err.find(path + ":0: point 7 is seen by 2201 images, above the 2200"), std::string::npos) << r.err;
+    EXPECT_EQ(count_lines(r.err), 1u) << r.err;
+  }
 }
 
 TEST_F(SparsifyCliTest, FlagErrorsPrintOneUsageLine) {

@@ -143,7 +143,9 @@ bool check_limits(const ModelOptions& opt, Mode mode, const Loaded& m, std::stri
        over(n.max_pair_arcs, opt.limits.max_pair_arcs, "pair arcs in the whole mode's window", "--max-pair-arcs"))) {
     return false;
   }
-  if (mode != Mode::kWhole) return true;
+  // A replay window holds K images: only a K above core::kMaxPointViews can
+  // hold a point seen by more (checked over the whole model, which is safe).
+  if (mode != Mode::kWhole && opt.K <= core::kMaxPointViews) return true;
   std::string why = point_views_refusal(m.keyframes.file, opt.params, opt.path);
   if (why.empty()) return true;
   *error = std::move(why);
