@@ -8,8 +8,12 @@ if(TARGET keepless::opencv)
 else()
   set(KEEPLESS_PACKAGE_HAS_OPENCV FALSE)
 endif()
+# Likewise the LCM messages and the node's library: their own targets file,
+# loaded only where the consumer's machine has LCM.
 if(TARGET keepless::lcm_types)
   set(KEEPLESS_PACKAGE_HAS_LCM TRUE)
+  install(EXPORT keeplessLcmTargets NAMESPACE keepless:: FILE keeplessLcmTargets.cmake
+          DESTINATION ${CMAKE_INSTALL_LIBDIR}/cmake/keepless)
 else()
   set(KEEPLESS_PACKAGE_HAS_LCM FALSE)
 endif()

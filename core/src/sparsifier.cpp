@@ -528,6 +528,9 @@ Status Sparsifier::validate(const Params& p) {
   if (p.box_width < 0 || p.box_height < 0) return Status::kInvalidArgument;
   if (p.spatial_weight < 1 || p.spatial_weight > kMaxSpatialWeight) return Status::kInvalidArgument;
   if (p.scope != Scope::kWindow && p.scope != Scope::kNewest) return Status::kInvalidArgument;
+  // Bits beyond the defined terms would be ignored silently.
+  if ((p.cost_terms & ~(kConnectivityCost | kSpatialCost | kBaselineCost)) != 0) return Status::kInvalidArgument;
+  if ((p.track_terms & ~(kTrackLength | kTrackAge | kTrackError | kTrackAngle)) != 0) return Status::kInvalidArgument;
   switch (p.budget.kind) {
     case BudgetKind::kNone:
     case BudgetKind::kPoints:

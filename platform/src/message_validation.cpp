@@ -256,10 +256,12 @@ void OrderTracker::accept(const Verdict& v, std::int64_t publisher, std::int64_t
     }
     if (v.restart) ++restarts_;
     if (v.resync) ++resyncs_;
-    for (Run& run : runs_) run = Run{};
   } else if (sequence > last_sequence_) {
     gaps_ += static_cast<std::uint64_t>(sequence) - static_cast<std::uint64_t>(last_sequence_) - 1;
   }
+  // A run matters only while the order refuses everything: keyframes refused
+  // around accepted ones (late or repeated) never count toward a later run.
+  for (Run& run : runs_) run = Run{};
   has_previous_ = owned_ && !v.takeover;
   previous_sequence_ = last_sequence_;
   previous_utime_ = last_utime_;

@@ -39,6 +39,10 @@ endif()
 if(NOT out MATCHES "onboard_module: [0-9]+ keyframes, [0-9]+ points: kept [1-9][0-9]*, culled [1-9][0-9]*")
   message(FATAL_ERROR "onboard_module printed no decision summary")
 endif()
+# A package with LCM must have exercised it (this machine has LCM).
+if(EXISTS ${PREFIX}/include/keepless/decision_t.hpp AND NOT out MATCHES "decision_t: [0-9]+ bytes")
+  message(FATAL_ERROR "onboard_module did not use keepless::lcm_types although the package has it")
+endif()
 # A package with the OpenCV adapter must have exercised it.
 if(EXISTS ${PREFIX}/include/keepless/opencv/keyframe_adapter.hpp AND
    NOT out MATCHES "keepless::opencv: [1-9][0-9]* culled ids, the same decisions")

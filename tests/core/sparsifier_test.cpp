@@ -215,6 +215,11 @@ TEST(Sparsifier, ValidateParams) {
   // The solver's arc capacities are 32-bit: M up to INT32_MAX, with a budget too.
   EXPECT_EQ(with([](Params& p) { p.pair_capacity = INT32_MAX; }), Status::kOk);
   EXPECT_EQ(with([](Params& p) { p.pair_capacity = std::int64_t{INT32_MAX} + 1; }), Status::kInvalidArgument);
+  // Undefined term bits would be ignored silently.
+  EXPECT_EQ(with([](Params& p) { p.cost_terms = kSpatialCost; }), Status::kOk);
+  EXPECT_EQ(with([](Params& p) { p.cost_terms = 0xff; }), Status::kInvalidArgument);
+  EXPECT_EQ(with([](Params& p) { p.track_terms = kTrackAngle; }), Status::kOk);
+  EXPECT_EQ(with([](Params& p) { p.track_terms = 0xf0; }), Status::kInvalidArgument);
   EXPECT_EQ(with([](Params& p) {
               p.pair_capacity = std::int64_t{1} << 40;
               p.budget = {BudgetKind::kPoints, 1, 0.0};

@@ -291,7 +291,10 @@ TEST_F(GuardOnMemq, AStragglerDoesNotLockARestartOut) {
   send(kt::make_keyframe(1030, 1030, kt::id_range(230, 30)));     // the old one's straggler
   const std::size_t first = decisions_.size();
   for (std::int64_t s = 2; s <= 200; ++s) send(kt::make_keyframe(s, s, kt::id_range(s, 20)));
-  EXPECT_EQ(count(decision_t::STATUS_OPTIMAL, first), 198u) << "served from its third keyframe";
+  // Served from its fourth keyframe: the straggler, accepted, clears the run
+  // the new process's first keyframe had started (runs count only while the
+  // order refuses everything).
+  EXPECT_EQ(count(decision_t::STATUS_OPTIMAL, first), 197u) << "served from its fourth keyframe";
   EXPECT_EQ(node_->order().restarts(), 1u);
   EXPECT_EQ(status().stream_restarts, 1);
   EXPECT_EQ(node_->order().last_sequence(), 200);
@@ -666,6 +669,28 @@ TEST_F(ResyncOnMemq, LateStragglersDoNotBlockTheResync) {
   stream_at_10hz(101, 120);
   send_flipped(121);
   expect_resynchronised(122, 4, Delivery::kWithStraggler);
+}
+
+// Review: candidate runs outlived the stream accepting again, so two late
+// keyframes and a third an hour later were a restart (window and cull memory
+// cleared). Every accepted message clears them.
+TEST_F(ResyncOnMemq, LateKeyframesOfALiveStreamNeverAddUpToARestart) {
+  stream_at_10hz(1, 12);
+  for (std::int64_t s : {3, 4}) {
+    keepless::keyframe_t late = owner_keyframe(s);
+    late.keyframe_id = 100000 + s;  // valid: its id is not in the window
+    send(late);
+  }
+  stream_at_10hz(13, 40);
+  clock_.advance(3600ull * 1000000000ull);
+  keepless::keyframe_t late = owner_keyframe(5);
+  late.keyframe_id = 100005;
+  send(late);
+  EXPECT_EQ(decisions_.back().status, decision_t::STATUS_REJECTED_INPUT);
+  EXPECT_EQ(node_->order().restarts(), 0u);
+  EXPECT_EQ(node_->order().resyncs(), 0u);
+  EXPECT_EQ(node_->order().last_sequence(), 40);
+  EXPECT_EQ(node_->window().keyframe_count(), 4u) << "the window kept";
 }
 
 // Review: a VO numbering from a random 64-bit start (here negative) never

@@ -645,7 +645,7 @@ TEST_F(SparsifyMaps, MaxMemoryIsHonouredOnEveryInputPath) {
       {{"--bal", bal, "--max-memory-mb", "1"}, bal + ": reading this model needs about "},
       // 1 MB of one-digit values: 12 MB by its bytes, about 51 MB by its tokens.
       {{"--bal", path("short_values.txt"), "--max-memory-mb", "20"},
-       path("short_values.txt") + ": reading this model needs about 49 MB (its 1,000,006 bytes of files, 500,003 numbers and names)"},
+       path("short_values.txt") + ": reading this model needs about 49 MB (its 1,000,006 bytes of files, 500,003 numbers and names on 500,001 lines)"},
       // A window file's reader checks record by record (with the whole-mode
       // decision's memory); replay's windows are checked once it is read.
       // (Both fit in 100 MB: replay needs about 98 MB.)

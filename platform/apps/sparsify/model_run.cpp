@@ -1,6 +1,7 @@
 #include "model_run.hpp"
 
 #include <algorithm>
+#include <cerrno>
 #include <charconv>
 #include <cinttypes>
 #include <cmath>
@@ -226,25 +227,33 @@ std::uint64_t total_size(const std::vector<std::string>& files) {
   return n;
 }
 
-// Whitespace-separated tokens of the files, read in chunks (nothing held);
-// a file that cannot be opened counts none (reading it reports why).
-std::uint64_t count_tokens(const std::vector<std::string>& files) {
-  std::uint64_t tokens = 0;
+// Whitespace-separated tokens and lines of the files, read in chunks
+// (nothing held); a file that cannot be opened counts none (reading it
+// reports why).
+struct TextCounts {
+  std::uint64_t tokens = 0, lines = 0;
+};
+TextCounts count_text(const std::vector<std::string>& files) {
+  TextCounts c;
   char buf[1 << 16];
   for (const std::string& f : files) {
     platform::RegularFile file;
     std::string problem;
     if (!platform::open_regular_file(f, &file, &problem)) continue;
     bool in_token = false;
-    for (ssize_t n; (n = ::read(file.fd, buf, sizeof buf)) > 0;) {
+    for (;;) {
+      const ssize_t n = ::read(file.fd, buf, sizeof buf);
+      if (n < 0 && errno == EINTR) continue;
+      if (n <= 0) break;
       for (ssize_t i = 0; i < n; ++i) {
         const bool blank = buf[i] == ' ' || buf[i] == '\n' || buf[i] == '\t' || buf[i] == '\r';
-        tokens += !blank && !in_token;
+        c.tokens += !blank && !in_token;
+        c.lines += buf[i] == '\n';
         in_token = !blank;
       }
     }
   }
-  return tokens;
+  return c;
 }
 
 // a is b or lies inside it (both resolved).
@@ -490,12 +499,14 @@ int run_model(const ModelOptions& opt) {
   const bool text = opt.input == Input::kBal || (opt.input == Input::kColmap && inputs[0].size() > 4 &&
                                                  inputs[0].compare(inputs[0].size() - 4, 4, ".txt") == 0);
   const ReadCost cost = opt.input == Input::kBal ? kBalRead : (text ? kColmapTextRead : kColmapBinaryRead);
-  const std::uint64_t tokens = text && opt.input != Input::kWindow ? count_tokens(inputs) : 0;
+  const TextCounts counts = text ? count_text(inputs) : TextCounts{};
   const double read_need = opt.input == Input::kWindow ? 0.0
                                                        : cost.per_byte * static_cast<double>(input_bytes) +
-                                                             cost.per_token * static_cast<double>(tokens);
+                                                             cost.per_token * static_cast<double>(counts.tokens) +
+                                                             cost.per_line * static_cast<double>(counts.lines);
   if (read_need > limit) {
-    const std::string words = text ? ", " + grouped(tokens) + " numbers and names" : "";
+    const std::string words =
+        text ? ", " + grouped(counts.tokens) + " numbers and names on " + grouped(counts.lines) + " lines" : "";
     std::fprintf(stderr, "%s: reading this model needs about %s (its %s bytes of files%s), above --max-memory-mb %llu\n",
                  opt.path.c_str(), megabytes(read_need).c_str(), grouped(input_bytes).c_str(), words.c_str(),
                  static_cast<unsigned long long>(opt.max_memory_mb));

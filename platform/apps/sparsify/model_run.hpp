@@ -60,21 +60,24 @@ constexpr std::int64_t kEvidenceM = 200;
 
 // What reading a model holds at most (the files, the parsed model and its
 // keyframes), checked against --max-memory-mb before reading: bytes per
-// byte of its files, plus, for text, bytes per whitespace-separated token
-// (a text model of short tokens holds more per byte: each value is kept
-// with its text). Measured peaks of the whole run (RSS, with the program's
-// own ~7 MB): COLMAP binary 6.5x the fixture's bytes (3.3x its reading and
-// deciding alone); COLMAP text, the fixture 3.9x, 300,000 images of short
-// lines 18x (about 55 bytes a token); BAL, the zenslam problem 14x,
-// 240,000 short tokens 25x and 24-digit ones 11x (about 80 bytes a token),
-// 4.5 M one-digit values 33x.
+// byte of its files and, for text, per whitespace-separated token and per
+// line, counted first (a text model of short tokens or short lines holds
+// more per byte: BAL keeps each value with its text, a COLMAP image line
+// is a record). Measured peaks of the whole run (RSS, with the program's own
+// ~7 MB) and what these give: COLMAP binary, the fixture 6.5x its bytes
+// (reading and deciding alone 3.3x); COLMAP text, the fixture 51 MB (46),
+// 300,000 images on short lines 164 MB (173), 3,000 images and 300,000
+// points 296 MB (417); BAL, the zenslam problem 25 MB (24), 240,000 short
+// tokens 28 MB (28) and 24-digit ones 47 MB (46), 4.5 M one-digit values
+// 297 MB at a refusal after parsing (459).
 struct ReadCost {
   double per_byte;
   double per_token;
+  double per_line;
 };
-constexpr ReadCost kColmapBinaryRead{6.0, 0.0};
-constexpr ReadCost kColmapTextRead{3.0, 60.0};
-constexpr ReadCost kBalRead{6.0, 90.0};
+constexpr ReadCost kColmapBinaryRead{6.0, 0.0, 0.0};
+constexpr ReadCost kColmapTextRead{2.5, 10.0, 200.0};
+constexpr ReadCost kBalRead{6.0, 90.0, 0.0};
 
 // --decisions' contents: "<point_id> <keep|cull|skip> <flow> <capacity>" a line.
 std::string format_decisions(const core::PointDecision* decisions, std::size_t n);

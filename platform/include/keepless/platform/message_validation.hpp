@@ -92,7 +92,8 @@ RejectReason check_map_event_bytes(const void* data, std::size_t size, const Mes
 //    last one. A keyframe extends the longest run it continues; one that
 //    continues none starts a run in place of the shortest (the least
 //    recently extended of equals); one with the sequence of the last
-//    accepted message or of a run's last keyframe (a duplicate) does neither. A restart run starts at a sequence in
+//    accepted message or of a run's last keyframe (a duplicate) does neither;
+//    every accepted message clears them. A restart run starts at a sequence in
 //    0..kRestartMaxFirstSequence that does not follow the order as it was
 //    before the last accepted message, and is continued only in steps of at
 //    most kRestartMaxFirstSequence (stragglers of an old run never break or
@@ -117,7 +118,8 @@ struct OrderBounds {
 // A restart candidate starts at a sequence no larger than this.
 constexpr std::int64_t kRestartMaxFirstSequence = 16;
 // Candidate runs held at once: a duplicate or straggler starts its own run
-// instead of replacing the stream's.
+// instead of replacing the stream's (kCandidateRuns or more out-of-order
+// keyframes after each of the stream's would still displace it).
 constexpr std::size_t kCandidateRuns = 4;
 // The longest silence of the order a resync waits for (rule 3).
 constexpr std::uint64_t kResyncSilenceNs = 1000000000ull;

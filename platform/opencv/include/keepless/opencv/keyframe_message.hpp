@@ -3,6 +3,7 @@
 // and apart from keyframe_adapter.hpp so that the adapter itself needs no LCM:
 // include this only when linking keepless::lcm_types.
 
+#include <algorithm>
 #include <cstdint>
 
 #include "keepless/keyframe_t.hpp"
