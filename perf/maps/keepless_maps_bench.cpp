@@ -142,7 +142,7 @@ Ba bundle_adjust(const Options& opt, const std::string& in, const std::string& o
   const int rc = std::system(cmd.c_str());
   ba.seconds = static_cast<double>(platform::monotonic_ns() - t0) / 1e9;
   std::string text, error;
-  io::read_file(log, &text, &error);
+  if (!io::read_file(log, &text, &error)) text.clear();  // no log: not counted as converged
   ba.converged = rc == 0 && text.find("Termination : Convergence") != std::string::npos;
   io::ColmapFormat format;
   if (rc != 0 || !io::read_colmap_model(out, &ba.model, &format, &error)) {

@@ -37,7 +37,10 @@ bool read_window_file(const std::string& path, core::WindowFile* out, std::strin
 }
 
 bool write_window_file(const std::string& path, const core::WindowFile& file, std::string* error) {
-  std::FILE* f = std::fopen(path.c_str(), "wb");
+  // A temporary name beside it, renamed over it once whole: a failed write
+  // leaves no partial file at PATH (io::write_file_atomically, streamed).
+  const std::string tmp = path + ".tmp-" + std::to_string(::getpid());
+  std::FILE* f = std::fopen(tmp.c_str(), "wb");
   if (f == nullptr) {
     *error = path + ": cannot open for writing: " + std::strerror(errno);
     return false;
@@ -50,9 +53,16 @@ bool write_window_file(const std::string& path, const core::WindowFile& file, st
     core::append_window_keyframe(&chunk, file.keyframes[k], file.observations[k]);
     ok = std::fwrite(chunk.data(), 1, chunk.size(), f) == chunk.size();
   }
-  const int err = errno;
+  int err = errno;
   ok = (std::fclose(f) == 0) && ok;
-  if (!ok) *error = path + ": write failed: " + std::strerror(err != 0 ? err : EIO);
+  if (ok && std::rename(tmp.c_str(), path.c_str()) != 0) {
+    err = errno;
+    ok = false;
+  }
+  if (!ok) {
+    *error = path + ": write failed: " + std::strerror(err != 0 ? err : EIO);
+    std::remove(tmp.c_str());
+  }
   return ok;
 }
 

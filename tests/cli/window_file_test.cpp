@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <string>
 
 #include <sys/stat.h>
@@ -283,6 +284,26 @@ TEST(WindowFileTest, WriteThenReadIsBitIdentical) {
   ASSERT_TRUE(platform::read_window_file(path, &h, &error)) << error;
   EXPECT_EQ(format_window_file(h), text);
   std::remove(path.c_str());
+}
+
+// The writer goes through a temporary name: a write that cannot land (here
+// PATH is a folder) leaves PATH as it was and no temporary behind.
+TEST(WindowFileTest, AFailedWriteLeavesNoPartialFile) {
+  const std::string dir = ::testing::TempDir() + "keepless_window_file_dir";
+  std::filesystem::create_directories(dir);
+  WindowFile f;
+  Keyframe kf;
+  kf.id = 1;
+  f.keyframes.push_back(kf);
+  f.observations.push_back({{7, 1, 2}});
+  std::string error;
+  EXPECT_FALSE(platform::write_window_file(dir, f, &error));
+  EXPECT_EQ(error.rfind(dir + ": write failed: ", 0), 0u) << error;
+  EXPECT_TRUE(std::filesystem::is_directory(dir));
+  for (const auto& e : std::filesystem::directory_iterator(::testing::TempDir())) {
+    EXPECT_EQ(e.path().filename().string().find("keepless_window_file_dir.tmp-"), std::string::npos) << e.path();
+  }
+  std::filesystem::remove_all(dir);
 }
 
 TEST(WindowFileTest, IdentityOrientationIsOmitted) {

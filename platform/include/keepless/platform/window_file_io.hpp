@@ -13,10 +13,11 @@ namespace keepless::platform {
 
 // On failure returns false and sets *error to one line "PATH:LINE: reason"
 // (LINE 0 when the file cannot be opened or is not a regular file).
-bool read_window_file(const std::string& path, core::WindowFile* out, std::string* error,
-                      const core::WindowFileLimits& limits = {});
+[[nodiscard]] bool read_window_file(const std::string& path, core::WindowFile* out, std::string* error,
+                                    const core::WindowFileLimits& limits = {});
 
-// Writes `file` to `path` keyframe by keyframe; false + *error on I/O failure.
-bool write_window_file(const std::string& path, const core::WindowFile& file, std::string* error);
+// Writes `file` to `path` keyframe by keyframe, under a temporary name
+// renamed over it; false + *error on I/O failure (nothing at PATH changed).
+[[nodiscard]] bool write_window_file(const std::string& path, const core::WindowFile& file, std::string* error);
 
 }  // namespace keepless::platform

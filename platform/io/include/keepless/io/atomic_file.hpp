@@ -8,13 +8,13 @@ namespace keepless::io {
 
 // False with *error "PATH:0: reason" when the file cannot be read or is not
 // a regular file (a FIFO or a device is refused, never waited on).
-bool read_file(const std::string& path, std::string* out, std::string* error);
+[[nodiscard]] bool read_file(const std::string& path, std::string* out, std::string* error);
 
 // Writes `contents` to `path` (created or truncated); 0 or an errno value.
-int write_whole_file(const std::string& path, const std::string& contents);
+[[nodiscard]] int write_whole_file(const std::string& path, const std::string& contents);
 
 // Writes PATH.tmp-<pid>, then renames it over PATH; false with *error
 // "PATH:0: reason" (and nothing at PATH changed) on failure.
-bool write_file_atomically(const std::string& path, const std::string& contents, std::string* error);
+[[nodiscard]] bool write_file_atomically(const std::string& path, const std::string& contents, std::string* error);
 
 }  // namespace keepless::io

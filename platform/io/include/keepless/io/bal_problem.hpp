@@ -33,8 +33,8 @@ struct BalProblem {
 // Parses `text` (named `name` in errors). On failure false and *error is
 // "NAME:LINE: reason". Indices must be in range and numbers finite; the
 // counts are checked against the lines present before anything is sized.
-bool parse_bal(const std::string& name, const std::string& text, BalProblem* out, std::string* error);
-bool read_bal(const std::string& path, BalProblem* out, std::string* error);
+[[nodiscard]] bool parse_bal(const std::string& name, const std::string& text, BalProblem* out, std::string* error);
+[[nodiscard]] bool read_bal(const std::string& path, BalProblem* out, std::string* error);
 
 std::string format_bal(const BalProblem& problem);
 

@@ -87,7 +87,7 @@ struct ColmapFiles {
 // their parameter counts, finite numbers, unique ids, every image's camera,
 // and that images and tracks reference each other exactly (each 2D point
 // naming a 3D point appears once in that point's track, and back).
-bool parse_colmap(const std::string& dir, const ColmapFiles& files, ColmapFormat format,
+[[nodiscard]] bool parse_colmap(const std::string& dir, const ColmapFiles& files, ColmapFormat format,
                   ColmapModel* out, std::string* error);
 
 // The model in COLMAP's layout; the text header comments carry the counts
@@ -98,7 +98,7 @@ ColmapFiles format_colmap(const ColmapModel& model, ColmapFormat format);
 // ones are absent (COLMAP's own preference). A DIR holding none of the six
 // files is "DIR: no COLMAP model (...)"; one with some is read in that
 // format and the missing file named.
-bool read_colmap_model(const std::string& dir, ColmapModel* out, ColmapFormat* format,
+[[nodiscard]] bool read_colmap_model(const std::string& dir, ColmapModel* out, ColmapFormat* format,
                        std::string* error);
 
 // Writes the three files into a temporary directory beside DIR (when absent),
@@ -111,9 +111,9 @@ bool read_colmap_model(const std::string& dir, ColmapModel* out, ColmapFormat* f
 // cut it there).
 // write_colmap_model's refusals, checked before it writes anything (a caller
 // writing other outputs first checks them before those, too).
-bool colmap_model_writable(const std::string& dir, const ColmapModel& model, ColmapFormat format,
+[[nodiscard]] bool colmap_model_writable(const std::string& dir, const ColmapModel& model, ColmapFormat format,
                            std::string* error);
-bool write_colmap_model(const std::string& dir, const ColmapModel& model, ColmapFormat format,
+[[nodiscard]] bool write_colmap_model(const std::string& dir, const ColmapModel& model, ColmapFormat format,
                         std::string* error);
 
 // Removes the points whose `culled[i]` is set (i indexes model->points) and

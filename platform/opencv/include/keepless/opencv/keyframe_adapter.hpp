@@ -110,7 +110,13 @@ struct KeyframeExtras {
 struct KeyframeRecord {
   KeyframeRecord() = default;
   explicit KeyframeRecord(const core::Capacities& capacities);
-  core::Keyframe keyframe;  // keyframe.unmapped/.tracked/.quality point into the vectors below (re-point them after a copy)
+  // keyframe's pointers are into this record's own vectors: a copy would
+  // point into the original's, a move takes the buffers with them.
+  KeyframeRecord(const KeyframeRecord&) = delete;
+  KeyframeRecord& operator=(const KeyframeRecord&) = delete;
+  KeyframeRecord(KeyframeRecord&&) = default;
+  KeyframeRecord& operator=(KeyframeRecord&&) = default;
+  core::Keyframe keyframe;  // keyframe.unmapped/.tracked/.quality point into the vectors below
   std::vector<core::Observation> observations;  // mapped first, then reserved-id unmapped
   std::uint32_t mapped = 0;                     // observations[0, mapped) are map points
   std::vector<core::Keypoint> unmapped;         // UnmappedAs::kKeypointList
