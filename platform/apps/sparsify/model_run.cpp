@@ -490,7 +490,7 @@ int run_model(const ModelOptions& opt) {
 
   // --max-memory-mb, estimated before allocating: reading a COLMAP or BAL
   // model holds its files and the parsed model (ReadCost: per byte, and per
-  // token of a text model, counted first); a window file is checked record
+  // token and line of a text model, counted first); a window file is checked record
   // by record by its reader (whole mode: with the decision's memory too;
   // replay: after reading, below).
   const double limit = static_cast<double>(opt.max_memory_mb) * 1048576.0;
