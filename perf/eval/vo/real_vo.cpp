@@ -2,6 +2,7 @@
 
 #include <cstdint>
 #include <cstdio>
+#include <cstdlib>
 #include <map>
 #include <string>
 #include <utility>
@@ -96,12 +97,14 @@ RealRunResult Vo::run() {
   const Clock::time_point start = Clock::now();
   result_.frames = static_cast<int>(seq_.image_files.size());
   bool was_tracked = false;
+  const bool debug = std::getenv("KEEPLESS_EVAL_DEBUG") != nullptr;
   for (int i = 0; i < result_.frames; ++i) {
     TrackedFrame cur;
     cur.index = i;
     if (!features_of(i, &cur.f)) return result_;
     bool tracked = false;
-    if (!initialised_) {
+    const bool tracking = initialised_;
+    if (!tracking) {
       if (seq_.rgbd) {
         if (cur.f.keys.size() >= 500) {
           initialize_rgbd(cur);
@@ -132,6 +135,18 @@ RealRunResult Vo::run() {
       if (!records_.empty()) records_.push_back({i, records_.back().ref_kf, records_.back().T_cr});
     }
     was_tracked = tracked;
+    if (debug && tracking && trace_.inliers < 0) {
+      std::fprintf(stderr, "  [%s %s] frame %d: lost, no pose (motion model and relocalisation failed)\n",
+                   seq_.name.c_str(), to_string(opt_.selector), i);
+    } else if (debug && tracking && !tracked) {
+      std::fprintf(stderr, "  [%s %s] frame %d: lost, %d inliers of %d local points (needs %d)\n", seq_.name.c_str(),
+                   to_string(opt_.selector), i, trace_.inliers, trace_.local_points, kMinTrackedInliers);
+    } else if (debug && tracking) {
+      std::fprintf(stderr, "  [%s %s] frame %d: %d inliers of %d local points, reference keyframe's points seen 3+ "
+                   "times %d%s; map %d KFs, %d points\n", seq_.name.c_str(), to_string(opt_.selector), i,
+                   trace_.inliers, trace_.local_points, trace_.ref_matches, trace_.keyframe ? ", keyframe" : "",
+                   map_.alive_keyframes(), map_.alive_points());
+    }
     if (opt_.verbose && (i % 50 == 0 || i + 1 == result_.frames)) {
       std::fprintf(stderr, "  [%s %s] frame %d: tracked %d, %d KFs, %d MPs, %.1f s\n", seq_.name.c_str(),
                    to_string(opt_.selector), i, result_.frames_tracked, map_.alive_keyframes(), map_.alive_points(),

@@ -49,7 +49,7 @@ class Vo {
   std::vector<int> local_map(const TrackedFrame& cur, int* reference);
   bool initialize_monocular(TrackedFrame& cur);
   void initialize_rgbd(TrackedFrame& cur);
-  bool need_keyframe(const TrackedFrame& cur, int inliers) const;
+  bool need_keyframe(const TrackedFrame& cur, int inliers, int* ref_matches) const;
   int insert_keyframe(TrackedFrame& cur);
   void local_mapping(int kf);
   void point_culling(int kf);
@@ -95,6 +95,12 @@ class Vo {
   bool have_init_ref_ = false;
   std::vector<TrackedFrame> pending_;  // frames after init_ref_ while initialisation waits for parallax
   std::vector<FrameRecord> records_;
+  // The last frame's tracking, printed per frame under KEEPLESS_EVAL_DEBUG
+  // (why a run lost tracking: inliers against kMinTrackedInliers).
+  struct FrameTrace {
+    int inliers = -1, local_points = 0, ref_matches = 0;
+    bool keyframe = false;
+  } trace_;
 
   opencv::KeyframeAdapter adapter_;
   core::Window window_;

@@ -146,6 +146,7 @@ std::vector<int> Vo::local_map(const TrackedFrame& cur, int* reference) {
 }
 
 bool Vo::track(TrackedFrame& cur) {
+  trace_ = FrameTrace{};
   cur.mp.assign(cur.f.keys.size(), -1);
   cur.outlier.assign(cur.f.keys.size(), false);
   cur.Tcw = have_velocity_ ? velocity_ * last_.Tcw : last_.Tcw;
@@ -172,6 +173,8 @@ bool Vo::track(TrackedFrame& cur) {
   const bool recent = cur.index < relocalised_frame_ + 2;
   search_local_points(cur, map_, points, cam_, recent ? 5 : (seq_.rgbd ? 3 : 1));
   const int inliers = optimize(cur);
+  trace_.inliers = inliers;
+  trace_.local_points = static_cast<int>(points.size());
   if (inliers < (relocalised || recent ? kMinTrackedAfterRelocalisation : kMinTrackedInliers)) return false;
   for (int p : cur.mp) {
     if (p < 0) continue;
@@ -179,16 +182,18 @@ bool Vo::track(TrackedFrame& cur) {
     if (map_.points[static_cast<std::size_t>(p)].excluded) ++result_.excluded_matches;
   }
   reference_kf_ = reference;
-  if (need_keyframe(cur, inliers)) insert_keyframe(cur);
+  trace_.keyframe = need_keyframe(cur, inliers, &trace_.ref_matches);
+  if (trace_.keyframe) insert_keyframe(cur);
   return true;
 }
 
-bool Vo::need_keyframe(const TrackedFrame& cur, int inliers) const {
+bool Vo::need_keyframe(const TrackedFrame& cur, int inliers, int* ref_matches_out) const {
   const int kfs = map_.alive_keyframes();
   const int max_frames = static_cast<int>(seq_.fps);
   if (cur.index < relocalised_frame_ + max_frames && kfs > max_frames) return false;
   const int min_obs = kfs <= 2 ? 2 : 3;
-  int ref_matches = 0;
+  int& ref_matches = *ref_matches_out;
+  ref_matches = 0;
   for (int p : map_.kfs[static_cast<std::size_t>(reference_kf_)].mp) {
     if (p >= 0 && !map_.points[static_cast<std::size_t>(p)].bad && map_.weighted_observations(p) >= min_obs) {
       ++ref_matches;
