@@ -3,9 +3,9 @@
 #include <unistd.h>
 
 #include <cerrno>
-#include <cstdio>
 #include <cstring>
 
+#include "keepless/platform/atomic_file_writer.hpp"
 #include "keepless/platform/regular_file.hpp"
 
 namespace keepless::platform {
@@ -37,33 +37,23 @@ bool read_window_file(const std::string& path, core::WindowFile* out, std::strin
 }
 
 bool write_window_file(const std::string& path, const core::WindowFile& file, std::string* error) {
-  // A temporary name beside it, renamed over it once whole: a failed write
-  // leaves no partial file at PATH (io::write_file_atomically, streamed).
-  const std::string tmp = path + ".tmp-" + std::to_string(::getpid());
-  std::FILE* f = std::fopen(tmp.c_str(), "wb");
-  if (f == nullptr) {
-    *error = path + ": cannot open for writing: " + std::strerror(errno);
+  AtomicFileWriter out(path);
+  if (out.open_error() != 0) {
+    *error = path + ": cannot open for writing: " + std::strerror(out.open_error());
     return false;
   }
   // One keyframe at a time keeps the buffer small for a whole map.
   std::string chunk;
-  bool ok = true;
-  for (std::size_t k = 0; ok && k < file.keyframes.size(); ++k) {
+  for (std::size_t k = 0; k < file.keyframes.size(); ++k) {
     chunk.clear();
     core::append_window_keyframe(&chunk, file.keyframes[k], file.observations[k]);
-    ok = std::fwrite(chunk.data(), 1, chunk.size(), f) == chunk.size();
+    if (!out.write(chunk)) break;
   }
-  int err = errno;
-  ok = (std::fclose(f) == 0) && ok;
-  if (ok && std::rename(tmp.c_str(), path.c_str()) != 0) {
-    err = errno;
-    ok = false;
+  if (const int err = out.commit(); err != 0) {
+    *error = path + ": write failed: " + std::strerror(err);
+    return false;
   }
-  if (!ok) {
-    *error = path + ": write failed: " + std::strerror(err != 0 ? err : EIO);
-    std::remove(tmp.c_str());
-  }
-  return ok;
+  return true;
 }
 
 }  // namespace keepless::platform

@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <cstring>
 
+#include "keepless/platform/atomic_file_writer.hpp"
 #include "keepless/platform/regular_file.hpp"
 
 namespace keepless::io {
@@ -39,13 +40,10 @@ int write_whole_file(const std::string& path, const std::string& contents) {
 }
 
 bool write_file_atomically(const std::string& path, const std::string& contents, std::string* error) {
-  const std::string tmp = path + ".tmp-" + std::to_string(::getpid());
-  int err = write_whole_file(tmp, contents);
-  if (err == 0 && std::rename(tmp.c_str(), path.c_str()) != 0) err = errno;
-  if (err != 0) {
-    std::remove(tmp.c_str());
-    *error = path + ":0: cannot write: " + std::strerror(err);
-  }
+  platform::AtomicFileWriter out(path);
+  out.write(contents);
+  const int err = out.commit();
+  if (err != 0) *error = path + ":0: cannot write: " + std::strerror(err);
   return err == 0;
 }
 

@@ -13,8 +13,8 @@ namespace keepless::io {
 // Writes `contents` to `path` (created or truncated); 0 or an errno value.
 [[nodiscard]] int write_whole_file(const std::string& path, const std::string& contents);
 
-// Writes PATH.tmp-<pid>, then renames it over PATH; false with *error
-// "PATH:0: reason" (and nothing at PATH changed) on failure.
+// Writes PATH.tmp-<pid>, then renames it over PATH (platform::AtomicFileWriter);
+// false with *error "PATH:0: reason" (and nothing at PATH changed) on failure.
 [[nodiscard]] bool write_file_atomically(const std::string& path, const std::string& contents, std::string* error);
 
 }  // namespace keepless::io
