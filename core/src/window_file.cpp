@@ -374,7 +374,7 @@ bool WindowFileParser::finish(WindowFile* out) {
   if (!failed_ && !partial_.empty()) {
     const std::string last = std::move(partial_);
     partial_.clear();
-    feed_line(last.data(), last.size());
+    if (!feed_line(last.data(), last.size())) return false;
   }
   if (failed_) return false;
   file_.needs.max_keyframes = static_cast<std::uint32_t>(file_.keyframes.size());

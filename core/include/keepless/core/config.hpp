@@ -194,14 +194,14 @@ struct Params {
 // alone) for any other text.
 const char* to_string(Scope scope);
 const char* to_string(CostModel model);
-bool parse_scope(const char* text, Scope* out);
-bool parse_cost_model(const char* text, CostModel* out);
+[[nodiscard]] bool parse_scope(const char* text, Scope* out);
+[[nodiscard]] bool parse_cost_model(const char* text, CostModel* out);
 // Params::track_terms from a comma-separated list of "length", "age",
 // "error", "angle" (each at most once); false (and *out unchanged) for
 // anything else, an empty list included.
-bool parse_track_terms(const char* text, std::uint8_t* out);
+[[nodiscard]] bool parse_track_terms(const char* text, std::uint8_t* out);
 // Params::cost_terms from a comma-separated list of "c_c", "c_s", "c_b", the
 // same way.
-bool parse_cost_terms(const char* text, std::uint8_t* out);
+[[nodiscard]] bool parse_cost_terms(const char* text, std::uint8_t* out);
 
 }  // namespace keepless::core

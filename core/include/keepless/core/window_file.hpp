@@ -60,11 +60,11 @@ class WindowFileParser {
   explicit WindowFileParser(std::string name, WindowFileLimits limits = {});
 
   // One line, without its '\n'.
-  bool feed_line(const char* data, std::size_t size);
+  [[nodiscard]] bool feed_line(const char* data, std::size_t size);
   // Any chunk of the input; a line split across chunks is joined (bounded).
-  bool feed(const char* data, std::size_t size);
+  [[nodiscard]] bool feed(const char* data, std::size_t size);
   // End of input (a last line without '\n' is parsed); moves the result out.
-  bool finish(WindowFile* out);
+  [[nodiscard]] bool finish(WindowFile* out);
   // An error found outside the text (e.g. reading failed), on line `line`.
   void fail_at(std::uint64_t line, const std::string& reason);
 
@@ -104,8 +104,8 @@ class WindowFileParser {
 };
 
 // Parses `text` as if read from a file named `name` (for errors).
-bool parse_window_text(const std::string& name, const std::string& text, WindowFile* out,
-                       std::string* error, const WindowFileLimits& limits = {});
+[[nodiscard]] bool parse_window_text(const std::string& name, const std::string& text, WindowFile* out,
+                                     std::string* error, const WindowFileLimits& limits = {});
 
 // The needs of `file` (does not validate it; ids are trusted), each saturated
 // at UINT32_MAX.
@@ -121,10 +121,10 @@ void append_window_keyframe(std::string* out, const Keyframe& keyframe, const st
 
 // Strict number parsing shared by the reader and the command-line tools.
 // An unsigned decimal: digits only (no sign, no spaces), at most 2^64-1.
-bool parse_uint64(const char* text, std::uint64_t* out);
+[[nodiscard]] bool parse_uint64(const char* text, std::uint64_t* out);
 // A finite double consumed entirely by strtod; no hex, nan, inf or overflow.
-bool parse_finite_double(const char* text, double* out);
+[[nodiscard]] bool parse_finite_double(const char* text, double* out);
 // "WxH", e.g. "64x48": two unsigned decimals that fit in int32.
-bool parse_box(const char* text, int* width, int* height);
+[[nodiscard]] bool parse_box(const char* text, int* width, int* height);
 
 }  // namespace keepless::core

@@ -14,8 +14,8 @@ struct PinResult {
 };
 
 // Parses "0,1" or "0-3"; false on malformed text or CPU >= 1024.
-bool parse_cpu_list(const std::string& text, std::uint64_t mask_out[16]);
-PinResult pin_to_cpus(const std::string& cpu_list);
+[[nodiscard]] bool parse_cpu_list(const std::string& text, std::uint64_t mask_out[16]);
+[[nodiscard]] PinResult pin_to_cpus(const std::string& cpu_list);
 std::string current_cpus();
 
 struct LockResult {
@@ -23,6 +23,6 @@ struct LockResult {
   std::string error;
 };
 // mlockall(MCL_CURRENT | MCL_FUTURE).
-LockResult lock_memory();
+[[nodiscard]] LockResult lock_memory();
 
 }  // namespace keepless::platform
