@@ -753,4 +753,112 @@ TEST_F(ResyncOnMemq, AnEarlyRestartIsStillARestart) {
   EXPECT_EQ(node_->cull_memory().size(), 0u);
 }
 
+// A VO that crash-restarts within its first --window keyframes and numbers
+// its sequences and keyframe ids from 1 again: its keyframes are not
+// retransmissions (later utimes, other points), so it is a restart.
+class EarlyRestartOnMemq : public ResyncOnMemq {
+ protected:
+  void SetUp() override {
+    NodeConfig c = default_config();
+    c.window = 8;
+    make_node(c);
+  }
+  // The old process's keyframe `s` (sequence and id s).
+  static keepless::keyframe_t old_keyframe(std::int64_t s) { return kt::make_keyframe(s, s, kt::id_range(s * 5, 30)); }
+  // The new process's keyframe `s`: sequence and id s again, 5 s later, other points.
+  static keepless::keyframe_t new_keyframe(std::int64_t s) {
+    keepless::keyframe_t m = kt::make_keyframe(s, s, kt::id_range(200 + s * 5, 30));
+    m.utime += 5000000;
+    return m;
+  }
+  // Every point in the window is the new process's.
+  bool window_only_new() const {
+    const keepless::core::Window& w = node_->window();
+    for (std::uint32_t k = 0; k < w.keyframe_count(); ++k) {
+      for (std::uint32_t j = 0; j < w.observation_count(k); ++j) {
+        if (w.observations(k)[j].point < 200) return false;
+      }
+    }
+    return true;
+  }
+};
+
+// Before: the copies of 1..5 were refused as retransmissions (their ids in
+// the window) and 6..12 accepted in order: no restart, old keyframe 5 still
+// in the window, new 6..12 decided on windows mixing both processes.
+TEST_F(EarlyRestartOnMemq, ARestartReusingSequencesAndIdsIsARestart) {
+  for (std::int64_t s = 1; s <= 5; ++s) send(old_keyframe(s));
+  ASSERT_EQ(node_->window().keyframe_count(), 5u);
+  const std::size_t first = decisions_.size();
+  for (std::int64_t s = 1; s <= 12; ++s) send(new_keyframe(s));
+  EXPECT_EQ(node_->order().restarts(), 1u);
+  EXPECT_EQ(node_->order().resyncs(), 0u);
+  EXPECT_EQ(node_->order().last_sequence(), 12);
+  EXPECT_EQ(count(decision_t::STATUS_OPTIMAL, first), 10u) << "served from its third keyframe";
+  EXPECT_TRUE(window_only_new()) << "an old keyframe is still in the window";
+  std::vector<std::uint64_t> ids;
+  for (std::uint32_t k = 0; k < node_->window().keyframe_count(); ++k) ids.push_back(node_->window().keyframe(k).id);
+  EXPECT_EQ(ids, (std::vector<std::uint64_t>{5, 6, 7, 8, 9, 10, 11, 12}));
+  // Each decision of the new process equals a fresh node's fed its keyframes 3..12.
+  const std::vector<decision_t> got(decisions_.begin() + static_cast<std::ptrdiff_t>(first), decisions_.end());
+  make_node(config_);
+  for (std::int64_t s = 3; s <= 12; ++s) send(new_keyframe(s));
+  ASSERT_EQ(decisions_.size(), 10u);
+  ASSERT_EQ(got.size(), 12u);
+  for (std::size_t i = 0; i < 10; ++i) {
+    const decision_t& a = got[i + 2];
+    const decision_t& b = decisions_[i];
+    EXPECT_EQ(a.keyframe_id, b.keyframe_id);
+    EXPECT_EQ(a.status, b.status) << "keyframe " << b.keyframe_id;
+    EXPECT_EQ(a.window_keyframe_id, b.window_keyframe_id) << "keyframe " << b.keyframe_id;
+    EXPECT_EQ(a.culled_point_id, b.culled_point_id) << "keyframe " << b.keyframe_id;
+  }
+}
+
+// The same after three old keyframes: the new process's third has the
+// sequence of the last accepted keyframe, and differs from it.
+TEST_F(EarlyRestartOnMemq, ARestartReusingTheLastSequenceIsARestart) {
+  for (std::int64_t s = 1; s <= 3; ++s) send(old_keyframe(s));
+  const std::size_t first = decisions_.size();
+  for (std::int64_t s = 1; s <= 6; ++s) send(new_keyframe(s));
+  EXPECT_EQ(node_->order().restarts(), 1u);
+  EXPECT_EQ(count(decision_t::STATUS_OPTIMAL, first), 4u) << "served from its third keyframe";
+  EXPECT_EQ(node_->window().keyframe_count(), 4u);
+  EXPECT_TRUE(window_only_new());
+}
+
+// Retransmissions early in a stream (same bytes, ids in the window) still
+// change nothing, however often repeated.
+TEST_F(EarlyRestartOnMemq, EarlyRetransmissionsDoNotRestart) {
+  for (std::int64_t s = 1; s <= 5; ++s) send(old_keyframe(s));
+  const State before = state();
+  for (int copy = 0; copy < 3; ++copy) {
+    for (std::int64_t s = 1; s <= 5; ++s) send(old_keyframe(s));
+  }
+  EXPECT_TRUE(state() == before);
+  EXPECT_EQ(node_->order().restarts(), 0u);
+  EXPECT_EQ(count(decision_t::STATUS_OPTIMAL), 5u) << "no keyframe decided twice";
+  send(old_keyframe(6));
+  EXPECT_EQ(decisions_.back().status, decision_t::STATUS_OPTIMAL);
+}
+
+// Differing copies are no cheaper than other keyframes: fewer than
+// --restart-confirm of them in a row change nothing, and the owner's next
+// keyframe clears them.
+TEST_F(EarlyRestartOnMemq, FewerDifferingCopiesThanARunChangeNothing) {
+  for (std::int64_t s = 1; s <= 5; ++s) send(old_keyframe(s));
+  for (std::int64_t round = 0; round < 3; ++round) {
+    const State before = state();
+    send(new_keyframe(1));
+    send(new_keyframe(2));
+    EXPECT_TRUE(state() == before);
+    send(old_keyframe(6 + round));
+    EXPECT_EQ(decisions_.back().status, decision_t::STATUS_OPTIMAL);
+    send(new_keyframe(3));
+    EXPECT_EQ(decisions_.back().reject_reason, keepless::status_t::REJECT_OUT_OF_ORDER);
+  }
+  EXPECT_EQ(node_->order().restarts(), 0u);
+  EXPECT_EQ(node_->window().keyframe_count(), 8u);
+}
+
 }  // namespace
