@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <bitset>
 #include <cmath>
+#include <cstring>
 
 #include "keepless/core/window_file.hpp"
 #include "keepless/map_event_ack_t.hpp"
@@ -169,7 +170,35 @@ RejectReason follows(std::int64_t last_sequence, std::int64_t last_utime, std::i
 
 }  // namespace
 
-OrderTracker::OrderTracker(const OrderBounds& bounds) : bounds_(bounds) {}
+std::uint64_t message_hash(const void* data, std::size_t size) {
+  // Four independent lanes of (h ^ word) * odd, h ^= h >> 29: each step is a
+  // bijection of h and of the word, so two messages of one length that
+  // differ in a single word never collide; the lanes keep the multiplies
+  // apart (a few microseconds for the largest keyframe_t).
+  constexpr std::uint64_t kMul = 0x9E3779B97F4A7C15ull;
+  const auto mix = [](std::uint64_t h, std::uint64_t w) {
+    h = (h ^ w) * kMul;
+    return h ^ (h >> 29);
+  };
+  const auto* p = static_cast<const unsigned char*>(data);
+  std::uint64_t lane[4] = {size, size + 1, size + 2, size + 3};
+  std::size_t at = 0;
+  for (; at + 32 <= size; at += 32) {
+    for (std::size_t l = 0; l < 4; ++l) {
+      std::uint64_t w;
+      std::memcpy(&w, p + at + 8 * l, 8);
+      lane[l] = mix(lane[l], w);
+    }
+  }
+  for (std::size_t l = 0; at < size; ++l, at += 8) {
+    std::uint64_t w = 0;
+    std::memcpy(&w, p + at, std::min<std::size_t>(8, size - at));
+    lane[l] = mix(lane[l], w);
+  }
+  return mix(mix(mix(mix(0, lane[0]), lane[1]), lane[2]), lane[3]);
+}
+
+OrderTracker::OrderTracker(const OrderBounds& bounds) : bounds_(bounds), recent_(bounds.recent_keyframes) {}
 
 bool OrderTracker::continues(const Run& run, std::int64_t sequence, std::int64_t utime) const {
   if (run.length == 0 || follows(run.sequence, run.utime, sequence, utime, bounds_.max_sequence_jump,
@@ -183,8 +212,17 @@ bool OrderTracker::continues(const Run& run, std::int64_t sequence, std::int64_t
              static_cast<std::uint64_t>(kRestartMaxFirstSequence);
 }
 
-bool OrderTracker::repeats(std::int64_t sequence) const {
-  if (sequence == last_sequence_) return true;
+bool OrderTracker::retransmits(std::int64_t sequence, std::uint64_t hash) const {
+  if (!owned_) return false;
+  if (sequence == last_sequence_ && hash == last_hash_) return true;
+  for (std::size_t i = 0; i < recent_used_; ++i) {
+    if (recent_[i].sequence == sequence && recent_[i].hash == hash) return true;
+  }
+  return false;
+}
+
+bool OrderTracker::repeats(std::int64_t sequence, std::uint64_t hash) const {
+  if (retransmits(sequence, hash)) return true;
   for (const Run& r : runs_) {
     if (r.length != 0 && r.sequence == sequence) return true;
   }
@@ -205,7 +243,7 @@ int OrderTracker::extended_run(std::int64_t sequence, std::int64_t utime) const 
 }
 
 OrderTracker::Verdict OrderTracker::check(std::int64_t publisher, std::int64_t sequence, std::int64_t utime,
-                                          std::uint64_t now_ns, bool keyframe) const {
+                                          std::uint64_t hash, std::uint64_t now_ns, bool keyframe) const {
   Verdict v;
   if (!owned_ || publisher != owner_) {
     // Before the first keyframe no order can refuse a map event (a VO's
@@ -228,7 +266,7 @@ OrderTracker::Verdict OrderTracker::check(std::int64_t publisher, std::int64_t s
                                         ? UINT64_MAX
                                         : bounds_.max_utime_jump_us + quiet_us;
   v.reason = follows(last_sequence_, last_utime_, sequence, utime, bounds_.max_sequence_jump, utime_bound);
-  if (v.reason == RejectReason::kNone || !keyframe || repeats(sequence)) return v;
+  if (v.reason == RejectReason::kNone || !keyframe || repeats(sequence, hash)) return v;
   const int r = extended_run(sequence, utime);
   if (r < 0 || runs_[r].length + 1 < bounds_.restart_confirm) return v;
   // A resync only of an order that has accepted nothing for a while: a live
@@ -247,7 +285,7 @@ OrderTracker::Verdict OrderTracker::check(std::int64_t publisher, std::int64_t s
 }
 
 void OrderTracker::accept(const Verdict& v, std::int64_t publisher, std::int64_t sequence, std::int64_t utime,
-                          std::uint64_t now_ns) {
+                          std::uint64_t hash, std::uint64_t now_ns, bool keyframe) {
   if (!owned_ && !v.takeover) return;  // a map event before any keyframe (rule 1)
   if (v.takeover || v.restart || v.resync) {
     if (v.takeover) {
@@ -269,13 +307,20 @@ void OrderTracker::accept(const Verdict& v, std::int64_t publisher, std::int64_t
   owner_ = publisher;
   last_sequence_ = sequence;
   last_utime_ = utime;
+  last_hash_ = hash;
   last_heard_ns_ = now_ns;
+  if (keyframe && !recent_.empty()) {
+    recent_[recent_next_] = {sequence, hash};
+    recent_next_ = (recent_next_ + 1) % recent_.size();
+    recent_used_ = std::min(recent_used_ + 1, recent_.size());
+  }
 }
 
-bool OrderTracker::extend_restart(std::int64_t publisher, std::int64_t sequence, std::int64_t utime) {
+bool OrderTracker::extend_restart(std::int64_t publisher, std::int64_t sequence, std::int64_t utime,
+                                  std::uint64_t hash) {
   // A duplicate (a datagram delivered twice) changes no run: extending
   // one would let copies confirm it, starting one would displace one.
-  if (!owned_ || publisher != owner_ || repeats(sequence)) return false;
+  if (!owned_ || publisher != owner_ || repeats(sequence, hash)) return false;
   ++run_clock_;
   const int e = extended_run(sequence, utime);
   if (e >= 0) {

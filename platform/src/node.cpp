@@ -147,19 +147,31 @@ struct Node::Impl {
     return static_cast<std::size_t>(len);
   }
 
-  // The keyframe in kf, decoded: its order verdict and content check, with
-  // no state changed. Content is checked against the window it would enter
-  // (empty on a takeover), so an invalid message can never adopt an order.
+  // The keyframe in kf, decoded (its bytes hashed to `hash`): its order
+  // verdict and content check, with no state changed. Content is checked
+  // against the window it would enter (empty on a takeover or a restart), so
+  // an invalid message can never adopt an order.
   struct Checked {
     OrderTracker::Verdict verdict;
     RejectReason content = RejectReason::kNone;
     RejectReason reason() const { return verdict.reason != RejectReason::kNone ? verdict.reason : content; }
   };
-  Checked check_decoded_keyframe(std::uint64_t now) {
+  Checked check_decoded_keyframe(std::uint64_t now, std::uint64_t hash) {
     Checked c;
-    c.verdict = order.check(kf.publisher_id, kf.sequence, kf.utime, now, true);
-    c.content = check_keyframe(kf, c.verdict.takeover ? empty_window : sliding.window(), id_scratch.data());
+    c.verdict = order.check(kf.publisher_id, kf.sequence, kf.utime, hash, now, true);
+    c.content = check_keyframe(kf, c.verdict.takeover || c.verdict.restart ? empty_window : sliding.window(),
+                               id_scratch.data());
     return c;
+  }
+  // A keyframe the order refused, valid otherwise, may be part of a restart
+  // or a resync. So is one whose id is in the window, unless it is a
+  // retransmission (a copy of a recent message): a VO restarted within its
+  // first keyframes sends the same sequences and ids again, with other content.
+  bool candidate(const Checked& c, std::uint64_t hash) {
+    if (c.verdict.reason == RejectReason::kNone || c.verdict.reason == RejectReason::kNotOwner) return false;
+    if (c.content == RejectReason::kNone) return true;
+    return c.content == RejectReason::kDuplicateKeyframe && !order.retransmits(kf.sequence, hash) &&
+           check_keyframe(kf, empty_window, id_scratch.data()) == RejectReason::kNone;
   }
 
   // A window beyond a capacity: counted, remembered for status_t, logged
@@ -309,7 +321,8 @@ struct Node::Impl {
       reject("keyframe_t", config.keyframe_channel, size, r, false, 0, 0);
       return;
     }
-    const Checked c = check_decoded_keyframe(arrival);
+    const std::uint64_t hash = message_hash(data, size);
+    const Checked c = check_decoded_keyframe(arrival, hash);
     std::uint32_t evicted = 0;  // older keyframes dropped to make room (beyond the slide)
     r = c.reason();
     if (r == RejectReason::kNone) {
@@ -317,9 +330,8 @@ struct Node::Impl {
       // keyframe is decided first, over the window it entered.
       if (c.verdict.takeover || c.verdict.restart) decide_pending();
       r = admit_keyframe(c.verdict, &evicted);
-    } else if (c.content == RejectReason::kNone && c.verdict.reason != RejectReason::kNotOwner) {
-      // Valid, refused by the order only: may be part of a restart or a resync.
-      (void)order.extend_restart(kf.publisher_id, kf.sequence, kf.utime);
+    } else if (candidate(c, hash)) {
+      (void)order.extend_restart(kf.publisher_id, kf.sequence, kf.utime, hash);
     }
     const std::uint64_t t1 = clock->now_ns();
     if (r != RejectReason::kNone) {
@@ -331,7 +343,7 @@ struct Node::Impl {
       finish_timing(request(), arrival, t0, t1, t1, t1, 0, 0);
       return;
     }
-    order.accept(c.verdict, kf.publisher_id, kf.sequence, kf.utime, arrival);
+    order.accept(c.verdict, kf.publisher_id, kf.sequence, kf.utime, hash, arrival, true);
     skip_pending();  // superseded by this accepted keyframe of the same stream
     if (drain) {
       has_pending = true;
@@ -475,7 +487,8 @@ struct Node::Impl {
       reject("map_event_t", config.event_channel, size, r, false, 0, 0);
       return;
     }
-    const OrderTracker::Verdict v = order.check(event.publisher_id, event.sequence, event.utime, arrival, false);
+    const std::uint64_t hash = message_hash(data, size);
+    const OrderTracker::Verdict v = order.check(event.publisher_id, event.sequence, event.utime, hash, arrival, false);
     r = v.reason;
     if (r == RejectReason::kNone) r = check_map_event(event);
     MapEventItems items;
@@ -524,7 +537,7 @@ struct Node::Impl {
       publish_ack(r, items, false, 0);
       return;
     }
-    order.accept(v, event.publisher_id, event.sequence, event.utime, arrival);
+    order.accept(v, event.publisher_id, event.sequence, event.utime, hash, arrival, false);
     counters.event_items_refused += items.refused;
     publish_ack(r, items, cleared, merges_applied);
   }

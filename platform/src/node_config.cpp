@@ -437,6 +437,7 @@ OrderBounds order_bounds(const NodeConfig& config) {
   b.max_utime_jump_us = static_cast<std::uint64_t>(config.max_utime_jump_s * 1e6);
   b.restart_confirm = config.restart_confirm;
   b.owner_timeout_ns = static_cast<std::uint64_t>(config.owner_timeout_s * 1e9);
+  b.recent_keyframes = config.window;
   return b;
 }
 
@@ -468,9 +469,10 @@ double estimate_node_bytes(const NodeConfig& config) {
   const core::Capacities caps = window_capacities(config);
   const MemoryModel model = probe_memory_model(config.params, core::SolveMode::kIncremental, 2);
   const double ids = config.cull_memory != 0 ? config.cull_memory : caps.max_points;
-  // Sliding-window scratch, message objects and buffers, decision arrays, cull memory.
+  // Sliding-window scratch, message objects and buffers, decision arrays, cull memory,
+  // the order's record of the window's keyframes (sequence and hash).
   const double messages = 158.0 * config.max_observations + 132.0 * config.max_event_ids +
-                          16.0 * (caps.max_points + caps.max_keyframes) + 8.0 * caps.max_points;
+                          16.0 * (caps.max_points + 2.0 * caps.max_keyframes) + 8.0 * caps.max_points;
   // Deferred culling: the held points (a 16-byte slot table at <= 1/2 load,
   // id and last match) and the decision's two lists.
   const double deferred = config.params.defer_keyframes == 0 ? 0.0

@@ -828,8 +828,11 @@ TEST_F(EarlyRestartOnMemq, ARestartReusingTheLastSequenceIsARestart) {
 }
 
 // Retransmissions early in a stream (same bytes, ids in the window) still
-// change nothing, however often repeated.
+// change nothing, however often repeated. The node remembers its window's
+// keyframes (K = 8), in its fixed memory.
 TEST_F(EarlyRestartOnMemq, EarlyRetransmissionsDoNotRestart) {
+  EXPECT_EQ(node_->order().recent_capacity(), 8u);
+  EXPECT_GE(node_->order().memory_bytes(), 8 * 16u);
   for (std::int64_t s = 1; s <= 5; ++s) send(old_keyframe(s));
   const State before = state();
   for (int copy = 0; copy < 3; ++copy) {

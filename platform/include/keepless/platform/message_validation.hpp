@@ -91,14 +91,19 @@ RejectReason check_map_event_bytes(const void* data, std::size_t size, const Mes
 //    the window but refused by the order, each in order with its run's
 //    last one. A keyframe extends the longest run it continues; one that
 //    continues none starts a run in place of the shortest (the least
-//    recently extended of equals); one with the sequence of the last
-//    accepted message or of a run's last keyframe (a duplicate) does neither;
-//    every accepted message clears them. A restart run starts at a sequence in
-//    0..kRestartMaxFirstSequence that does not follow the order as it was
-//    before the last accepted message, and is continued only in steps of at
-//    most kRestartMaxFirstSequence (stragglers of an old run never break or
-//    complete it): `restart_confirm` keyframes are a restart (the last one
-//    is accepted, the window and the cull memory are cleared). Every other
+//    recently extended of equals); a duplicate does neither: a copy of the
+//    last accepted message or of one of the last recent_keyframes accepted
+//    keyframes (same sequence and content hash: a retransmission), or a
+//    keyframe with the sequence of a run's last one. A keyframe whose id is
+//    in the window is valid here unless it is such a copy: a VO restarted
+//    within its first keyframes sends its sequences and ids again, with
+//    other content. Every accepted message clears the runs. A restart run
+//    starts at a sequence in 0..kRestartMaxFirstSequence that does not
+//    follow the order as it was before the last accepted message, and is
+//    continued only in steps of at most kRestartMaxFirstSequence
+//    (stragglers of an old run never break or complete it):
+//    `restart_confirm` keyframes are a restart (the last one is accepted,
+//    the window and the cull memory are cleared). Every other
 //    run is a resync run: `restart_confirm` keyframes, once the order has
 //    accepted nothing for kResyncSilenceNs (or owner_timeout_ns if shorter
 //    and not 0), are a resync: the last one is accepted and becomes the
@@ -114,6 +119,10 @@ struct OrderBounds {
   std::uint64_t max_utime_jump_us = 600ull * 1000000;  // 10 minutes
   std::uint32_t restart_confirm = 3;                   // keyframes
   std::uint64_t owner_timeout_ns = 1000000000ull;      // 1 s; 0: the owner is never replaced
+  // Accepted keyframes whose sequence and content hash are remembered, to
+  // tell a retransmission from a restarted VO's keyframe (rule 3); the node
+  // remembers its window's (--window). Allocated once, at construction.
+  std::uint32_t recent_keyframes = 20;
 };
 // A restart candidate starts at a sequence no larger than this.
 constexpr std::int64_t kRestartMaxFirstSequence = 16;
@@ -124,9 +133,14 @@ constexpr std::size_t kCandidateRuns = 4;
 // The longest silence of the order a resync waits for (rule 3).
 constexpr std::uint64_t kResyncSilenceNs = 1000000000ull;
 
+// A message's bytes, hashed (64 bits; not cryptographic, the same within one
+// process): a retransmission repeats them, so it repeats the hash.
+std::uint64_t message_hash(const void* data, std::size_t size);
+
 // The owner and its order (rules 1-3 above). check() is pure; the node
 // calls accept() for a message it accepted, extend_restart() for a valid
-// keyframe the order refused, and nothing for any other refusal.
+// keyframe the order refused, and nothing for any other refusal. `hash` is
+// the message's message_hash().
 class OrderTracker {
  public:
   explicit OrderTracker(const OrderBounds& bounds);
@@ -138,14 +152,18 @@ class OrderTracker {
     bool resync = false;    // the owner's stream replaces an order it does not continue; window kept
   };
   [[nodiscard]] Verdict check(std::int64_t publisher, std::int64_t sequence, std::int64_t utime,
-                              std::uint64_t now_ns, bool keyframe) const;
+                              std::uint64_t hash, std::uint64_t now_ns, bool keyframe) const;
   // The message passed every check. A map event accepted before any owner
-  // (rule 1) sets nothing.
+  // (rule 1) sets nothing. An accepted keyframe is remembered (rule 3).
   void accept(const Verdict& v, std::int64_t publisher, std::int64_t sequence, std::int64_t utime,
-              std::uint64_t now_ns);
-  // An owner keyframe, valid against the window, refused by the order:
-  // extends (or starts) a candidate run. Returns true if it did.
-  bool extend_restart(std::int64_t publisher, std::int64_t sequence, std::int64_t utime);
+              std::uint64_t hash, std::uint64_t now_ns, bool keyframe);
+  // An owner keyframe, valid against the window (or valid but for an id in
+  // it), refused by the order: extends (or starts) a candidate run. Returns
+  // true if it did.
+  bool extend_restart(std::int64_t publisher, std::int64_t sequence, std::int64_t utime, std::uint64_t hash);
+  // A copy of the last accepted message or of a remembered keyframe: the
+  // same sequence and hash (a retransmission).
+  bool retransmits(std::int64_t sequence, std::uint64_t hash) const;
 
   bool owned() const { return owned_; }
   std::int64_t owner() const { return owner_; }
@@ -157,7 +175,8 @@ class OrderTracker {
   std::uint64_t resyncs() const { return resyncs_; }
   std::uint64_t takeovers() const { return takeovers_; }
   std::uint64_t owners_seen() const { return owners_seen_; }
-  std::size_t memory_bytes() const { return sizeof(*this); }
+  std::uint32_t recent_capacity() const { return static_cast<std::uint32_t>(recent_.size()); }
+  std::size_t memory_bytes() const { return sizeof(*this) + recent_.capacity() * sizeof(Recent); }
 
  private:
   struct Run {
@@ -167,8 +186,8 @@ class OrderTracker {
     std::uint64_t touched = 0;             // extend_restart() call that last started or extended it
   };
   bool continues(const Run& run, std::int64_t sequence, std::int64_t utime) const;
-  // The sequence of the last accepted message or of a run's last keyframe.
-  bool repeats(std::int64_t sequence) const;
+  // A retransmission, or the sequence of a run's last keyframe.
+  bool repeats(std::int64_t sequence, std::uint64_t hash) const;
   // The run the keyframe would extend, or -1.
   int extended_run(std::int64_t sequence, std::int64_t utime) const;
 
@@ -177,12 +196,20 @@ class OrderTracker {
   std::int64_t owner_ = 0;
   std::int64_t last_sequence_ = -1;
   std::int64_t last_utime_ = 0;
+  std::uint64_t last_hash_ = 0;  // the last accepted message's
   std::uint64_t last_heard_ns_ = 0;
   // The order before the last accepted message (none after a takeover):
   // a low run that follows it continues the stream, so it is no restart.
   bool has_previous_ = false;
   std::int64_t previous_sequence_ = 0, previous_utime_ = 0;
   Run runs_[kCandidateRuns];  // the candidates (rule 3)
+  // The last recent_keyframes accepted keyframes (a ring; used: recent_used_).
+  struct Recent {
+    std::int64_t sequence = 0;
+    std::uint64_t hash = 0;
+  };
+  std::vector<Recent> recent_;
+  std::size_t recent_next_ = 0, recent_used_ = 0;
   std::uint64_t run_clock_ = 0;
   std::uint64_t gaps_ = 0, restarts_ = 0, resyncs_ = 0, takeovers_ = 0, owners_seen_ = 0;
 };
