@@ -364,3 +364,37 @@ TEST(RealVoQuick, UsesRunTheFlagsTheyName) {
   EXPECT_NE(deferred, paper);
   EXPECT_NE(deferred, monocular);
 }
+
+// --weak-keyframe N: the VO also makes a keyframe of every tracked frame with
+// fewer than N pose inliers (ORB-SLAM3's weak-tracking rule), every run alike.
+// Read from the per-frame trace (KEEPLESS_EVAL_DEBUG): with N above any
+// frame's inliers every tracked frame becomes a keyframe; without the rule
+// some tracked frames do not (ORB-SLAM2's test alone).
+TEST(RealVoQuick, AWeakKeyframeRuleMakesAKeyframeOfEveryWeakFrame) {
+  DATA_OR_SKIP(data, "kitti06_first51_niconielsen", "image_l/000020.png");
+  const auto frames = [&](const std::string& extra, int* tracked, int* keyframes) {
+    setenv("KEEPLESS_EVAL_DEBUG", "1", 1);
+    const EvalOutput o = run_eval("--images '" + data + "/image_l' --calib '" + data + "/calib.txt' --poses '" + data +
+                                  "/poses.txt' --frames 0:20 --seeds 1 --kept-fraction 0.3 --no-ablation "
+                                  "--no-baselines " + extra);
+    unsetenv("KEEPLESS_EVAL_DEBUG");
+    ASSERT_EQ(o.status, 0) << o.all;
+    *tracked = *keyframes = 0;
+    std::size_t at = 0;
+    while ((at = o.all.find(" inliers of ", at)) != std::string::npos) {
+      const std::size_t end = o.all.find('\n', at);
+      const std::string line = o.all.substr(at, end - at);
+      at = end;
+      if (line.find("reference keyframe") == std::string::npos) continue;  // a lost frame's line
+      ++*tracked;
+      if (line.find(", keyframe;") != std::string::npos) ++*keyframes;
+    }
+  };
+  int tracked = 0, keyframes = 0;
+  frames("", &tracked, &keyframes);
+  ASSERT_GT(tracked, 20) << "the original's and keepless's tracked frames after initialisation";
+  EXPECT_LT(keyframes, tracked);
+  frames("--weak-keyframe 100000", &tracked, &keyframes);
+  ASSERT_GT(tracked, 20);
+  EXPECT_EQ(keyframes, tracked);
+}

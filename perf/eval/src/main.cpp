@@ -130,6 +130,9 @@ const std::vector<cli::Flag> kFlags = {
      "makes stays; count-culled, the test also counts each point a selector\n"
      "deleted, with the observations it had then"},
     {"--no-keyframe-culling", nullptr, "--keyframe-culling off"},
+    {"--weak-keyframe", "N", "the real VO also makes a keyframe when a frame keeps fewer than N pose\n"
+                             "inliers (ORB-SLAM3's weak-tracking rule for monocular-inertial input, N =\n"
+                             "75; ORB-SLAM2's monocular test has none), every run alike (default 0: off)"},
     {"--window-sizes", nullptr, "instead of the comparison: the original run of the first seed on each\n"
                                 "--trajectory, --images and --rgbd input, and the largest window it\n"
                                 "gives (keyframes, points, observations, pair arcs, unmapped keypoints)\n"
@@ -175,6 +178,7 @@ struct Args {
   std::vector<keepless::eval::vo::Selector> vo_baselines = keepless::eval::vo::VoEvalOptions{}.baselines;  // --vo-baselines
   keepless::core::Params policy;  // scope, coverage_floor, theta, cost_model, maturity_keyframes, track_terms, cost_terms (the real VO), spatial_weight; the rest is set per variant
   bool tracked_flags = false;     // --tracked-flags (the real VO)
+  int weak_keyframe = 0;          // --weak-keyframe (the real VO)
   bool defer_fixed = false;       // --defer-fixed (the real VO)
   bool defer_refine = false;      // --defer-refine (the real VO)
   bool defer_alternate = false;   // --defer-alternate (the real VO)
@@ -328,6 +332,7 @@ Args parse(int argc, char** argv) {
     }
     else if (f == "--maturity") a.policy.maturity_keyframes = static_cast<std::uint32_t>(parse_int(f, val(), 0, 1000));
     else if (f == "--tracked-flags") a.tracked_flags = true;
+    else if (f == "--weak-keyframe") a.weak_keyframe = static_cast<int>(parse_int(f, val(), 0, 100000));
     else if (f == "--defer") a.policy.defer_keyframes = static_cast<std::uint32_t>(parse_int(f, val(), 1, 1000));
     else if (f == "--defer-fixed") a.defer_fixed = true;
     else if (f == "--defer-refine") a.defer_refine = true;
@@ -596,6 +601,7 @@ int main(int argc, char** argv) {
     summary.settings += " from F " + std::to_string(a.policy.budget.track_share_from);
   if (a.policy.maturity_keyframes > 0) summary.settings += ", maturity " + std::to_string(a.policy.maturity_keyframes);
   if (a.tracked_flags) summary.settings += ", tracked flags";
+  if (a.weak_keyframe > 0) summary.settings += ", a keyframe below " + std::to_string(a.weak_keyframe) + " inliers";
   if (a.policy.defer_keyframes > 0) summary.settings += ", defer " + std::to_string(a.policy.defer_keyframes);
   if (a.defer_fixed) summary.settings += ", excluded points fixed in BA";
   if (a.defer_refine) summary.settings += ", excluded points refined";
@@ -716,6 +722,7 @@ int main(int argc, char** argv) {
     else vo.baselines.clear();
     vo.policy = a.policy;
     vo.tracked_flags = a.tracked_flags;
+    vo.weak_keyframe = a.weak_keyframe;
     vo.defer_fixed = a.defer_fixed;
     vo.defer_refine = a.defer_refine;
     vo.defer_alternate = a.defer_alternate;

@@ -34,6 +34,12 @@ struct RealVoOptions {
   // Send the new keyframe's tracked flags (core::Keyframe::tracked: the map
   // points the tracker matched in that frame) with its window.
   bool tracked_flags = false;
+  // A keyframe also when a tracked frame keeps fewer than this many pose
+  // inliers (0: off; ORB-SLAM3 uses 75 for monocular-inertial input).
+  // ORB-SLAM2's monocular test compares the inliers with the reference
+  // keyframe's points seen 3+ times only, which a sparse map makes few, so
+  // at a tight budget it can fire too late to keep tracking.
+  int weak_keyframe = 0;
   // Deferred culling (params.defer_keyframes > 0): excluded points enter local
   // BA as constant landmarks seen by the local keyframes, instead of not at all.
   bool defer_fixed = false;

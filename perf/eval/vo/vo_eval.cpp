@@ -91,6 +91,7 @@ bool evaluate_real_vo(const VoInput& in, const VoEvalOptions& o, std::vector<Com
     vo.params.maturity_keyframes = o.policy.maturity_keyframes;
     vo.params.defer_keyframes = o.policy.defer_keyframes;
     vo.tracked_flags = o.tracked_flags;
+    vo.weak_keyframe = o.weak_keyframe;
     vo.defer_fixed = o.defer_fixed;
     vo.defer_refine = o.defer_refine;
     vo.defer_alternate = o.defer_alternate;

@@ -213,7 +213,8 @@ bool Vo::need_keyframe(const TrackedFrame& cur, int inliers, int* ref_matches_ou
   const Eigen::Isometry3d rel = cur.Tcw * map_.kfs[static_cast<std::size_t>(reference_kf_)].Tcw.inverse();
   const bool turned = Eigen::AngleAxisd(Eigen::Matrix3d(rel.linear())).angle() > 20.0 * M_PI / 180.0;
   const bool c1a = cur.index >= last_kf_frame_ + max_frames;
-  return (c2 || ((turned || c1a) && inliers > 15));
+  const bool weak = inliers < opt_.weak_keyframe;
+  return (c2 || ((turned || c1a || weak) && inliers > 15));
 }
 
 }  // namespace keepless::eval::vo::detail
