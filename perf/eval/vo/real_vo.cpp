@@ -140,7 +140,7 @@ RealRunResult Vo::run() {
                    seq_.name.c_str(), to_string(opt_.selector), i);
     } else if (debug && tracking && !tracked) {
       std::fprintf(stderr, "  [%s %s] frame %d: lost, %d inliers of %d local points (needs %d)\n", seq_.name.c_str(),
-                   to_string(opt_.selector), i, trace_.inliers, trace_.local_points, kMinTrackedInliers);
+                   to_string(opt_.selector), i, trace_.inliers, trace_.local_points, trace_.needed);
     } else if (debug && tracking) {
       std::fprintf(stderr, "  [%s %s] frame %d: %d inliers of %d local points, reference keyframe's points seen 3+ "
                    "times %d%s; map %d KFs, %d points\n", seq_.name.c_str(), to_string(opt_.selector), i,

@@ -98,7 +98,7 @@ class Vo {
   // The last frame's tracking, printed per frame under KEEPLESS_EVAL_DEBUG
   // (why a run lost tracking: inliers against kMinTrackedInliers).
   struct FrameTrace {
-    int inliers = -1, local_points = 0, ref_matches = 0;
+    int inliers = -1, needed = 0, local_points = 0, ref_matches = 0;
     bool keyframe = false;
   } trace_;
 

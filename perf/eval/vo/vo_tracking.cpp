@@ -174,8 +174,9 @@ bool Vo::track(TrackedFrame& cur) {
   search_local_points(cur, map_, points, cam_, recent ? 5 : (seq_.rgbd ? 3 : 1));
   const int inliers = optimize(cur);
   trace_.inliers = inliers;
+  trace_.needed = relocalised || recent ? kMinTrackedAfterRelocalisation : kMinTrackedInliers;
   trace_.local_points = static_cast<int>(points.size());
-  if (inliers < (relocalised || recent ? kMinTrackedAfterRelocalisation : kMinTrackedInliers)) return false;
+  if (inliers < trace_.needed) return false;
   for (int p : cur.mp) {
     if (p < 0) continue;
     ++map_.points[static_cast<std::size_t>(p)].found;
