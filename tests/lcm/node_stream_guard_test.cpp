@@ -864,4 +864,57 @@ TEST_F(EarlyRestartOnMemq, FewerDifferingCopiesThanARunChangeNothing) {
   EXPECT_EQ(node_->window().keyframe_count(), 8u);
 }
 
+// Late exact copies of the dead process's keyframes, after the restart: the
+// new process's keyframes pushed them out of the record and reuse their ids,
+// yet they are earlier than the last accepted keyframe, so they count toward
+// no run (they restarted the stream again and brought keyframe 5 back).
+TEST_F(EarlyRestartOnMemq, LateCopiesOfTheDeadProcessDoNotRestartAgain) {
+  for (std::int64_t s = 1; s <= 5; ++s) send(old_keyframe(s));
+  for (std::int64_t s = 1; s <= 10; ++s) send(new_keyframe(s));
+  ASSERT_EQ(node_->order().restarts(), 1u);
+  ASSERT_TRUE(window_only_new());
+  const std::size_t culls = node_->cull_memory().size();
+  for (std::int64_t s = 3; s <= 5; ++s) send(old_keyframe(s));
+  EXPECT_EQ(node_->order().restarts(), 1u);
+  EXPECT_EQ(node_->order().last_sequence(), 10);
+  EXPECT_EQ(node_->window().keyframe_count(), 8u);
+  EXPECT_EQ(node_->cull_memory().size(), culls);
+  send(new_keyframe(11));
+  EXPECT_TRUE(window_only_new()) << "the dead process's keyframe 5 is back in the window";
+}
+
+// Copies of keyframes after a plain and after a reset map event change nothing.
+TEST_F(EarlyRestartOnMemq, CopiesAfterMapEventsChangeNothing) {
+  for (std::int64_t s = 1; s <= 3; ++s) send(old_keyframe(s));
+  keepless::map_event_t e = kt::make_event(4);
+  e.deleted_point_id = {5};
+  send(e);
+  State before = state();
+  for (int c = 0; c < 2; ++c) for (std::int64_t s = 1; s <= 3; ++s) send(old_keyframe(s));
+  EXPECT_TRUE(state() == before);
+  keepless::map_event_t reset = kt::make_event(5);
+  reset.reset = true;
+  send(reset);
+  send(reset);
+  ASSERT_EQ(node_->window().keyframe_count(), 0u);
+  before = state();
+  for (int c = 0; c < 2; ++c) for (std::int64_t s = 1; s <= 3; ++s) send(old_keyframe(s));
+  EXPECT_TRUE(state() == before);
+  EXPECT_EQ(node_->order().restarts(), 0u);
+}
+
+// Two anonymous VO processes numbering keyframe ids alike: the one behind
+// (its keyframes timed before the owner's last) is refused, early in the
+// stream too; it wiped the window once its ids counted toward a restart.
+TEST_F(EarlyRestartOnMemq, TheProcessBehindIsRefused) {
+  for (std::int64_t s = 1; s <= 5; ++s) send(old_keyframe(s));
+  for (std::int64_t s = 1; s <= 3; ++s) {
+    keepless::keyframe_t m = new_keyframe(s);
+    m.utime -= 5000000 - 1000;  // the owner's clock, a little behind it
+    send(m);
+  }
+  EXPECT_EQ(node_->order().restarts(), 0u);
+  EXPECT_EQ(node_->window().keyframe_count(), 5u);
+}
+
 }  // namespace

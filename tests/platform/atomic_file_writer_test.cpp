@@ -3,6 +3,7 @@
 #include "keepless/platform/atomic_file_writer.hpp"
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <cerrno>
 #include <filesystem>
@@ -18,7 +19,11 @@ namespace fs = std::filesystem;
 class AtomicFileWriterTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = fs::path(::testing::TempDir()) / "keepless_atomic_file_writer_test";
+    // One folder per test and process: ctest runs the cases in parallel.
+    dir_ = fs::path(::testing::TempDir()) /
+           ("keepless_atomic_file_writer_test_" +
+            std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()) + "_" +
+            std::to_string(::getpid()));
     fs::remove_all(dir_);
     fs::create_directories(dir_);
   }
