@@ -221,6 +221,10 @@ bool OrderTracker::retransmits(std::int64_t sequence, std::uint64_t hash) const 
   return false;
 }
 
+bool OrderTracker::reissues(std::int64_t sequence, std::int64_t utime, std::uint64_t hash) const {
+  return utime > last_utime_ && !retransmits(sequence, hash);
+}
+
 bool OrderTracker::repeats(std::int64_t sequence, std::uint64_t hash) const {
   if (retransmits(sequence, hash)) return true;
   for (const Run& r : runs_) {

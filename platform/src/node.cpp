@@ -164,17 +164,12 @@ struct Node::Impl {
     return c;
   }
   // A keyframe the order refused, valid otherwise, may be part of a restart
-  // or a resync. So is one whose id is in the window if it is later than
-  // the last accepted message and no retransmission (a copy of a recent
-  // message): a VO restarted within its first keyframes sends the same
-  // sequences and ids again, with other content and later utimes; a second
-  // process behind the owner, or late copies of a dead process's keyframes,
-  // are earlier.
+  // or a resync; so may one whose id is in the window, if the order says it
+  // reissues that id (rule 3: a restarted VO's, no retransmission).
   bool candidate(const Checked& c, std::uint64_t hash) {
     if (c.verdict.reason == RejectReason::kNone || c.verdict.reason == RejectReason::kNotOwner) return false;
     if (c.content == RejectReason::kNone) return true;
-    return c.content == RejectReason::kDuplicateKeyframe && kf.utime > order.last_utime() &&
-           !order.retransmits(kf.sequence, hash) &&
+    return c.content == RejectReason::kDuplicateKeyframe && order.reissues(kf.sequence, kf.utime, hash) &&
            check_keyframe(kf, empty_window, id_scratch.data()) == RejectReason::kNone;
   }
 

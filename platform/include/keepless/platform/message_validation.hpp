@@ -95,9 +95,12 @@ RejectReason check_map_event_bytes(const void* data, std::size_t size, const Mes
 //    last accepted message or of one of the last recent_keyframes accepted
 //    keyframes (same sequence and content hash: a retransmission), or a
 //    keyframe with the sequence of a run's last one. A keyframe whose id is
-//    in the window is valid here unless it is such a copy: a VO restarted
-//    within its first keyframes sends its sequences and ids again, with
-//    other content. Every accepted message clears the runs. A restart run
+//    in the window counts only if it is no such copy and is later than the
+//    last accepted message (reissues()): a VO restarted within its first
+//    keyframes sends its sequences and ids again, with other content and
+//    later utimes; a second process behind the owner, or late copies of a
+//    dead process's keyframes, are earlier. Every accepted message clears
+//    the runs. A restart run
 //    starts at a sequence in 0..kRestartMaxFirstSequence that does not
 //    follow the order as it was before the last accepted message, and is
 //    continued only in steps of at most kRestartMaxFirstSequence
@@ -161,9 +164,9 @@ class OrderTracker {
   // it), refused by the order: extends (or starts) a candidate run. Returns
   // true if it did.
   bool extend_restart(std::int64_t publisher, std::int64_t sequence, std::int64_t utime, std::uint64_t hash);
-  // A copy of the last accepted message or of a remembered keyframe: the
-  // same sequence and hash (a retransmission).
-  bool retransmits(std::int64_t sequence, std::uint64_t hash) const;
+  // A keyframe later than the last accepted message and no retransmission:
+  // one that may belong to a restart though its id is in the window (rule 3).
+  bool reissues(std::int64_t sequence, std::int64_t utime, std::uint64_t hash) const;
 
   bool owned() const { return owned_; }
   std::int64_t owner() const { return owner_; }
@@ -186,6 +189,9 @@ class OrderTracker {
     std::uint64_t touched = 0;             // extend_restart() call that last started or extended it
   };
   bool continues(const Run& run, std::int64_t sequence, std::int64_t utime) const;
+  // A copy of the last accepted message or of a remembered keyframe: the
+  // same sequence and hash (a retransmission).
+  bool retransmits(std::int64_t sequence, std::uint64_t hash) const;
   // A retransmission, or the sequence of a run's last keyframe.
   bool repeats(std::int64_t sequence, std::uint64_t hash) const;
   // The run the keyframe would extend, or -1.
