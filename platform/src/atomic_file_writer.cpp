@@ -20,6 +20,7 @@ AtomicFileWriter::~AtomicFileWriter() {
 
 bool AtomicFileWriter::write(const char* data, std::size_t size) {
   if (error_ != 0) return false;
+  errno = 0;  // fwrite need not set it: a stale value would name the wrong cause
   if (std::fwrite(data, 1, size, file_) != size) error_ = errno ? errno : EIO;
   return error_ == 0;
 }
@@ -27,6 +28,7 @@ bool AtomicFileWriter::write(const char* data, std::size_t size) {
 int AtomicFileWriter::commit() {
   committed_ = true;
   if (file_ != nullptr) {
+    errno = 0;
     if (std::fclose(file_) != 0 && error_ == 0) error_ = errno ? errno : EIO;
     file_ = nullptr;
   }
