@@ -917,4 +917,218 @@ TEST_F(EarlyRestartOnMemq, TheProcessBehindIsRefused) {
   EXPECT_EQ(node_->window().keyframe_count(), 5u);
 }
 
+// A VO restarted behind a persisted sequence counter (or a bridge that
+// numbers its messages): the new process numbers its keyframe ids from 0
+// again but continues the old sequences. Its keyframes are in order and
+// their ids unique among the window's, so to the node it is the old stream:
+// served at once, no restart, the old process's keyframes left in the window
+// until they slide out (the first --window - 1 decisions) and its culls in
+// the cull memory. Its reset first (in order) gives it a clean window.
+class ContinuedSequenceOnMemq : public EarlyRestartOnMemq {
+ protected:
+  static constexpr std::int64_t kOld = 12;       // the old process's keyframes, more than the window (8)
+  static constexpr std::int64_t kOwnPoints = 200;  // the new process's point ids, none the old one's
+  // The old process: sequences 1..n, keyframe ids 0..n-1, at 10 Hz.
+  void dead_process(std::int64_t n = kOld) {
+    for (std::int64_t s = 1; s <= n; ++s) {
+      clock_.advance(100000000);
+      send(kt::make_keyframe(s, s - 1, kt::id_range(s * 5, 30)));
+    }
+    last_old_ = n;
+    ASSERT_EQ(count(decision_t::STATUS_OPTIMAL), static_cast<std::size_t>(n));
+    ASSERT_GT(node_->cull_memory().size(), 0u) << "the old process must cull";
+  }
+  // The new process's keyframe j: id j, sequence `first` + j, 2 s after the
+  // old process's last, points from `points` + 5j (kOwnPoints: ids of its
+  // own; 5: the old process's ids again, a VO numbering its points from 0).
+  keepless::keyframe_t restarted(std::int64_t first, std::int64_t j, std::int64_t points) const {
+    keepless::keyframe_t m = kt::make_keyframe(first + j, j, kt::id_range(points + j * 5, 30));
+    m.utime = kt::make_keyframe(last_old_, 0, {}).utime + 2000000 + j * 100000;
+    return m;
+  }
+  // The new process's keyframes 0..n-1 at 10 Hz, after 2 s of silence.
+  void new_process(std::int64_t first, std::int64_t points = kOwnPoints, std::int64_t n = 20) {
+    clock_.advance(2000000000);
+    for (std::int64_t j = 0; j < n; ++j) {
+      clock_.advance(100000000);
+      send(restarted(first, j, points));
+    }
+  }
+  // The old process's keyframes in decision `d`'s window (oldest first):
+  // those ahead of `first_id`, the new process's first accepted one.
+  static std::size_t old_in(const decision_t& d, std::int64_t first_id) {
+    for (std::size_t i = 0; i < d.window_keyframe_id.size(); ++i) {
+      if (d.window_keyframe_id[i] == first_id) return i;
+    }
+    return 0;  // it left the window, after every older keyframe
+  }
+  // Decisions from `first` on whose window holds an old keyframe.
+  std::size_t mixed(std::size_t first, std::int64_t first_id) const {
+    std::size_t n = 0;
+    for (std::size_t i = first; i < decisions_.size(); ++i) n += old_in(decisions_[i], first_id) > 0;
+    return n;
+  }
+  // The decisions since `first`, and a fresh node's for the same keyframes of the new process.
+  std::vector<decision_t> since(std::size_t first) const {
+    return {decisions_.begin() + static_cast<std::ptrdiff_t>(first), decisions_.end()};
+  }
+  std::vector<decision_t> fresh_node(std::int64_t first, std::int64_t points) {
+    make_node(config_);
+    new_process(first, points);
+    return decisions_;
+  }
+  std::int64_t last_old_ = 0;
+};
+
+// Old 1..12 (ids 0..11), new 13..32 (ids 0..19): all 20 decided, none
+// refused, no restart; the first 7 (ids 0..6) over windows that still hold
+// old keyframes (7 - j of them). The point ids do not meet, so the culls are
+// a fresh node's; the old culls stay remembered.
+TEST_F(ContinuedSequenceOnMemq, ARestartContinuingTheSequencesIsServedOverTheOldWindow) {
+  dead_process();
+  std::uint64_t old_cull = 0;
+  while (old_cull < 200 && !node_->cull_memory().contains(old_cull)) ++old_cull;
+  ASSERT_LT(old_cull, 200u);
+  const std::size_t first = decisions_.size();
+  new_process(kOld + 1);
+  ASSERT_EQ(decisions_.size(), first + 20);
+  EXPECT_EQ(count(decision_t::STATUS_OPTIMAL, first), 20u) << "served at once";
+  EXPECT_EQ(node_->counters().messages_rejected, 0u);
+  EXPECT_EQ(node_->order().restarts(), 0u);
+  EXPECT_EQ(node_->order().resyncs(), 0u);
+  EXPECT_EQ(node_->order().last_sequence(), kOld + 20);
+  for (std::size_t j = 0; j < 20; ++j) {
+    EXPECT_EQ(old_in(decisions_[first + j], 0), j < 7 ? 7 - j : 0) << "keyframe " << j;
+  }
+  EXPECT_EQ(mixed(first, 0), 7u) << "--window - 1 decisions over old keyframes";
+  EXPECT_TRUE(window_only_new());
+  EXPECT_TRUE(node_->cull_memory().contains(old_cull)) << "no restart: the old culls are kept";
+  const std::vector<decision_t> got = since(first);
+  const std::vector<decision_t> fresh = fresh_node(kOld + 1, kOwnPoints);
+  ASSERT_EQ(fresh.size(), 20u);
+  for (std::size_t j = 0; j < 20; ++j) EXPECT_EQ(got[j].culled_point_id, fresh[j].culled_point_id) << "keyframe " << j;
+}
+
+// The same new process numbering its points from 0 again, as the old one
+// did: its observations meet the old keyframes' points in the window (2
+// windows), and those of ids the old process culled are dropped as stale
+// (410 against a fresh node's 290: the cull memory was not cleared), so 9
+// of its 20 decisions cull less than a fresh node's. Still served.
+TEST_F(ContinuedSequenceOnMemq, ARestartReusingPointIdsMeetsTheOldPointsAndCulls) {
+  dead_process();
+  const std::uint64_t stale = node_->counters().stale_observations;
+  const std::size_t first = decisions_.size();
+  std::size_t meetings = 0;  // windows where an old and a new keyframe observe one point
+  clock_.advance(2000000000);
+  for (std::int64_t j = 0; j < 20; ++j) {
+    clock_.advance(100000000);
+    send(restarted(kOld + 1, j, 5));
+    const keepless::core::Window& w = node_->window();
+    const auto old = static_cast<std::uint32_t>(old_in(decisions_.back(), 0));
+    bool met = false;
+    for (std::uint32_t a = 0; a < old; ++a) {
+      for (std::uint32_t b = old; b < w.keyframe_count(); ++b) {
+        for (std::uint32_t i = 0; i < w.observation_count(a); ++i) {
+          for (std::uint32_t k = 0; k < w.observation_count(b); ++k) {
+            met = met || w.observations(a)[i].point == w.observations(b)[k].point;
+          }
+        }
+      }
+    }
+    meetings += met;
+  }
+  EXPECT_EQ(meetings, 2u) << "the two processes' points meet in the window";
+  EXPECT_EQ(count(decision_t::STATUS_OPTIMAL, first), 20u) << "served at once";
+  EXPECT_EQ(node_->order().restarts(), 0u);
+  EXPECT_EQ(mixed(first, 0), 7u);
+  EXPECT_GT(node_->counters().stale_observations, stale) << "the old culls drop the new process's points";
+  const std::uint64_t new_stale = node_->counters().stale_observations - stale;
+  const std::vector<decision_t> got = since(first);
+  const std::vector<decision_t> fresh = fresh_node(kOld + 1, 5);
+  ASSERT_EQ(fresh.size(), 20u);
+  std::size_t differ = 0, fewer = 0;
+  for (std::size_t j = 0; j < 20; ++j) {
+    differ += got[j].culled_point_id != fresh[j].culled_point_id;
+    fewer += got[j].culled_point_id.size() < fresh[j].culled_point_id.size();
+  }
+  EXPECT_EQ(differ, 9u) << "its decisions over the old window and culls";
+  EXPECT_EQ(fewer, differ) << "each culls less than a fresh node's";
+  EXPECT_GT(new_stale, node_->counters().stale_observations) << "more than its own in-flight culls dropped";
+}
+
+// Sequences jumping ahead within --max-sequence-jump: the same, the jump a
+// gap. Beyond it: refused until a resync run (the old process silent for
+// 1 s), whose third keyframe is decided over the kept window.
+TEST_F(ContinuedSequenceOnMemq, ARestartJumpingAheadIsServedOverTheOldWindow) {
+  dead_process();
+  const std::size_t first = decisions_.size();
+  new_process(5000);
+  EXPECT_EQ(count(decision_t::STATUS_OPTIMAL, first), 20u) << "served at once";
+  EXPECT_EQ(node_->order().restarts(), 0u);
+  EXPECT_EQ(node_->order().resyncs(), 0u);
+  EXPECT_EQ(node_->order().sequence_gaps(), 5000u - kOld - 1);
+  EXPECT_EQ(mixed(first, 0), 7u);
+}
+
+TEST_F(ContinuedSequenceOnMemq, ARestartJumpingBeyondTheBoundIsResynchronised) {
+  dead_process();
+  const std::size_t first = decisions_.size();
+  new_process(kOld + 2000000);
+  ASSERT_EQ(decisions_.size(), first + 20);
+  for (std::size_t j = 0; j < 2; ++j) {
+    EXPECT_EQ(decisions_[first + j].reject_reason, keepless::status_t::REJECT_SEQUENCE_JUMP);
+  }
+  EXPECT_EQ(count(decision_t::STATUS_OPTIMAL, first), 18u) << "served from its third keyframe";
+  EXPECT_EQ(node_->order().resyncs(), 1u);
+  EXPECT_EQ(node_->order().restarts(), 0u);
+  EXPECT_EQ(old_in(decisions_[first + 2], 2), 7u) << "a resync keeps the window";
+  EXPECT_EQ(mixed(first + 2, 2), 7u);
+}
+
+// An old process of fewer keyframes than the window: the new process's ids
+// still held are refused (duplicate keyframe ids, in order: no run) until
+// fresh ids arrive, then 7 decisions over old keyframes.
+TEST_F(ContinuedSequenceOnMemq, ARestartWithinTheWindowIsRefusedUntilFreshIds) {
+  dead_process(5);
+  const std::size_t first = decisions_.size();
+  new_process(6);
+  ASSERT_EQ(decisions_.size(), first + 20);
+  for (std::size_t j = 0; j < 5; ++j) {
+    EXPECT_EQ(decisions_[first + j].reject_reason, keepless::status_t::REJECT_DUPLICATE_KEYFRAME);
+  }
+  EXPECT_EQ(count(decision_t::STATUS_OPTIMAL, first), 15u);
+  EXPECT_EQ(node_->order().restarts(), 0u);
+  EXPECT_EQ(node_->order().resyncs(), 0u);
+  EXPECT_EQ(mixed(first, 5), 7u);
+  EXPECT_TRUE(window_only_new());
+}
+
+// The remedy: the new process's reset first, in order. The window and the
+// cull memory are cleared at once and every keyframe is decided as by a
+// fresh node, its point ids reused or not.
+TEST_F(ContinuedSequenceOnMemq, AResetFirstGivesTheRestartAFreshWindow) {
+  dead_process();
+  keepless::map_event_t reset = kt::make_event(kOld + 1);
+  reset.utime = restarted(0, 0, 0).utime;
+  reset.reset = true;
+  send(reset);
+  ASSERT_TRUE(acks_.back().reset);
+  EXPECT_EQ(node_->window().keyframe_count(), 0u);
+  EXPECT_EQ(node_->cull_memory().size(), 0u);
+  const std::uint64_t stale = node_->counters().stale_observations;
+  const std::size_t first = decisions_.size();
+  new_process(kOld + 2, 5);
+  EXPECT_EQ(count(decision_t::STATUS_OPTIMAL, first), 20u);
+  EXPECT_EQ(mixed(first, 0), 0u);
+  const std::uint64_t own_stale = node_->counters().stale_observations - stale;
+  const std::vector<decision_t> got = since(first);
+  const std::vector<decision_t> fresh = fresh_node(kOld + 2, 5);
+  ASSERT_EQ(fresh.size(), got.size());
+  for (std::size_t j = 0; j < got.size(); ++j) {
+    EXPECT_EQ(got[j].window_keyframe_id, fresh[j].window_keyframe_id) << "keyframe " << j;
+    EXPECT_EQ(got[j].culled_point_id, fresh[j].culled_point_id) << "keyframe " << j;
+  }
+  EXPECT_EQ(node_->counters().stale_observations, own_stale) << "only its own in-flight culls";
+}
+
 }  // namespace
