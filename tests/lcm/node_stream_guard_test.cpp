@@ -8,6 +8,7 @@
 
 #include <cstdint>
 #include <limits>
+#include <set>
 #include <vector>
 
 #include "keepless/platform/recent_ids.hpp"
@@ -962,6 +963,23 @@ class ContinuedSequenceOnMemq : public EarlyRestartOnMemq {
     }
     return 0;  // it left the window, after every older keyframe
   }
+  // Whether a point is observed both by one of the window's `old` oldest
+  // keyframes (the old process's) and by one of the rest.
+  bool old_and_new_meet(std::size_t old) const {
+    const keepless::core::Window& w = node_->window();
+    std::set<keepless::core::PointId> old_points;
+    for (std::uint32_t k = 0; k < w.keyframe_count(); ++k) {
+      for (std::uint32_t j = 0; j < w.observation_count(k); ++j) {
+        const keepless::core::PointId p = w.observations(k)[j].point;
+        if (k < old) {
+          old_points.insert(p);
+        } else if (old_points.count(p) != 0) {
+          return true;
+        }
+      }
+    }
+    return false;
+  }
   // Decisions from `first` on whose window holds an old keyframe.
   std::size_t mixed(std::size_t first, std::int64_t first_id) const {
     std::size_t n = 0;
@@ -1023,19 +1041,7 @@ TEST_F(ContinuedSequenceOnMemq, ARestartReusingPointIdsMeetsTheOldPointsAndCulls
   for (std::int64_t j = 0; j < 20; ++j) {
     clock_.advance(100000000);
     send(restarted(kOld + 1, j, 5));
-    const keepless::core::Window& w = node_->window();
-    const auto old = static_cast<std::uint32_t>(old_in(decisions_.back(), 0));
-    bool met = false;
-    for (std::uint32_t a = 0; a < old; ++a) {
-      for (std::uint32_t b = old; b < w.keyframe_count(); ++b) {
-        for (std::uint32_t i = 0; i < w.observation_count(a); ++i) {
-          for (std::uint32_t k = 0; k < w.observation_count(b); ++k) {
-            met = met || w.observations(a)[i].point == w.observations(b)[k].point;
-          }
-        }
-      }
-    }
-    meetings += met;
+    meetings += old_and_new_meet(old_in(decisions_.back(), 0));
   }
   EXPECT_EQ(meetings, 2u) << "the two processes' points meet in the window";
   EXPECT_EQ(count(decision_t::STATUS_OPTIMAL, first), 20u) << "served at once";

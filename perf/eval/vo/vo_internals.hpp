@@ -96,7 +96,7 @@ class Vo {
   std::vector<TrackedFrame> pending_;  // frames after init_ref_ while initialisation waits for parallax
   std::vector<FrameRecord> records_;
   // The last frame's tracking, printed per frame under KEEPLESS_EVAL_DEBUG
-  // (why a run lost tracking: inliers against kMinTrackedInliers).
+  // (why a run lost tracking: inliers against those needed).
   struct FrameTrace {
     int inliers = -1, needed = 0, local_points = 0, ref_matches = 0;
     bool keyframe = false;

@@ -100,8 +100,8 @@ RejectReason check_map_event_bytes(const void* data, std::size_t size, const Mes
 //    keyframes sends its sequences and ids again, with other content and
 //    later utimes; a second process behind the owner, or late copies of a
 //    dead process's keyframes, are earlier. Every accepted message clears
-//    the runs. A restart run
-//    starts at a sequence in 0..kRestartMaxFirstSequence that does not
+//    the runs. A restart run starts at a sequence in
+//    0..kRestartMaxFirstSequence that does not
 //    follow the order as it was before the last accepted message, and is
 //    continued only in steps of at most kRestartMaxFirstSequence
 //    (stragglers of an old run never break or complete it):
