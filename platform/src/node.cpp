@@ -689,9 +689,7 @@ struct Node::Impl {
   core::Sparsifier sparsifier;
   // Arrival stamps, deadlines and latencies: CLOCK_MONOTONIC unless a clock
   // was injected.
-  struct MonotonicClock final : solver::Clock {
-    std::uint64_t now_ns() const override { return monotonic_ns(); }
-  } own_clock;
+  MonotonicClock own_clock;
   const solver::Clock* clock;
   core::Window empty_window;  // what a keyframe taking the window over is checked against
   solver::Budget budget;

@@ -1,7 +1,6 @@
 #include "keepless/solver/min_cost_flow.hpp"
 
 #include <algorithm>
-#include <chrono>
 #include <memory>
 
 #include "min_cost_flow_impl.hpp"
@@ -9,12 +8,6 @@
 namespace keepless::solver {
 
 using namespace detail;
-
-std::uint64_t SteadyClock::now_ns() const {
-  return static_cast<std::uint64_t>(std::chrono::duration_cast<std::chrono::nanoseconds>(
-                                        std::chrono::steady_clock::now().time_since_epoch())
-                                        .count());
-}
 
 MinCostFlow::MinCostFlow(const Capacity& capacity) : impl_(std::make_unique<Impl>(capacity)) {}
 MinCostFlow::~MinCostFlow() = default;

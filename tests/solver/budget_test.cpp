@@ -4,7 +4,6 @@
 
 #include <gtest/gtest.h>
 
-#include <chrono>
 #include <vector>
 
 #include "flow_certificate.hpp"
@@ -178,25 +177,6 @@ TEST(Budget, StoppedWarmSolvesResume) {
   }
   EXPECT_GT(stops, 0);
   EXPECT_GT(unbalanced_stops, 0) << "no stop happened while excesses were being routed";
-}
-
-// The deadline's clock is std::chrono::steady_clock in nanoseconds (a
-// monotonic clock, not the wall clock that NTP may step): each read lies
-// between two reads of steady_clock around it.
-TEST(Budget, SteadyClockReadsTheMonotonicClock) {
-  const auto steady_ns = [] {
-    return static_cast<std::uint64_t>(
-        std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch())
-            .count());
-  };
-  SteadyClock clock;
-  for (int i = 0; i < 3; ++i) {
-    const std::uint64_t before = steady_ns();
-    const std::uint64_t read = clock.now_ns();
-    const std::uint64_t after = steady_ns();
-    EXPECT_LE(before, read);
-    EXPECT_LE(read, after);
-  }
 }
 
 }  // namespace

@@ -35,6 +35,7 @@
 #include "keepless/core/sparsifier.hpp"
 #include "keepless/core/use.hpp"
 #include "keepless/platform/cpu_pinning.hpp"
+#include "keepless/platform/monotonic_clock.hpp"
 #include "lcm_mode.hpp"
 #include "node_memory.hpp"
 #include "publish.hpp"
@@ -425,7 +426,7 @@ bool replay(const KeyframeStream& stream, std::uint32_t warmup, std::uint64_t bu
                                              core::Start::kZeroFlow);
   }
   DecisionEncoder encoder(caps);
-  solver::SteadyClock clock;
+  platform::MonotonicClock clock;
   inc.set_clock(&clock);
   scratch.set_clock(&clock);
   r->footprint = window.memory_bytes() + inc.memory_bytes() + encoder.memory_bytes();

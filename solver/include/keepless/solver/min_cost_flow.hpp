@@ -59,16 +59,12 @@ struct Capacity {
 };
 
 // A monotonic clock for deadlines, injected so that tests can drive time.
+// The solver reads no OS clock itself: keepless::platform::MonotonicClock
+// is CLOCK_MONOTONIC.
 class Clock {
  public:
   virtual ~Clock() = default;
   virtual std::uint64_t now_ns() const = 0;
-};
-
-// std::chrono::steady_clock (CLOCK_MONOTONIC on Linux).
-class SteadyClock final : public Clock {
- public:
-  std::uint64_t now_ns() const override;
 };
 
 // How much a solve may do. Work units are deterministic (one per residual
