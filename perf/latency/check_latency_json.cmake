@@ -1,6 +1,7 @@
 # Runs keepless_latency on the small workload and checks its last stdout line
 # (a JSON object): every documented key is present, identical_decisions is
-# true and allocations_after_warmup is 0, the run was pinned to CPUs 0 and 1
+# true and allocations_after_warmup is 0 (the A/A replay's too, with the
+# reference's decisions), the run was pinned to CPUs 0 and 1
 # (the perf rule: two cores) and LEMON, the reference, was timed. Timings are
 # not asserted.
 #
@@ -35,7 +36,8 @@ function(run_latency last_var)
               floor_promoted out_of_scope_mean decisions_digest reference reference_e2e_p50_ms
               reference_e2e_p99_ms reference_allocations_after_warmup reference_decisions_digest
               p50_ratio_to_paper p99_ratio_to_paper profile profile_fits node_memory_predicted_bytes
-              node_memory_bytes peak_rss_bytes)
+              node_memory_bytes peak_rss_bytes aa_e2e_p50_ms aa_e2e_p99_ms aa_p50_ratio aa_p99_ratio
+              aa_allocations_after_warmup aa_decisions_digest)
     string(JSON value ERROR_VARIABLE missing GET "${last}" ${key})
     if(missing)
       message(FATAL_ERROR "key ${key} missing from: ${last}")
@@ -52,6 +54,14 @@ function(run_latency last_var)
   endif()
   if(NOT allocations EQUAL 0 OR NOT ref_allocations EQUAL 0)
     message(FATAL_ERROR "allocations after warm-up ${allocations} (reference ${ref_allocations}): ${last}")
+  endif()
+  # The A/A control replays the reference's policy again: the same decisions
+  # (no budget runs out under --budget-ms 0), nothing allocated.
+  string(JSON aa_digest GET "${last}" aa_decisions_digest)
+  string(JSON aa_allocations GET "${last}" aa_allocations_after_warmup)
+  string(JSON ref_digest GET "${last}" reference_decisions_digest)
+  if(NOT aa_digest STREQUAL ref_digest OR NOT aa_allocations EQUAL 0)
+    message(FATAL_ERROR "A/A replay: digest ${aa_digest} against the reference's ${ref_digest}, allocations ${aa_allocations}: ${last}")
   endif()
   if(NOT decisions EQUAL 40 OR NOT workload STREQUAL "small" OR NOT exhausted EQUAL 0)
     message(FATAL_ERROR "unexpected run: ${last}")

@@ -13,7 +13,8 @@
 // do; the stream then carries what the cost model reads
 // (intrinsics and depths, unmapped keypoints), and a second replay of the
 // same stream with the paper's defaults, in the same process, is the
-// reference the figures are divided by. With --lcm it measures
+// reference the figures are divided by; the defaults replayed once more,
+// last, are an A/A control (the noise a ratio carries on this machine). With --lcm it measures
 // keyframe-published -> decision-received across keepless_node on loopback
 // (the node with the same policy flags). The last stdout line is one JSON object.
 
@@ -122,7 +123,9 @@ std::string usage() {
   return cli::usage("usage: keepless_latency [options]", kFlags,
                     "With a policy other than the defaults (--use, --scope, --floor, --cost, a keep\n"
                     "budget), the same stream is replayed again with the defaults as the reference\n"
-                    "of the *_ratio_to_paper figures. The last stdout line is a JSON summary.");
+                    "of the *_ratio_to_paper figures; the defaults are then replayed once more, last,\n"
+                    "as an A/A control (aa_*: what the machine alone moves a ratio by). The last\n"
+                    "stdout line is a JSON summary.");
 }
 
 // Returns -1 to go on, else the exit status.
@@ -662,6 +665,10 @@ int main(int argc, char** argv) {
   Replay ref_run;
   if (with_reference && !replay(stream, o.warmup, budget_ns, core::Params{}, o, false, &ref_run)) return 1;
   const Replay& ref = with_reference ? ref_run : r;
+  // A/A control: the reference's policy replayed once more, last. Its ratios
+  // to the reference are what the machine alone moves a ratio by in this run.
+  Replay again;
+  if (!replay(stream, o.warmup, budget_ns, core::Params{}, o, false, &again)) return 1;
 
   std::printf("capacities: %u keyframes, %u points, %u observations, %u pair arcs; footprint %zu bytes;"
               " publish as %s\n",
@@ -702,7 +709,8 @@ int main(int argc, char** argv) {
   }
   const bool identical = r.mismatches == 0 && r.cost_mismatches == 0 && r.lemon_decision_mismatches == 0 &&
                          r.closed_mismatches == 0 && r.failures == 0 && r.decisions > 0 &&
-                         ref.mismatches == 0 && ref.failures == 0 && ref.decisions == r.decisions;
+                         ref.mismatches == 0 && ref.failures == 0 && ref.decisions == r.decisions &&
+                         again.mismatches == 0 && again.failures == 0 && again.decisions == r.decisions;
   std::printf("identical decisions: %s (%u windows incremental vs run() from zero flow; %u LEMON canonical, %u closed form;"
               " cost mismatches %u)\n",
               identical ? "true" : "false", r.decisions, r.lemon_checked, r.compared, r.cost_mismatches);
@@ -737,6 +745,13 @@ int main(int argc, char** argv) {
                   theirs->p(0.99), ratio(mine->p(0.99), theirs->p(0.99)));
     }
   }
+
+  std::printf("A/A control (the %s replayed again, last): end-to-end p50 %.3f p99 %.3f ms, CPU p99 %.3f ms:"
+              " p50 %.2fx, p99 %.2fx, CPU p99 %.2fx the first run's; ratios nearer 1 than these are this"
+              " machine's noise\n",
+              with_reference ? "reference" : "policy", again.e2e.p(0.5), again.e2e.p(0.99), again.e2e_cpu.p(0.99),
+              ratio(again.e2e.p(0.5), ref.e2e.p(0.5)), ratio(again.e2e.p(0.99), ref.e2e.p(0.99)),
+              ratio(again.e2e_cpu.p(0.99), ref.e2e_cpu.p(0.99)));
 
   // keepless_node's fixed memory with --profile (measured first, above), and
   // whether the workload's windows fit it (the decision path above is sized
@@ -810,7 +825,10 @@ int main(int argc, char** argv) {
       "\"reference_allocations_after_warmup\":%llu,\"reference_decisions_digest\":\"%016llx\","
       "\"p50_ratio_to_paper\":%.3f,\"p99_ratio_to_paper\":%.3f,"
       "\"e2e_cpu_p50_ms\":%.4f,\"e2e_cpu_p99_ms\":%.4f,\"reference_e2e_cpu_p50_ms\":%.4f,"
-      "\"reference_e2e_cpu_p99_ms\":%.4f,\"cpu_p50_ratio_to_paper\":%.3f,\"cpu_p99_ratio_to_paper\":%.3f,",
+      "\"reference_e2e_cpu_p99_ms\":%.4f,\"cpu_p50_ratio_to_paper\":%.3f,\"cpu_p99_ratio_to_paper\":%.3f,"
+      "\"aa_e2e_p50_ms\":%.4f,\"aa_e2e_p99_ms\":%.4f,\"aa_e2e_cpu_p99_ms\":%.4f,\"aa_p50_ratio\":%.3f,"
+      "\"aa_p99_ratio\":%.3f,\"aa_cpu_p99_ratio\":%.3f,\"aa_allocations_after_warmup\":%llu,"
+      "\"aa_decisions_digest\":\"%016llx\",",
       core::to_string(o.params.budget.kind),
       o.params.budget.kind == core::BudgetKind::kFraction ? o.params.budget.fraction
                                                           : static_cast<double>(o.params.budget.count),
@@ -824,7 +842,10 @@ int main(int argc, char** argv) {
       ref.exhausted, static_cast<unsigned long long>(ref.allocations), static_cast<unsigned long long>(ref.digest),
       ratio(r.e2e.p(0.5), ref.e2e.p(0.5)), ratio(r.e2e.p(0.99), ref.e2e.p(0.99)), r.e2e_cpu.p(0.5),
       r.e2e_cpu.p(0.99), ref.e2e_cpu.p(0.5), ref.e2e_cpu.p(0.99), ratio(r.e2e_cpu.p(0.5), ref.e2e_cpu.p(0.5)),
-      ratio(r.e2e_cpu.p(0.99), ref.e2e_cpu.p(0.99)));
+      ratio(r.e2e_cpu.p(0.99), ref.e2e_cpu.p(0.99)), again.e2e.p(0.5), again.e2e.p(0.99), again.e2e_cpu.p(0.99),
+      ratio(again.e2e.p(0.5), ref.e2e.p(0.5)), ratio(again.e2e.p(0.99), ref.e2e.p(0.99)),
+      ratio(again.e2e_cpu.p(0.99), ref.e2e_cpu.p(0.99)), static_cast<unsigned long long>(again.allocations),
+      static_cast<unsigned long long>(again.digest));
   std::printf("\"profile\":\"%s\",\"profile_fits\":%s,\"node_memory_predicted_bytes\":%.0f,"
               "\"node_memory_bytes\":%llu,\"node_rss_growth_bytes\":%lld,\"peak_rss_bytes\":%llu,",
               o.profile.c_str(), fits ? "true" : "false", node_memory.predicted_bytes,
