@@ -14,9 +14,10 @@
 // (intrinsics and depths, unmapped keypoints), and a second replay of the
 // same stream with the paper's defaults, in the same process, is the
 // reference the figures are divided by; the defaults replayed once more,
-// last, are an A/A control (the noise a ratio carries on this machine). With --lcm it measures
-// keyframe-published -> decision-received across keepless_node on loopback
-// (the node with the same policy flags). The last stdout line is one JSON object.
+// last, are an A/A control (the noise a ratio carries on this machine).
+// With --lcm it measures keyframe-published -> decision-received across
+// keepless_node on loopback (the node with the same policy flags). The last
+// stdout line is one JSON object.
 
 #include <algorithm>
 #include <cmath>
