@@ -101,12 +101,11 @@ RejectReason check_map_event_bytes(const void* data, std::size_t size, const Mes
 //    later utimes; a second process behind the owner, or late copies of a
 //    dead process's keyframes, are earlier. Every accepted message clears
 //    the runs. A restart run starts at a sequence in
-//    0..kRestartMaxFirstSequence that does not
-//    follow the order as it was before the last accepted message, and is
-//    continued only in steps of at most kRestartMaxFirstSequence
-//    (stragglers of an old run never break or complete it):
-//    `restart_confirm` keyframes are a restart (the last one is accepted,
-//    the window and the cull memory are cleared). Every other
+//    0..kRestartMaxFirstSequence that does not follow the order as it was
+//    before the last accepted message, and is continued only in steps of at
+//    most kRestartMaxFirstSequence (stragglers of an old run never break or
+//    complete it): `restart_confirm` keyframes are a restart (the last one
+//    is accepted, the window and the cull memory are cleared). Every other
 //    run is a resync run: `restart_confirm` keyframes, once the order has
 //    accepted nothing for kResyncSilenceNs (or owner_timeout_ns if shorter
 //    and not 0), are a resync: the last one is accepted and becomes the
