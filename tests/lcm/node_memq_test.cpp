@@ -14,12 +14,14 @@
 #include <memory>
 #include <set>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "keepless/decision_t.hpp"
 #include "keepless/decision_timing_t.hpp"
 #include "keepless/platform/node.hpp"
 #include "keepless/status_t.hpp"
+#include "forward_stream.hpp"
 #include "node_memq_fixture.hpp"
 #include "reference_node.hpp"
 
@@ -358,6 +360,40 @@ TEST_F(NodeOnMemq, BudgetExhaustedCullsNothing) {
   EXPECT_EQ(decisions_.back().num_culled, 0);
   EXPECT_GE(node_->counters().budget_exhaustions, 1u);
   EXPECT_EQ(node_->window().total_observations(), 160u);
+}
+
+// Each monocular use with its default flags, as the end-to-end test runs
+// it: a decision the latency target stops (the host stalled) culls nothing,
+// and whichever keyframe's decision it is, the use's rules hold after it
+// (forward_stream.hpp): the next decision catches up on what was missed, and
+// every excluded point is deleted when its own rule says.
+TEST_F(NodeOnMemq, EachMonocularUseKeepsItsRulesWhicheverDecisionIsLate) {
+  const std::pair<const char*, const char*> runs[] = {
+      {"monocular", "0.2"}, {"monocular", "0.4"}, {"monocular-deferred", "0.2"}};
+  for (const auto& [use, fraction] : runs) {
+    for (int late = 0; late < 30; ++late) {
+      SCOPED_TRACE(std::string(use) + " at " + fraction + ", late at keyframe " + std::to_string(late));
+      NodeConfig c;
+      std::string error;
+      const char* argv[] = {"keepless_node", "--url", "memq://", "--use", use, "--keep-fraction", fraction,
+                            "--max-observations", "64", "--quiet"};
+      ASSERT_EQ(keepless::platform::parse_node_arguments(10, argv, c, error), keepless::platform::ParseResult::kOk)
+          << error;
+      ASSERT_GT(c.latency_target_ms, 0) << "the default configuration has a latency target";
+      make_node(c);
+      for (int i = 0; i < 30; ++i) {
+        clock_.tick = i == late ? 100000000ull : 1000ull;  // 100 ms a clock reading: past the deadline at once
+        send(kt::forward_stream::keyframe(i));
+        ASSERT_EQ(decisions_.size(), static_cast<std::size_t>(i) + 1);
+      }
+      EXPECT_EQ(decisions_[static_cast<std::size_t>(late)].status, keepless::decision_t::STATUS_BUDGET_EXHAUSTED);
+      if (std::string(use) == "monocular-deferred") {
+        EXPECT_GT(kt::forward_stream::expect_deferred_rules(decisions_, 2), 100u);
+      } else {
+        EXPECT_GT(kt::forward_stream::expect_monocular_rules(decisions_), 100u);
+      }
+    }
+  }
 }
 
 TEST_F(NodeOnMemq, WindowCapacityIsAnsweredNotFatal) {
