@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cmath>
 #include <deque>
+#include <iterator>
 #include <limits>
 #include <map>
 #include <memory>
@@ -375,9 +376,11 @@ TEST_F(NodeOnMemq, EachMonocularUseKeepsItsRulesWhicheverDecisionIsLate) {
       SCOPED_TRACE(std::string(use) + " at " + fraction + ", late at keyframe " + std::to_string(late));
       NodeConfig c;
       std::string error;
+      // --max-observations: a small fixed memory (60 a keyframe here); decisions do not depend on it.
       const char* argv[] = {"keepless_node", "--url", "memq://", "--use", use, "--keep-fraction", fraction,
                             "--max-observations", "64", "--quiet"};
-      ASSERT_EQ(keepless::platform::parse_node_arguments(10, argv, c, error), keepless::platform::ParseResult::kOk)
+      ASSERT_EQ(keepless::platform::parse_node_arguments(static_cast<int>(std::size(argv)), argv, c, error),
+                keepless::platform::ParseResult::kOk)
           << error;
       ASSERT_GT(c.latency_target_ms, 0) << "the default configuration has a latency target";
       make_node(c);
