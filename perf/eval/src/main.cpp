@@ -76,6 +76,10 @@ const std::vector<cli::Flag> kFlags = {
     {"--no-baselines", nullptr, "keepless only, no baselines"},
     {"--vo-baselines", "LIST", "the real VO's baselines, comma-separated from random, longest-track, anms\n"
                                "(default all three; keepless and the original always run)"},
+    {"--anms-variant", "ssc|spread|response",
+     "what the real VO's ANMS ranks by: ssc, SSC on the keypoints' responses\n"
+     "(default); spread, SSC on the random baseline's priorities (spread alone);\n"
+     "response, the strongest responses without suppression (strength alone)"},
     {"--no-ablation", nullptr, "no ablation variants"},
     {"--ablation-all", nullptr, "every ablation variant"},
     {"--use", "NAME", "a use (core::apply_use) and what it asks of the real VO, applied before\n"
@@ -179,6 +183,7 @@ struct Args {
   keepless::core::Params policy;  // scope, coverage_floor, theta, cost_model, maturity_keyframes, track_terms, cost_terms (the real VO), spatial_weight; the rest is set per variant
   bool tracked_flags = false;     // --tracked-flags (the real VO)
   int weak_keyframe = 0;          // --weak-keyframe (the real VO)
+  keepless::eval::vo::AnmsVariant anms_variant{};  // --anms-variant (the real VO; default kSsc)
   bool defer_fixed = false;       // --defer-fixed (the real VO)
   bool defer_refine = false;      // --defer-refine (the real VO)
   bool defer_alternate = false;   // --defer-alternate (the real VO)
@@ -318,6 +323,14 @@ Args parse(int argc, char** argv) {
         else if (item == "anms") a.vo_baselines.push_back(Selector::kAnms);
         else fail("--vo-baselines: random, longest-track or anms, comma-separated, got '" + item + "'");
       }
+    }
+    else if (f == "--anms-variant") {
+      using keepless::eval::vo::AnmsVariant;
+      const std::string v = val();
+      if (v == "ssc") a.anms_variant = AnmsVariant::kSsc;
+      else if (v == "spread") a.anms_variant = AnmsVariant::kSpread;
+      else if (v == "response") a.anms_variant = AnmsVariant::kResponse;
+      else fail("--anms-variant: ssc, spread or response, got '" + v + "'");
     }
     else if (f == "--no-ablation") a.ablation = false;
     else if (f == "--ablation-all") a.ablation_all = true;
@@ -602,6 +615,8 @@ int main(int argc, char** argv) {
   if (a.policy.maturity_keyframes > 0) summary.settings += ", maturity " + std::to_string(a.policy.maturity_keyframes);
   if (a.tracked_flags) summary.settings += ", tracked flags";
   if (a.weak_keyframe > 0) summary.settings += ", a keyframe below " + std::to_string(a.weak_keyframe) + " inliers";
+  if (a.anms_variant == keepless::eval::vo::AnmsVariant::kSpread) summary.settings += ", ANMS by spread alone";
+  if (a.anms_variant == keepless::eval::vo::AnmsVariant::kResponse) summary.settings += ", ANMS by response alone";
   if (a.policy.defer_keyframes > 0) summary.settings += ", defer " + std::to_string(a.policy.defer_keyframes);
   if (a.defer_fixed) summary.settings += ", excluded points fixed in BA";
   if (a.defer_refine) summary.settings += ", excluded points refined";
@@ -723,6 +738,7 @@ int main(int argc, char** argv) {
     vo.policy = a.policy;
     vo.tracked_flags = a.tracked_flags;
     vo.weak_keyframe = a.weak_keyframe;
+    vo.anms_variant = a.anms_variant;
     vo.defer_fixed = a.defer_fixed;
     vo.defer_refine = a.defer_refine;
     vo.defer_alternate = a.defer_alternate;

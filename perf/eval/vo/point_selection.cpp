@@ -9,7 +9,8 @@
 namespace keepless::eval::vo {
 
 std::vector<core::PointId> baseline_culls(Selector selector, const std::vector<Candidate>& candidates,
-                                          std::size_t cull, std::uint64_t seed, int width, int height) {
+                                          std::size_t cull, std::uint64_t seed, int width, int height,
+                                          AnmsVariant anms) {
   const std::size_t n = candidates.size();
   cull = std::min(cull, n);
   std::vector<std::uint32_t> order(n);
@@ -32,6 +33,13 @@ std::vector<core::PointId> baseline_culls(Selector selector, const std::vector<C
       });
       break;
     case Selector::kAnms: {
+      if (anms == AnmsVariant::kResponse) {  // the weakest go first
+        std::sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) {
+          const Candidate &x = candidates[a], &y = candidates[b];
+          return x.response != y.response ? x.response < y.response : x.id > y.id;
+        });
+        break;
+      }
       // Keyframes in the order they first appear, each with its candidates
       // (indices into `candidates`) and their keypoints.
       std::vector<int> frames;
@@ -48,7 +56,10 @@ std::vector<core::PointId> baseline_culls(Selector selector, const std::vector<C
         }
         const auto k = static_cast<std::size_t>(at - frames.begin());
         per[k].push_back(i);
-        groups[k].push_back({c.u, c.v, c.response, c.id});
+        // kSpread: a priority in [0, 1) that knows nothing of the keypoint.
+        const double rank = anms == AnmsVariant::kSpread ? static_cast<double>(mix(seed, c.id) >> 11) * 0x1p-53
+                                                         : static_cast<double>(c.response);
+        groups[k].push_back({c.u, c.v, rank, c.id});
       }
       const auto chosen = ssc_select_shared(groups, static_cast<std::uint32_t>(n - cull), width, height);
       std::vector<bool> kept(n, false);

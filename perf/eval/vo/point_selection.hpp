@@ -22,8 +22,10 @@ struct Candidate {
 // `selector` (a baseline, not kKeepless/kOriginal) removes. ANMS judges each
 // candidate among those of its own keyframe (SSC on one image), the
 // keyframes sharing the kept count in proportion to their candidates
-// (largest remainder), as the synthetic back end's ANMS does.
+// (largest remainder), as the synthetic back end's ANMS does; `anms` says
+// what it ranks by (AnmsVariant).
 std::vector<core::PointId> baseline_culls(Selector selector, const std::vector<Candidate>& candidates,
-                                          std::size_t cull, std::uint64_t seed, int width, int height);
+                                          std::size_t cull, std::uint64_t seed, int width, int height,
+                                          AnmsVariant anms = AnmsVariant::kSsc);
 
 }  // namespace keepless::eval::vo

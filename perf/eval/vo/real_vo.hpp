@@ -21,6 +21,12 @@ namespace keepless::eval::vo {
 // fraction (params.budget) every selector keeps the count core::FractionBudget
 // gives on its own map: F of the points new to it plus those it kept before.
 enum class Selector : std::uint8_t { kOriginal, kKeepless, kRandom, kLongestTrack, kAnms };
+
+// What the ANMS baseline ranks by, to tell its two ingredients apart: kSsc,
+// SSC on the keypoints' responses (strong corners, spread); kSpread, SSC on
+// a seeded random priority (spread alone); kResponse, the strongest
+// responses without suppression (strength alone).
+enum class AnmsVariant : std::uint8_t { kSsc, kSpread, kResponse };
 enum class KeyframeCulling : std::uint8_t { kOn, kOff, kCountCulled };
 const char* to_string(Selector s);
 
@@ -28,6 +34,7 @@ struct RealVoOptions {
   int features = 0;  // ORB features per frame; 0: ORB-SLAM2's 1000 (RGB-D) or 2000 (monocular KITTI)
   std::uint64_t seed = 1;  // RANSAC sampling order and the random baseline's priorities
   Selector selector = Selector::kOriginal;
+  AnmsVariant anms_variant = AnmsVariant::kSsc;
   // keepless (M = params.pair_capacity; scope, coverage_floor, cost_model as
   // the eval's --scope/--floor/--cost). image_width/height are the camera's.
   core::Params params;

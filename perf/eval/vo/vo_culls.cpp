@@ -254,7 +254,7 @@ std::vector<core::PointId> Vo::select_points(int kf, const std::vector<int>& loc
     culls = own_culls;
     std::sort(culls.begin(), culls.end());  // in keypoint order so far
   } else if (opt_.selector != Selector::kOriginal) {
-    culls = baseline_culls(opt_.selector, candidates, cull, opt_.seed, cam_.width, cam_.height);
+    culls = baseline_culls(opt_.selector, candidates, cull, opt_.seed, cam_.width, cam_.height, opt_.anms_variant);
   }
   if (!culls.empty() && culls.size() > marked_culls_) {
     marked_culls_ = culls.size();
