@@ -68,7 +68,9 @@ inline std::size_t expect_deferred_rules(const std::vector<keepless::decision_t>
     for (const std::int64_t p : d.excluded_point_id) {
       EXPECT_TRUE(excluded_at.emplace(p, i).second) << "excluded twice: " << p;
     }
-    for (const std::int64_t p : d.deleted_point_id) EXPECT_TRUE(deleted_at.emplace(p, i).second) << "deleted twice: " << p;
+    for (const std::int64_t p : d.deleted_point_id) {
+      EXPECT_TRUE(deleted_at.emplace(p, i).second) << "deleted twice: " << p;
+    }
   }
   // With every decision in hand, no point is deleted without its exclusion.
   const bool complete = !answered.empty() && *answered.begin() == 0 &&

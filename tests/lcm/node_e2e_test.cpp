@@ -267,8 +267,8 @@ TEST(NodeEndToEnd, TheMonocularUsesKeepTheirRulesUnderTheDefaultConfiguration) {
     ASSERT_GE(messages.size(), static_cast<std::size_t>(kFrames) * 9 / 10) << "more than 10 % lost\n" << node.log();
     std::vector<keepless::decision_t> decisions;
     for (const Message& m : messages) {
-      decisions.push_back(decode<keepless::decision_t>(m));
-      EXPECT_NE(decisions.back().status, keepless::decision_t::STATUS_SKIPPED) << "keyframe " << decisions.back().keyframe_id;
+      const keepless::decision_t& d = decisions.emplace_back(decode<keepless::decision_t>(m));
+      EXPECT_NE(d.status, keepless::decision_t::STATUS_SKIPPED) << "keyframe " << d.keyframe_id;
     }
     if (std::string(use) == "monocular-deferred") {
       EXPECT_GT(kt::forward_stream::expect_deferred_rules(decisions, 2), 100u);
