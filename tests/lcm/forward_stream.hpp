@@ -12,8 +12,11 @@
 #include <cstdint>
 #include <map>
 #include <set>
+#include <string>
+#include <utility>
 #include <vector>
 
+#include "keepless/core/use.hpp"
 #include "keepless/decision_t.hpp"
 #include "keepless/keyframe_t.hpp"
 #include "message_builders.hpp"
@@ -75,8 +78,8 @@ inline std::size_t expect_deferred_rules(const std::vector<keepless::decision_t>
   // With every decision in hand, no point is deleted without its exclusion.
   const bool complete = !answered.empty() && *answered.begin() == 0 &&
                         *answered.rbegin() + 1 == static_cast<std::int64_t>(answered.size());
-  for (const auto& [p, k] : deleted_at) {
-    if (complete) {
+  if (complete) {
+    for (const auto& [p, k] : deleted_at) {
       EXPECT_EQ(excluded_at.count(p), 1u) << "keyframe " << k << " deleted " << p << ", never excluded";
     }
   }
@@ -91,6 +94,22 @@ inline std::size_t expect_deferred_rules(const std::vector<keepless::decision_t>
     }
   }
   return excluded_at.size();
+}
+
+// The monocular uses and kept fractions the node's tests run (monocular
+// also at 0.4, where its track share applies).
+inline constexpr std::pair<const char*, const char*> kMonocularUses[] = {
+    {"monocular", "0.2"}, {"monocular", "0.4"}, {"monocular-deferred", "0.2"}};
+
+// `use`'s rules, by its own settings (core::apply_use: deferred culling's T,
+// or culls deleted at once). Returns the points culled or excluded.
+inline std::size_t expect_use_rules(const char* use, const std::vector<keepless::decision_t>& decisions) {
+  core::Use u{};
+  EXPECT_TRUE(core::parse_use(use, &u)) << use;
+  core::Params params;
+  core::apply_use(u, &params);
+  return params.defer_keyframes > 0 ? expect_deferred_rules(decisions, params.defer_keyframes)
+                                    : expect_monocular_rules(decisions);
 }
 
 }  // namespace keepless::testing::forward_stream

@@ -233,14 +233,11 @@ TEST(NodeEndToEnd, TheDefaultConfigurationSkipsNoKeyframe) {
 }
 
 // The node's default configuration with each monocular use and a kept
-// fraction (monocular also at 0.4, where its track share applies), as a VO
-// would start it, fed the forward-moving stream (forward_stream.hpp), the VO
-// waiting for each decision: each use keeps its rules, whichever decisions
-// the loaded host made late.
+// fraction (kMonocularUses), as a VO would start it, fed the forward-moving
+// stream, the VO waiting for each decision (forward_stream.hpp): each use
+// keeps its rules, whichever decisions the loaded host made late.
 TEST(NodeEndToEnd, TheMonocularUsesKeepTheirRulesUnderTheDefaultConfiguration) {
-  const std::pair<const char*, const char*> runs[] = {
-      {"monocular", "0.2"}, {"monocular", "0.4"}, {"monocular-deferred", "0.2"}};
-  for (const auto& [use, fraction] : runs) {
+  for (const auto& [use, fraction] : kt::forward_stream::kMonocularUses) {
     SCOPED_TRACE(std::string(use) + " at " + fraction);
     TempDir tmp;
     const std::string url = udpm(unique_port(3));
@@ -270,11 +267,7 @@ TEST(NodeEndToEnd, TheMonocularUsesKeepTheirRulesUnderTheDefaultConfiguration) {
       const keepless::decision_t& d = decisions.emplace_back(decode<keepless::decision_t>(m));
       EXPECT_NE(d.status, keepless::decision_t::STATUS_SKIPPED) << "keyframe " << d.keyframe_id;
     }
-    if (std::string(use) == "monocular-deferred") {
-      EXPECT_GT(kt::forward_stream::expect_deferred_rules(decisions, 2), 100u);
-    } else {
-      EXPECT_GT(kt::forward_stream::expect_monocular_rules(decisions), 100u);
-    }
+    EXPECT_GT(kt::forward_stream::expect_use_rules(use, decisions), 100u);
   }
 }
 
