@@ -398,3 +398,31 @@ TEST(RealVoQuick, AWeakKeyframeRuleMakesAKeyframeOfEveryWeakFrame) {
   ASSERT_GT(tracked, 20);
   EXPECT_EQ(keyframes, tracked);
 }
+
+// --keyframe-ratio R: ORB-SLAM2's monocular test makes a keyframe when the
+// inliers fall below R x the reference keyframe's points seen 3+ times; the
+// default is ORB-SLAM2's 0.9, and a lower R makes fewer keyframes, every run
+// alike (the original's count read from its run line).
+TEST(RealVoQuick, ALowerKeyframeRatioMakesFewerKeyframes) {
+  DATA_OR_SKIP(data, "kitti00_first200_vamr", "image_0/000060.png");
+  const auto original = [&](const std::string& extra, int* made) {
+    const EvalOutput o = run_eval("--images '" + data + "/image_0' --calib '" + data + "/K.txt' --poses '" + data +
+                                  "/poses.txt' --frames 0:40 --seeds 1 --kept-fraction 0.2 --no-ablation "
+                                  "--no-baselines " + extra);
+    ASSERT_EQ(o.status, 0) << o.all;
+    ASSERT_FALSE(o.runs.empty()) << o.all;
+    const std::string& line = o.runs.front();
+    ASSERT_NE(line.find(" original "), std::string::npos) << line;
+    const std::size_t at = line.find(" kfs ");
+    ASSERT_NE(at, std::string::npos) << line;
+    int alive = -1;
+    ASSERT_EQ(std::sscanf(line.c_str() + at, " kfs %d (made %d)", &alive, made), 2) << line;
+  };
+  int by_default = 0, at_09 = 0, at_05 = 0;
+  original("", &by_default);
+  original("--keyframe-ratio 0.9", &at_09);
+  original("--keyframe-ratio 0.5", &at_05);
+  EXPECT_EQ(at_09, by_default);
+  EXPECT_GT(at_05, 0);
+  EXPECT_LT(at_05, at_09);
+}

@@ -137,6 +137,9 @@ const std::vector<cli::Flag> kFlags = {
     {"--weak-keyframe", "N", "the real VO also makes a keyframe when a frame keeps fewer than N pose\n"
                              "inliers (ORB-SLAM3's weak-tracking rule for monocular-inertial input, N =\n"
                              "75; ORB-SLAM2's monocular test has none), every run alike (default 0: off)"},
+    {"--keyframe-ratio", "R", "the real VO's monocular keyframe test: a keyframe when a frame's inliers fall\n"
+                              "below R x the reference keyframe's points seen 3+ times, R in [0.3, 1]\n"
+                              "(ORB-SLAM2's 0.9, the default; lower makes fewer keyframes), every run alike"},
     {"--window-sizes", nullptr, "instead of the comparison: the original run of the first seed on each\n"
                                 "--trajectory, --images and --rgbd input, and the largest window it\n"
                                 "gives (keyframes, points, observations, pair arcs, unmapped keypoints)\n"
@@ -183,6 +186,7 @@ struct Args {
   keepless::core::Params policy;  // scope, coverage_floor, theta, cost_model, maturity_keyframes, track_terms, cost_terms (the real VO), spatial_weight; the rest is set per variant
   bool tracked_flags = false;     // --tracked-flags (the real VO)
   int weak_keyframe = 0;          // --weak-keyframe (the real VO)
+  double keyframe_ratio = 0.9;    // --keyframe-ratio (the real VO)
   keepless::eval::vo::AnmsVariant anms_variant{};  // --anms-variant (the real VO; default kSsc)
   bool defer_fixed = false;       // --defer-fixed (the real VO)
   bool defer_refine = false;      // --defer-refine (the real VO)
@@ -346,6 +350,7 @@ Args parse(int argc, char** argv) {
     else if (f == "--maturity") a.policy.maturity_keyframes = static_cast<std::uint32_t>(parse_int(f, val(), 0, 1000));
     else if (f == "--tracked-flags") a.tracked_flags = true;
     else if (f == "--weak-keyframe") a.weak_keyframe = static_cast<int>(parse_int(f, val(), 0, 100000));
+    else if (f == "--keyframe-ratio") a.keyframe_ratio = parse_double(f, val(), 0.3, 1);
     else if (f == "--defer") a.policy.defer_keyframes = static_cast<std::uint32_t>(parse_int(f, val(), 1, 1000));
     else if (f == "--defer-fixed") a.defer_fixed = true;
     else if (f == "--defer-refine") a.defer_refine = true;
@@ -615,6 +620,7 @@ int main(int argc, char** argv) {
   if (a.policy.maturity_keyframes > 0) summary.settings += ", maturity " + std::to_string(a.policy.maturity_keyframes);
   if (a.tracked_flags) summary.settings += ", tracked flags";
   if (a.weak_keyframe > 0) summary.settings += ", a keyframe below " + std::to_string(a.weak_keyframe) + " inliers";
+  if (a.keyframe_ratio != 0.9) summary.settings += ", keyframe ratio " + std::to_string(a.keyframe_ratio);
   if (a.anms_variant == keepless::eval::vo::AnmsVariant::kSpread) summary.settings += ", ANMS by spread alone";
   if (a.anms_variant == keepless::eval::vo::AnmsVariant::kResponse) summary.settings += ", ANMS by response alone";
   if (a.policy.defer_keyframes > 0) summary.settings += ", defer " + std::to_string(a.policy.defer_keyframes);
@@ -738,6 +744,7 @@ int main(int argc, char** argv) {
     vo.policy = a.policy;
     vo.tracked_flags = a.tracked_flags;
     vo.weak_keyframe = a.weak_keyframe;
+    vo.keyframe_ratio = a.keyframe_ratio;
     vo.anms_variant = a.anms_variant;
     vo.defer_fixed = a.defer_fixed;
     vo.defer_refine = a.defer_refine;

@@ -47,6 +47,10 @@ struct RealVoOptions {
   // keyframe's points seen 3+ times only, which a sparse map makes few, so
   // at a tight budget it can fire too late to keep tracking.
   int weak_keyframe = 0;
+  // ORB-SLAM2's monocular keyframe test: a keyframe when a frame's inliers
+  // fall below this share of the reference keyframe's points seen 3+ times.
+  // Lower makes fewer keyframes (RGB-D input uses 0.75 whatever this says).
+  double keyframe_ratio = 0.9;
   // Deferred culling (params.defer_keyframes > 0): excluded points enter local
   // BA as constant landmarks seen by the local keyframes, instead of not at all.
   bool defer_fixed = false;

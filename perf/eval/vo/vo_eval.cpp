@@ -92,6 +92,7 @@ bool evaluate_real_vo(const VoInput& in, const VoEvalOptions& o, std::vector<Com
     vo.params.defer_keyframes = o.policy.defer_keyframes;
     vo.tracked_flags = o.tracked_flags;
     vo.weak_keyframe = o.weak_keyframe;
+    vo.keyframe_ratio = o.keyframe_ratio;
     vo.anms_variant = o.anms_variant;
     vo.defer_fixed = o.defer_fixed;
     vo.defer_refine = o.defer_refine;

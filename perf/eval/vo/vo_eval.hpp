@@ -35,6 +35,7 @@ struct VoEvalOptions {
   core::Params policy;  // and maturity_keyframes, defer_keyframes
   bool tracked_flags = false;  // RealVoOptions::tracked_flags
   int weak_keyframe = 0;       // RealVoOptions::weak_keyframe
+  double keyframe_ratio = 0.9; // RealVoOptions::keyframe_ratio
   AnmsVariant anms_variant = AnmsVariant::kSsc;  // RealVoOptions::anms_variant
   bool defer_fixed = false;    // RealVoOptions::defer_fixed
   bool defer_refine = false;   // RealVoOptions::defer_refine

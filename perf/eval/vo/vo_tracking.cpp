@@ -207,7 +207,7 @@ bool Vo::need_keyframe(const TrackedFrame& cur, int inliers, int* ref_matches_ou
     }
   }
   const bool need_close = seq_.rgbd && tracked_close < 100 && untracked_close > 70;
-  const double ratio = kfs < 2 ? 0.4 : (seq_.rgbd ? 0.75 : 0.9);
+  const double ratio = kfs < 2 ? 0.4 : (seq_.rgbd ? 0.75 : opt_.keyframe_ratio);
   // c1a (max frames) and c1b (min frames, mapping idle: always, it runs inline) hold.
   const bool c2 = (inliers < ref_matches * ratio || need_close) && inliers > 15;
   // The translation/rotation rule: a keyframe at least every 20 degrees.
