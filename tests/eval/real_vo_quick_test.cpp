@@ -74,6 +74,16 @@ EvalOutput run_eval(const std::string& args) {
   return o;
 }
 
+// A run line's keyframes alive at the end and made ("kfs A (made B)").
+::testing::AssertionResult keyframes_of(const std::string& line, int* alive, int* made) {
+  const std::size_t at = line.find(" kfs ");
+  if (at == std::string::npos ||
+      std::sscanf(line.c_str() + at, " kfs %d (made %d)", alive, made) != 2) {
+    return ::testing::AssertionFailure() << "no \"kfs A (made B)\" in " << line;
+  }
+  return ::testing::AssertionSuccess();
+}
+
 TEST(RealVoQuick, SevenScenesSliceIsTrackedAccuratelyAndReportedInFull) {
   DATA_OR_SKIP(data, "7scenes_redkitchen_first600", "frame-000059.color.jpg");
   const std::string out = ::testing::TempDir() + "/real_vo_quick";
@@ -264,10 +274,8 @@ TEST(RealVoQuick, NoKeyframeCullingKeepsEveryKeyframeMade) {
                                   "--defer-refine --decide window " + extra);
     out->clear();
     for (const std::string& line : o.runs) {
-      const std::size_t at = line.find(" kfs ");
-      ASSERT_NE(at, std::string::npos) << line;
       int alive = -1, made = -1;
-      ASSERT_EQ(std::sscanf(line.c_str() + at, " kfs %d (made %d)", &alive, &made), 2) << line;
+      ASSERT_TRUE(keyframes_of(line, &alive, &made));
       out->emplace_back(alive, made);
     }
     ASSERT_EQ(o.status, 0) << o.all;
@@ -413,10 +421,8 @@ TEST(RealVoQuick, ALowerKeyframeRatioMakesFewerKeyframes) {
     ASSERT_FALSE(o.runs.empty()) << o.all;
     const std::string& line = o.runs.front();
     ASSERT_NE(line.find(" original "), std::string::npos) << line;
-    const std::size_t at = line.find(" kfs ");
-    ASSERT_NE(at, std::string::npos) << line;
     int alive = -1;
-    ASSERT_EQ(std::sscanf(line.c_str() + at, " kfs %d (made %d)", &alive, made), 2) << line;
+    ASSERT_TRUE(keyframes_of(line, &alive, made));
   };
   int by_default = 0, at_09 = 0, at_05 = 0;
   original("", &by_default);
