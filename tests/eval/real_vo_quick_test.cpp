@@ -122,7 +122,8 @@ TEST(RealVoQuick, SevenScenesSliceIsTrackedAccuratelyAndReportedInFull) {
 
 // --frames A:B names frame numbers wherever the sequence starts: a folder of
 // links frame-000600.* .. frame-000629.* (to the first 30 real frames) with
-// --frames 600:619 runs 20 frames; 0:19 selects none and says so.
+// --frames 600:619 runs 20 frames, 600:619:4 every fourth of them (600, 604,
+// .., 616); 0:19 selects none and says so, a step of 0 is refused.
 TEST(RealVoQuick, FramesAreSelectedByNumberWhereverTheSequenceStarts) {
   namespace fs = std::filesystem;
   DATA_OR_SKIP(data, "7scenes_redkitchen_first600", "frame-000029.color.jpg");
@@ -145,6 +146,10 @@ TEST(RealVoQuick, FramesAreSelectedByNumberWhereverTheSequenceStarts) {
   ASSERT_EQ(some.status, 0) << some.all;
   bool present = false;
   EXPECT_EQ(number_after(some.last, "frames", &present), 20.0) << some.last;
+  const EvalOutput stepped = run("600:619:4");
+  ASSERT_EQ(stepped.status, 0) << stepped.all;
+  EXPECT_EQ(number_after(stepped.last, "frames", &present), 5.0) << stepped.last;
+  EXPECT_EQ(run("600:619:0").status, 2);
   const EvalOutput none = run("0:19");
   EXPECT_EQ(none.status, 2) << none.all;
   EXPECT_NE(none.all.find(dir + ": frames 0:19 select none of its frames 600..629"), std::string::npos) << none.all;

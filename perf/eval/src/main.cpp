@@ -51,8 +51,9 @@ const std::vector<cli::Flag> kFlags = {
     {"--calib", "FILE", "calibration of the --images or --image-tracks before it"},
     {"--poses", "FILE", "ground-truth poses of the --images or --image-tracks before it"},
     {"--rgbd", "DIR", "the real VO on a 7-Scenes RGB-D sequence (frame-NNNNNN.*)"},
-    {"--frames", "A:B", "frames numbered A..B inclusive, wherever the sequence starts\n"
-                        "(default all; --quick: the first 60 frames)"},
+    {"--frames", "A:B[:S]", "frames numbered A..B inclusive, wherever the sequence starts, every\n"
+                            "S-th of them (a camera S times faster over the same scene; its frame\n"
+                            "rate divided by S) (default all; --quick: the first 60 frames)"},
     {"--bal", "FILE", "a BAL problem (repeatable)"},
     {"--kept-fraction", "F[,F...]", "a keep budget: every selector keeps the share F of the points it\n"
                                     "evaluates (F of those new to each window, plus those it kept\n"
@@ -170,7 +171,11 @@ struct Args {
   std::vector<TrajectoryArg> trajectories;
   std::string images, calib, poses;  // --image-tracks
   std::vector<keepless::eval::vo::VoInput> vo;  // --images, --rgbd
-  int frames_first = 0, frames_last = -2;  // --frames A:B; -2: not given (-1: to the end)
+  int frames_first = 0, frames_last = -2;  // --frames A:B[:S]; -2: not given (-1: to the end)
+  int frames_step = 1;
+  keepless::eval::vo::FrameSelection vo_frames() const {
+    return {frames_first, frames_last != -2 ? frames_last : -1, frames_step, 0};
+  }
   std::vector<std::string> bal;
   std::vector<OperatingPoint> ops;
   int seeds = -1;
@@ -284,9 +289,13 @@ Args parse(int argc, char** argv) {
     } else if (f == "--frames") {
       const std::string v = val();
       const auto colon = v.find(':');
-      if (colon == std::string::npos) fail("--frames: expected A:B, got '" + v + "'");
+      if (colon == std::string::npos) fail("--frames: expected A:B[:S], got '" + v + "'");
+      const auto step_colon = v.find(':', colon + 1);
       a.frames_first = static_cast<int>(parse_int(f, v.substr(0, colon), 0, 10000000));
-      a.frames_last = static_cast<int>(parse_int(f, v.substr(colon + 1), a.frames_first, 10000000));
+      a.frames_last =
+          static_cast<int>(parse_int(f, v.substr(colon + 1, step_colon - colon - 1), a.frames_first, 10000000));
+      if (step_colon != std::string::npos)
+        a.frames_step = static_cast<int>(parse_int(f, v.substr(step_colon + 1), 1, 100));
     }
     else if (f == "--bal") a.bal.push_back(val());
     else if (f == "--M") {
@@ -692,9 +701,8 @@ int main(int argc, char** argv) {
       std::string name, err;
       ke::WindowSizes w;
       // Replayed at keepless_node's default capacities (K = 20).
-      if (!keepless::eval::vo::measure_real_windows(in, a.frames_first, a.frames_last != -2 ? a.frames_last : -1,
-                                                    a.first_seed, keepless::platform::window_capacities({}), &name,
-                                                    &w, &err))
+      if (!keepless::eval::vo::measure_real_windows(in, a.vo_frames(), a.first_seed,
+                                                    keepless::platform::window_capacities({}), &name, &w, &err))
         fail(err);
       sizes.emplace_back(name, w);
     }
@@ -734,9 +742,8 @@ int main(int argc, char** argv) {
 
   if (!a.vo.empty()) {  // the real VO, closed loop on real images
     keepless::eval::vo::VoEvalOptions vo;
-    vo.first = a.frames_first;
-    vo.last = a.frames_last != -2 ? a.frames_last : -1;
-    vo.max_frames = a.frames_last == -2 && a.quick ? 60 : 0;  // --quick: the first 60 frames
+    vo.frames = a.vo_frames();
+    if (a.frames_last == -2 && a.quick) vo.frames.max_frames = 60;  // --quick: the first 60 frames
     vo.seeds = summary.seeds;
     for (const OperatingPoint& op : a.ops) vo.ops.emplace_back(op.fraction, op.M);
     if (a.baselines) vo.baselines = a.vo_baselines;

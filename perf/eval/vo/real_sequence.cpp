@@ -87,11 +87,11 @@ bool probe_size(RealSequence* s, std::string* error) {
   return true;
 }
 
-// The frames numbered first..last (last < 0: to the end), at most
-// max_frames of them (0: all), as positions a..b into `numbers` (ascending,
-// non-empty): a sequence may start at any frame number.
-bool select_frames(const std::string& dir, const std::vector<long>& numbers, int first, int last, int max_frames,
-                   std::size_t* a, std::size_t* b, std::string* error) {
+// The selected frames as positions a, a + step, ... <= b into `numbers`
+// (ascending, non-empty): a sequence may start at any frame number.
+bool select_frames(const std::string& dir, const std::vector<long>& numbers, const FrameSelection& f, std::size_t* a,
+                   std::size_t* b, std::string* error) {
+  const int first = f.first, last = f.last;
   const auto lo = std::lower_bound(numbers.begin(), numbers.end(), static_cast<long>(first));
   const auto hi = last < 0 ? numbers.end() : std::upper_bound(numbers.begin(), numbers.end(), static_cast<long>(last));
   if (first < 0 || (last >= 0 && last < first) || lo >= hi) {
@@ -101,7 +101,12 @@ bool select_frames(const std::string& dir, const std::vector<long>& numbers, int
   }
   *a = static_cast<std::size_t>(lo - numbers.begin());
   *b = static_cast<std::size_t>(hi - numbers.begin()) - 1;
-  if (max_frames > 0) *b = std::min(*b, *a + static_cast<std::size_t>(max_frames) - 1);
+  if (f.step < 1) {
+    *error = dir + ": a frame step of " + std::to_string(f.step) + " (at least 1)";
+    return false;
+  }
+  const auto step = static_cast<std::size_t>(f.step);
+  if (f.max_frames > 0) *b = std::min(*b, *a + (static_cast<std::size_t>(f.max_frames) - 1) * step);
   return true;
 }
 
@@ -150,7 +155,7 @@ double RealSequence::path_length() const {
 }
 
 bool load_kitti_sequence(const std::string& image_dir, const std::string& calib_file,
-                         const std::string& poses_file, int first, int last, int max_frames, RealSequence* out,
+                         const std::string& poses_file, const FrameSelection& frames, RealSequence* out,
                          std::string* error) {
   RealSequence s;
   s.input = image_dir;
@@ -206,8 +211,9 @@ bool load_kitti_sequence(const std::string& image_dir, const std::string& calib_
     return false;
   }
   std::size_t a = 0, b = 0;
-  if (!select_frames(image_dir, numbers, first, last, max_frames, &a, &b, error)) return false;
-  for (std::size_t i = a; i <= b; ++i) {
+  if (!select_frames(image_dir, numbers, frames, &a, &b, error)) return false;
+  s.fps /= frames.step;
+  for (std::size_t i = a; i <= b; i += static_cast<std::size_t>(frames.step)) {
     s.image_files.push_back(files[i]);
     s.ground_truth.push_back(gt[i]);
   }
@@ -216,8 +222,7 @@ bool load_kitti_sequence(const std::string& image_dir, const std::string& calib_
   return true;
 }
 
-bool load_rgbd_sequence(const std::string& dir, int first, int last, int max_frames, RealSequence* out,
-                        std::string* error) {
+bool load_rgbd_sequence(const std::string& dir, const FrameSelection& frames, RealSequence* out, std::string* error) {
   RealSequence s;
   s.input = dir;
   s.name = name_of(dir, false);
@@ -249,8 +254,9 @@ bool load_rgbd_sequence(const std::string& dir, int first, int last, int max_fra
   }
   std::sort(numbers.begin(), numbers.end());
   std::size_t a = 0, b = 0;
-  if (!select_frames(dir, numbers, first, last, max_frames, &a, &b, error)) return false;
-  for (std::size_t i = a; i <= b; ++i) {
+  if (!select_frames(dir, numbers, frames, &a, &b, error)) return false;
+  s.fps /= frames.step;
+  for (std::size_t i = a; i <= b; i += static_cast<std::size_t>(frames.step)) {
     char stem[32];
     std::snprintf(stem, sizeof stem, "/frame-%06ld", numbers[i]);
     const std::string base = dir + stem;

@@ -37,13 +37,20 @@ struct RealSequence {
   double path_length() const;
 };
 
-// The frames numbered first..last inclusive (last < 0: to the end; numbers
-// from the file names, 000600.png / frame-000600.color.jpg, wherever the
-// sequence starts), at most max_frames of them (0: all).
+// Which frames of a sequence to read: those numbered first..last inclusive
+// (last < 0: to the end; numbers from the file names, 000600.png /
+// frame-000600.color.jpg, wherever the sequence starts), every step-th of
+// them from the first (a faster camera over the same scene: the frame rate
+// is divided by step), at most max_frames of them (0: all).
+struct FrameSelection {
+  int first = 0, last = -1;
+  int step = 1;
+  int max_frames = 0;
+};
+
 bool load_kitti_sequence(const std::string& image_dir, const std::string& calib_file,
-                         const std::string& poses_file, int first, int last, int max_frames, RealSequence* out,
+                         const std::string& poses_file, const FrameSelection& frames, RealSequence* out,
                          std::string* error);
-bool load_rgbd_sequence(const std::string& dir, int first, int last, int max_frames, RealSequence* out,
-                        std::string* error);
+bool load_rgbd_sequence(const std::string& dir, const FrameSelection& frames, RealSequence* out, std::string* error);
 
 }  // namespace keepless::eval::vo

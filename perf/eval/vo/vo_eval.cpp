@@ -60,9 +60,8 @@ void log_run(const RealSequence& s, const RunRecord& r, const RealRunResult& x) 
 
 bool evaluate_real_vo(const VoInput& in, const VoEvalOptions& o, std::vector<Comparison>* out, std::string* error) {
   RealSequence seq;
-  const bool loaded = in.rgbd ? load_rgbd_sequence(in.dir, o.first, o.last, o.max_frames, &seq, error)
-                              : load_kitti_sequence(in.dir, in.calib, in.poses, o.first, o.last, o.max_frames, &seq,
-                                                    error);
+  const bool loaded = in.rgbd ? load_rgbd_sequence(in.dir, o.frames, &seq, error)
+                              : load_kitti_sequence(in.dir, in.calib, in.poses, o.frames, &seq, error);
   if (!loaded) return false;
   std::fprintf(stderr, "keepless_eval: %s %s: %zu frames, path %.2f m, %dx%d, fx %.1f\n", in.rgbd ? "rgbd" : "images",
                seq.name.c_str(), seq.image_files.size(), seq.path_length(), seq.camera.width, seq.camera.height,
@@ -158,11 +157,11 @@ bool evaluate_real_vo(const VoInput& in, const VoEvalOptions& o, std::vector<Com
   return true;
 }
 
-bool measure_real_windows(const VoInput& in, int first, int last, std::uint64_t seed, const core::Capacities& replay,
-                          std::string* name, WindowSizes* sizes, std::string* error) {
+bool measure_real_windows(const VoInput& in, const FrameSelection& frames, std::uint64_t seed,
+                          const core::Capacities& replay, std::string* name, WindowSizes* sizes, std::string* error) {
   RealSequence seq;
-  const bool loaded = in.rgbd ? load_rgbd_sequence(in.dir, first, last, 0, &seq, error)
-                              : load_kitti_sequence(in.dir, in.calib, in.poses, first, last, 0, &seq, error);
+  const bool loaded = in.rgbd ? load_rgbd_sequence(in.dir, frames, &seq, error)
+                              : load_kitti_sequence(in.dir, in.calib, in.poses, frames, &seq, error);
   if (!loaded) return false;
   RealVoOptions vo;
   vo.seed = seed;

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "keepless/core/config.hpp"
+#include "real_sequence.hpp"
 #include "real_vo.hpp"
 #include "run_record.hpp"
 #include "window_sizes.hpp"
@@ -22,8 +23,7 @@ struct VoInput {
 };
 
 struct VoEvalOptions {
-  int first = 0, last = -1;                         // --frames A:B, frame numbers, inclusive (last < 0: to the end)
-  int max_frames = 0;                               // > 0: at most this many of them (--quick without --frames)
+  FrameSelection frames;                            // --frames A:B[:S]; max_frames: --quick without --frames
   std::vector<std::uint64_t> seeds;                 // RANSAC order and the random baseline's priorities
   std::vector<std::pair<double, std::int64_t>> ops;  // (kept fraction, NaN for a given M; M)
   // The baselines that run beside keepless (--vo-baselines; empty with --no-baselines).
@@ -54,7 +54,7 @@ struct VoEvalOptions {
 // The original run of one seed with its windows measured (window_sizes.hpp);
 // `name` gets the sequence's name. False with `error` on unreadable input.
 // `replay`: RealVoOptions::replay_capacities.
-[[nodiscard]] bool measure_real_windows(const VoInput& input, int first, int last, std::uint64_t seed,
+[[nodiscard]] bool measure_real_windows(const VoInput& input, const FrameSelection& frames, std::uint64_t seed,
                                         const core::Capacities& replay, std::string* name, WindowSizes* sizes,
                                         std::string* error);
 
