@@ -2,7 +2,7 @@
 # The libFuzzer harnesses of tests/fuzz (clang-14, ASan + UBSan), in their own
 # build dir (build-fuzz/, never the gcc presets).
 #
-#   scripts/fuzz.sh short        # CI: every harness for FUZZ_SECONDS (default 60) s
+#   scripts/fuzz.sh short        # CI: every harness for FUZZ_SECONDS (default 60) s, one per core at a time
 #   scripts/fuzz.sh long [SECS]  # every harness for SECS (default 3600) s; FUZZ_JOBS=N runs N processes each
 #
 # Each run prints libFuzzer's final stats (executions, corpus, peak RSS).
@@ -39,21 +39,34 @@ cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=RelWithDebInfo \
 cmake --build "$build" -j"${FUZZ_BUILD_JOBS:-2}" --target keepless_fuzzers
 mapfile -t harnesses < "$build/tests/fuzz/harnesses.txt"
 
-status=0
-for h in "${harnesses[@]}"; do
-  corpus="$build/tests/fuzz/corpus/$h"
-  findings="$build/findings/$h"
+# One harness per core at a time (FUZZ_PARALLEL; long runs default to one,
+# each with FUZZ_JOBS processes): the same time per harness, a shorter wall.
+if [ "$mode" = short ]; then parallel_harnesses=${FUZZ_PARALLEL:-$(nproc)}; else parallel_harnesses=${FUZZ_PARALLEL:-1}; fi
+fuzz_one() {
+  local h=$1 corpus="$build/tests/fuzz/corpus/$1" findings="$build/findings/$1" parallel=()
   mkdir -p "$corpus" "$findings"
-  echo "fuzz: $h for ${seconds}s"
-  parallel=()
   [ "${FUZZ_JOBS:-1}" -gt 1 ] && parallel=(-jobs="$FUZZ_JOBS" -workers="$FUZZ_JOBS")
-  if ! "$build/tests/$h" -max_total_time="$seconds" -print_final_stats=1 -timeout=10 -rss_limit_mb=2048 \
-       "${parallel[@]}" -artifact_prefix="$findings/" \
-       "$corpus" "$build/tests/fuzz/corpus/${h}_seeds" 2>"$findings/log.txt"; then
-    status=1
-    echo "fuzz: $h FOUND something, see $findings/" >&2
-  fi
-  grep -E "^stat::(number_of_executed_units|peak_rss_mb|new_units_added)|^#[0-9]+ *DONE" "$findings/log.txt" \
-    | sed "s/^/fuzz: $h: /" || true
+  "$build/tests/$h" -max_total_time="$seconds" -print_final_stats=1 -timeout=10 -rss_limit_mb=2048 \
+    "${parallel[@]}" -artifact_prefix="$findings/" \
+    "$corpus" "$build/tests/fuzz/corpus/${h}_seeds" 2>"$findings/log.txt"
+}
+status=0
+for ((first = 0; first < ${#harnesses[@]}; first += parallel_harnesses)); do
+  batch=("${harnesses[@]:first:parallel_harnesses}")
+  pids=()
+  for h in "${batch[@]}"; do
+    echo "fuzz: $h for ${seconds}s"
+    fuzz_one "$h" &
+    pids+=($!)
+  done
+  for i in "${!batch[@]}"; do
+    h=${batch[$i]}
+    if ! wait "${pids[$i]}"; then
+      status=1
+      echo "fuzz: $h FOUND something, see $build/findings/$h/" >&2
+    fi
+    grep -E "^stat::(number_of_executed_units|peak_rss_mb|new_units_added)|^#[0-9]+ *DONE" "$build/findings/$h/log.txt" \
+      | sed "s/^/fuzz: $h: /" || true
+  done
 done
 exit $status

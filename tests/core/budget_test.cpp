@@ -19,6 +19,7 @@
 #include <set>
 #include <vector>
 
+#include "case_count.hpp"
 #include "keepless/core/closed_form.hpp"
 #include "keepless/core/keep_thresholds.hpp"
 #include "keepless/core/network.hpp"
@@ -89,7 +90,7 @@ std::set<PointId> oracle_kept(const Window& w, Params p, std::int64_t m,
 TEST(KeepBudgets, CurveAndThresholdsMatchAnMSweep) {
   Window window(kCaps);
   std::uint64_t sweeps = 0, by_model[3] = {0, 0, 0}, newest = 0, never = 0;
-  for (std::uint64_t seed = 1; seed <= 120 && !HasFailure(); ++seed) {
+  for (std::uint64_t seed = 1; seed <= test::cases(120) && !HasFailure(); ++seed) {
     test::RandomCase c = test::random_case(seed);
     test::random_policies(c, seed);
     ASSERT_TRUE(test::load(window, c.frames)) << "seed " << seed;
@@ -140,16 +141,16 @@ TEST(KeepBudgets, CurveAndThresholdsMatchAnMSweep) {
     ++by_model[static_cast<int>(c.params.cost_model)];
     newest += c.params.scope == Scope::kNewest;
   }
-  EXPECT_GT(sweeps, 500u);
-  for (std::uint64_t n : by_model) EXPECT_GT(n, 30u);
-  EXPECT_GT(newest, 30u);
+  EXPECT_GT(sweeps, test::cases(500));
+  for (std::uint64_t n : by_model) EXPECT_GT(n, test::cases(30));
+  EXPECT_GT(newest, test::cases(30));
   EXPECT_GT(never, 0u);  // theta = 1 cases
 }
 
 TEST(KeepBudgets, BudgetsKeepExactly) {
   Window window(kCaps);
   std::uint64_t exact_sets = 0, floor_bound = 0, limited = 0;
-  for (std::uint64_t seed = 300; seed <= 350 && !HasFailure(); ++seed) {
+  for (std::uint64_t seed = 300; seed <= 300 + test::cases(50) && !HasFailure(); ++seed) {
     test::RandomCase c = test::random_case(seed, 12, 120);
     test::random_policies(c, seed);
     ASSERT_TRUE(test::load(window, c.frames)) << "seed " << seed;
@@ -257,9 +258,9 @@ TEST(KeepBudgets, BudgetsKeepExactly) {
       }
     }
   }
-  EXPECT_GT(exact_sets, 150u);
-  EXPECT_GT(floor_bound, 10u);
-  EXPECT_GT(limited, 100u);
+  EXPECT_GT(exact_sets, test::cases(150));
+  EXPECT_GT(floor_bound, test::cases(10));
+  EXPECT_GT(limited, test::cases(100));
 }
 
 ::testing::AssertionResult same(const Sparsifier& a, const Sparsifier& b) {
@@ -583,7 +584,7 @@ TEST(KeepBudgets, ForgetHistoryStartsAFractionAfresh) {
 TEST(KeepBudgets, TrackShareTakesTheLongestTracksAfterTheOrder) {
   Window window(kCaps);
   std::uint64_t differs = 0;
-  for (std::uint64_t seed = 600; seed <= 630 && !HasFailure(); ++seed) {
+  for (std::uint64_t seed = 600; seed <= 600 + test::cases(30) && !HasFailure(); ++seed) {
     test::RandomCase c = test::random_case(seed, 12, 120);
     test::random_policies(c, seed);
     c.params.coverage_floor = 0;
@@ -638,7 +639,7 @@ TEST(KeepBudgets, TrackShareTakesTheLongestTracksAfterTheOrder) {
     ASSERT_EQ(s.run(window), Status::kOk);
     ASSERT_EQ(s.summary().kept, static_cast<std::uint32_t>(std::floor(0.3 * e + 0.5))) << "seed " << seed;
   }
-  EXPECT_GT(differs, 50u);  // the share changes what is kept, not only in theory
+  EXPECT_GT(differs, test::cases(50));  // the share changes what is kept, not only in theory
 }
 
 TEST(KeepBudgets, InvalidBudgets) {

@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "case_count.hpp"
 #include "keepless/core/closed_form.hpp"
 #include "keepless/core/sparsifier.hpp"
 #include "random_window.hpp"
@@ -33,7 +34,7 @@ TEST(CostTerms, SwitchedOffTermsCostNothingAndTheOptimumStaysCanonical) {
   Window window(kCaps);
   ClosedForm closed(kCaps);
   std::uint32_t nonzero_cs = 0;
-  for (std::uint64_t seed = 1; seed <= 200; ++seed) {
+  for (std::uint64_t seed = 1; seed <= test::cases(200); ++seed) {
     const test::RandomCase c = test::random_case(seed);
     ASSERT_TRUE(test::load(window, c.frames)) << "seed " << seed;
     std::vector<PointDecision> by_mask[8];
@@ -77,7 +78,7 @@ TEST(CostTerms, SwitchedOffTermsCostNothingAndTheOptimumStaysCanonical) {
           << "seed " << seed << " mask " << int(mask);
     }
   }
-  EXPECT_GT(nonzero_cs, 100u);  // the windows exercise c_s
+  EXPECT_GT(nonzero_cs, test::cases(100));  // the windows exercise c_s
 }
 
 TEST(CostTerms, TermNames) {
@@ -97,7 +98,7 @@ TEST(CostTerms, TheSpatialWeightMultipliesCsAndTheOptimumStaysCanonical) {
   Window window(kCaps);
   ClosedForm closed(kCaps);
   std::uint32_t changed = 0;
-  for (std::uint64_t seed = 1; seed <= 100; ++seed) {
+  for (std::uint64_t seed = 1; seed <= test::cases(100); ++seed) {
     const test::RandomCase c = test::random_case(seed);
     ASSERT_TRUE(test::load(window, c.frames)) << "seed " << seed;
     Sparsifier paper(kCaps, c.params);
@@ -119,7 +120,7 @@ TEST(CostTerms, TheSpatialWeightMultipliesCsAndTheOptimumStaysCanonical) {
       changed += !same_verdicts(decisions_of(paper), decisions_of(s));
     }
   }
-  EXPECT_GT(changed, 10u);  // a weight that outranks c_c keeps other points
+  EXPECT_GT(changed, test::cases(10));  // a weight that outranks c_c keeps other points
   for (const std::int32_t bad : {0, -1, kMaxSpatialWeight + 1}) {
     Params p;
     p.spatial_weight = bad;

@@ -17,6 +17,7 @@
 #include <memory>
 #include <vector>
 
+#include "case_count.hpp"
 #include "decision_checks.hpp"
 #include "flow_certificate.hpp"
 #include "keepless/core/costs.hpp"
@@ -137,7 +138,7 @@ TEST(Policies, RandomWindowsMatchReference) {
   Cache cache;
   Window window(kCaps);
   std::uint32_t bound = 0, promoted = 0, scoped = 0, culled = 0, by_model[3] = {0, 0, 0};
-  for (std::uint64_t seed = 1; seed <= 900 && !HasFailure(); ++seed) {
+  for (std::uint64_t seed = 1; seed <= test::cases(900) && !HasFailure(); ++seed) {
     test::RandomCase c = test::random_case(seed);
     test::random_policies(c, seed);
     ASSERT_TRUE(test::load(window, c.frames)) << "seed " << seed;
@@ -162,11 +163,11 @@ TEST(Policies, RandomWindowsMatchReference) {
     ++by_model[static_cast<int>(c.params.cost_model)];
   }
   // The cases the check is for.
-  EXPECT_GT(bound, 200u);
-  EXPECT_GT(promoted, 500u);
-  EXPECT_GT(scoped, 500u);
-  EXPECT_GT(culled, 1000u);
-  for (std::uint32_t n : by_model) EXPECT_GT(n, 250u);
+  EXPECT_GT(bound, test::cases(200));
+  EXPECT_GT(promoted, test::cases(500));
+  EXPECT_GT(scoped, test::cases(500));
+  EXPECT_GT(culled, test::cases(1000));
+  for (std::uint32_t n : by_model) EXPECT_GT(n, test::cases(250));
 }
 
 // A window sliding over a stream: update() on the incremental network (both

@@ -11,6 +11,7 @@
 #include <tuple>
 #include <vector>
 
+#include "case_count.hpp"
 #include "decision_checks.hpp"
 #include "flow_certificate.hpp"
 #include "keepless/core/closed_form.hpp"
@@ -111,7 +112,7 @@ TEST(ReferenceCrossCheck, RandomWindows) {
   Window window(kCaps);
   ClosedForm closed(kCaps);
   std::uint32_t windows = 0, culled = 0, kept = 0, bound = 0;
-  for (std::uint64_t seed = 1; seed <= 1500; ++seed) {
+  for (std::uint64_t seed = 1; seed <= test::cases(1500); ++seed) {
     const test::RandomCase c = test::random_case(seed);
     ASSERT_TRUE(test::load(window, c.frames)) << "seed " << seed;
     // The product's closed-form start, and successive shortest paths from
@@ -144,10 +145,10 @@ TEST(ReferenceCrossCheck, RandomWindows) {
     }
   }
   // The generator must produce the cases the check is for.
-  EXPECT_EQ(windows, 1500u);
-  EXPECT_GT(culled, 1000u);
-  EXPECT_GT(kept, 1000u);
-  EXPECT_GT(bound, 1000u);
+  EXPECT_EQ(windows, test::cases(1500));
+  EXPECT_GT(culled, test::cases(1000));
+  EXPECT_GT(kept, test::cases(1000));
+  EXPECT_GT(bound, test::cases(1000));
 }
 
 // Windows of 24 to 40 keyframes with a few points seen by all of them:

@@ -11,6 +11,7 @@
 #include <limits>
 #include <vector>
 
+#include "case_count.hpp"
 #include "decision_checks.hpp"
 #include "keepless/core/costs.hpp"
 #include "keepless/core/sparsifier.hpp"
@@ -260,7 +261,7 @@ std::uint32_t without_quality(const std::vector<test::RefKeyframe>& frames) {
 TEST(TrackCost, RandomWindowsMatchReference) {
   Window window(kCaps);
   std::uint32_t culled = 0, fallback = 0, tracked = 0;
-  for (std::uint64_t seed = 1; seed <= 300 && !HasFailure(); ++seed) {
+  for (std::uint64_t seed = 1; seed <= test::cases(300) && !HasFailure(); ++seed) {
     test::RandomCase c = test::random_case(seed);
     test::random_policies(c, seed);
     if (seed % 3 == 0) test::random_guard(c, seed);
@@ -279,9 +280,9 @@ TEST(TrackCost, RandomWindowsMatchReference) {
     tracked += ref.tracked;
   }
   // The cases the check is for.
-  EXPECT_GT(culled, 1000u);
-  EXPECT_GT(fallback, 100u);
-  EXPECT_GT(tracked, 20u);
+  EXPECT_GT(culled, test::cases(1000));
+  EXPECT_GT(fallback, test::cases(100));
+  EXPECT_GT(tracked, test::cases(20));
 }
 
 TEST(TrackCost, UpdateMatchesRunAndReference) {

@@ -13,6 +13,7 @@
 #include <tuple>
 #include <vector>
 
+#include "case_count.hpp"
 #include "decision_checks.hpp"
 #include "keepless/core/sparsifier.hpp"
 #include "random_window.hpp"
@@ -90,7 +91,7 @@ TEST(TrackingGuard, RandomWindowsMatchReference) {
       cache;
   Window window(kCaps);
   std::uint32_t guarded = 0, tracked = 0, culled = 0, promoted = 0, scoped = 0, newest_guarded = 0;
-  for (std::uint64_t seed = 1; seed <= 300 && !HasFailure(); ++seed) {
+  for (std::uint64_t seed = 1; seed <= test::cases(300) && !HasFailure(); ++seed) {
     test::RandomCase c = test::random_case(seed);
     test::random_policies(c, seed);
     test::random_guard(c, seed);
@@ -119,12 +120,12 @@ TEST(TrackingGuard, RandomWindowsMatchReference) {
     for (const auto& p : ref.points) culled += p.verdict == Verdict::kCull;
   }
   // The cases the check is for.
-  EXPECT_GT(guarded, 500u);
-  EXPECT_GT(tracked, 100u);
-  EXPECT_GT(culled, 250u);
-  EXPECT_GT(promoted, 50u);
-  EXPECT_GT(scoped, 100u);
-  EXPECT_GT(newest_guarded, 100u);
+  EXPECT_GT(guarded, test::cases(500));
+  EXPECT_GT(tracked, test::cases(100));
+  EXPECT_GT(culled, test::cases(250));
+  EXPECT_GT(promoted, test::cases(50));
+  EXPECT_GT(scoped, test::cases(100));
+  EXPECT_GT(newest_guarded, test::cases(100));
 }
 
 // update() on the incremental network (both starts) decides what run() does
