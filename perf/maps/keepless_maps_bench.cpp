@@ -4,7 +4,7 @@
 //   keepless_maps_bench [--data DIR] [--colmap BIN] [--M 30,100,200 | --keep-fraction 0.1,0.3] [--K 20]
 //                       [--seeds 5] [--work DIR] [--cost paper|authors|information|track] [--theta 0.5]
 //                       [--model DIR --poses FILE] [--ba-iterations 100] [--exact-floor 30] [--tie-seeds 0]
-//                       [--track-share 0.5,1]
+//                       [--track-share 0.5,1] [--against-filter 1.1]
 //
 // On the shared fixture (DIR/colmap_kitti06_first51, 51 KITTI 06 images; or
 // --model, a COLMAP model of KITTI frames, with their --poses):
@@ -19,7 +19,10 @@
 // (rows *_exact); with --tie-seeds N, those two rules again over N
 // relabellings of the points, whose ids decide their ties (rows
 // *_exact_ties, mean±sd); with --track-share, keepless_exact with part of
-// the count by track length (rows keepless_exact_share<S>, and their ties).
+// the count by track length (rows keepless_exact_share<S>, and their ties);
+// with --against-filter R, only the exact rows, at the count of the filter
+// run nearest F x the model's points (so every row keeps the same number)
+// and with the floor R x that run's poorest image's observations.
 // Each sparsified model is bundle-adjusted the same
 // way. Printed per row: points kept, min observations per image, BA time
 // and termination, camera-centre deviation from the full solution (max and
@@ -84,6 +87,7 @@ struct Options {
   std::uint32_t exact_floor = sp::kDefaultFloor;   // observations per image the exact rows keep at least
   int tie_seeds = 0;                               // relabellings for the *_exact_ties rows
   std::vector<double> track_shares;                // --track-share: keepless_exact_share<S> rows
+  double against_filter = 0;                       // --against-filter R: the filter's count, floor R x its minimum
   std::string cpus;                                // --cpus: pin this process and its colmap children
 };
 
@@ -406,6 +410,11 @@ int main(int argc, char** argv) {
       {"--track-share", "LIST", "also keepless_exact with these track shares S in [0, 1] (S of the count\n"
                                 "by track length, as keepless_sparsify --track-share; rows\n"
                                 "keepless_exact_share<S>, and their ties with --tie-seeds)"},
+      {"--against-filter", "R", "only the comparison at COLMAP's filter's own count: per F, the exact rows\n"
+                                "keep exactly the points of the filter run nearest F x the model's points,\n"
+                                "with the floor ceil(R x that run's poorest image's observations) instead of\n"
+                                "--exact-floor (R >= 1: above the filter's minimum); no replay, whole or\n"
+                                "random rows, and keepless_exact only without --track-share"},
   };
   const std::string help =
       cli::usage("usage: keepless_maps_bench [options]", flags,
@@ -454,7 +463,11 @@ int main(int argc, char** argv) {
     else if (f == "--ba-iterations") opt.ba_iterations = count(1, 100000);
     else if (f == "--exact-floor") opt.exact_floor = static_cast<std::uint32_t>(count(0, 1000000));
     else if (f == "--tie-seeds") opt.tie_seeds = static_cast<int>(count(0, 1000));
-    else if (f == "--theta") {
+    else if (f == "--against-filter") {
+      if (!core::parse_finite_double(value, &opt.against_filter) || !(opt.against_filter >= 1 && opt.against_filter <= 100)) {
+        return cli::usage_error(kTool, std::string("bad value for --against-filter: '") + value + "' (a number in [1, 100])");
+      }
+    } else if (f == "--theta") {
       if (!core::parse_finite_double(value, &opt.theta) || !(opt.theta >= 0 && opt.theta <= 1)) {
         return cli::usage_error(kTool, std::string("bad value for --theta: '") + value + "' (a number in [0, 1])");
       }
@@ -464,15 +477,18 @@ int main(int argc, char** argv) {
       }
     }
   }
+  if (opt.model.empty() != opt.poses.empty()) {
+    return cli::usage_error(kTool, "--model and --poses go together");
+  }
+  if (opt.against_filter > 0 && opt.fractions.empty()) {
+    return cli::usage_error(kTool, "--against-filter needs --keep-fraction");
+  }
   if (opt.work.empty()) {
     char tmpl[] = "/tmp/keepless_maps_bench_XXXXXX";
     if (::mkdtemp(tmpl) == nullptr) die("mkdtemp failed");
     opt.work = tmpl;
   } else if (::mkdir(opt.work.c_str(), 0777) != 0 && errno != EEXIST) {
     die("cannot create --work " + opt.work + ": " + std::strerror(errno));
-  }
-  if (opt.model.empty() != opt.poses.empty()) {
-    return cli::usage_error(kTool, "--model and --poses go together");
   }
   const std::string fixture = opt.data + "/colmap_kitti06_first51";
   const std::string model = opt.model.empty() ? fixture + "/sparse" : opt.model;
@@ -587,46 +603,66 @@ int main(int argc, char** argv) {
   for (const auto& [M, F] : ops) {
     fraction = F;
     if (std::isfinite(F)) std::printf("keep fraction %.2f (a keep budget per window; M unused)\n", F);
-    const Row replay = b.score("keepless_replay", M, b.keepless_culls(sp::Mode::kReplay, M, F, as_read));
-    add_row(replay);
-    add_row(b.score("keepless_whole", M, b.keepless_culls(sp::Mode::kWhole, M, F, as_read)));
-    const std::uint64_t n = replay.points;
-    add_row(b.score("longest_track", M, b.keep_first(as_read.longest, n)));
-    std::vector<Row> runs;
-    for (int seed = 1; seed <= opt.seeds; ++seed) {
-      std::vector<std::size_t> order(b.original.points.size());
-      std::iota(order.begin(), order.end(), 0);
-      std::mt19937_64 rng(static_cast<std::uint64_t>(seed));
-      std::shuffle(order.begin(), order.end(), rng);
-      runs.push_back(b.score("random_seed" + std::to_string(seed), M, b.keep_first(order, n)));
-    }
-    add_seeds("random", M, n, runs);
-    // COLMAP's own filter, at the track length whose count is nearest.
-    const auto filter_row = [&](std::uint64_t target, const std::string& suffix) {
+    // COLMAP's own filter: the run whose count is nearest `target`, read into
+    // *filtered; its track length.
+    const auto nearest_filter = [&](std::uint64_t target, io::ColmapModel* filtered) {
       int best = 2;
       for (const auto& [t, count] : filter_count) {
         const auto gap = [&](std::uint64_t c) { return c > target ? c - target : target - c; };
         if (gap(count) < gap(filter_count[best])) best = t;
       }
+      if (!io::read_colmap_model(opt.work + "/filter" + std::to_string(best), filtered, &format, &error)) die(error);
+      return best;
+    };
+    const auto filter_row = [&](std::uint64_t target, const std::string& suffix) {
       io::ColmapModel filtered;
-      if (!io::read_colmap_model(opt.work + "/filter" + std::to_string(best), &filtered, &format, &error)) die(error);
+      const int best = nearest_filter(target, &filtered);
       std::vector<bool> culled(b.original.points.size(), true);
       std::map<std::uint64_t, bool> in;
       for (const auto& p : filtered.points) in[p.id] = true;
       for (std::size_t i = 0; i < culled.size(); ++i) culled[i] = in.count(b.original.points[i].id) == 0;
       add_row(b.score("colmap_filter_len" + std::to_string(best) + suffix, M, culled));
     };
-    filter_row(n, "");
-    // The whole model at exactly K points (K = F x the model's points, or
-    // replay's count under --M) with every image's floor, against
-    // longest-track-first at K and COLMAP's filter nearest K.
-    const std::uint64_t exact =
-        std::isfinite(F) ? static_cast<std::uint64_t>(std::floor(F * b.original.points.size() + 0.5)) : n;
-    add_row(b.score("keepless_exact", M, b.exact_culls(exact, as_read)));
+    // The whole model at exactly K points with every image's floor, against
+    // longest-track-first at K and COLMAP's filter nearest K: K = F x the
+    // model's points (or replay's count under --M), or under --against-filter
+    // the count of the filter run nearest that, so all three keep the same.
+    const std::uint64_t target =
+        std::isfinite(F) ? static_cast<std::uint64_t>(std::floor(F * b.original.points.size() + 0.5)) : 0;
+    std::uint64_t exact = target;
+    if (opt.against_filter > 0) {
+      io::ColmapModel filtered;
+      const int t = nearest_filter(target, &filtered);
+      exact = filtered.points.size();
+      opt.exact_floor = static_cast<std::uint32_t>(std::ceil(opt.against_filter * min_observations(filtered)));
+      std::printf("against the filter: --min_track_len %d keeps %" PRIu64 " points (F x points %" PRIu64
+                  "), its poorest image %u observations; exact rows at %" PRIu64 " points, floor %u\n",
+                  t, exact, target, min_observations(filtered), exact, opt.exact_floor);
+    } else {
+      const Row replay = b.score("keepless_replay", M, b.keepless_culls(sp::Mode::kReplay, M, F, as_read));
+      add_row(replay);
+      add_row(b.score("keepless_whole", M, b.keepless_culls(sp::Mode::kWhole, M, F, as_read)));
+      const std::uint64_t n = replay.points;
+      add_row(b.score("longest_track", M, b.keep_first(as_read.longest, n)));
+      std::vector<Row> runs;
+      for (int seed = 1; seed <= opt.seeds; ++seed) {
+        std::vector<std::size_t> order(b.original.points.size());
+        std::iota(order.begin(), order.end(), 0);
+        std::mt19937_64 rng(static_cast<std::uint64_t>(seed));
+        std::shuffle(order.begin(), order.end(), rng);
+        runs.push_back(b.score("random_seed" + std::to_string(seed), M, b.keep_first(order, n)));
+      }
+      add_seeds("random", M, n, runs);
+      filter_row(n, "");
+      if (!std::isfinite(F)) exact = n;
+    }
+    if (opt.against_filter == 0 || opt.track_shares.empty()) {
+      add_row(b.score("keepless_exact", M, b.exact_culls(exact, as_read)));
+    }
     add_row(b.score("longest_track_exact", M, b.keep_first(as_read.longest, exact)));
     filter_row(exact, "_exact");
     // The same two rules over relabellings: how far their ties move them.
-    if (!relabelled.empty()) {
+    if (!relabelled.empty() && opt.against_filter == 0) {
       std::vector<Row> keepless_runs, longest_runs;
       for (std::size_t k = 0; k < relabelled.size(); ++k) {
         const std::string seed = "_ties" + std::to_string(k + 1);
@@ -654,6 +690,7 @@ int main(int argc, char** argv) {
           ",\"track_shares\":[" + join(opt.track_shares) + "]" +
           ",\"not_converged\":" + std::to_string(not_converged) +
           ",\"floor\":" + std::to_string(sp::kDefaultFloor) + ",\"exact_floor\":" + std::to_string(opt.exact_floor) +
+          ",\"against_filter\":" + std::to_string(opt.against_filter) +
           ",\"cost\":\"" + core::to_string(opt.cost) + "\",\"theta\":" + std::to_string(opt.theta) +
           ",\"ba_iterations\":" + std::to_string(opt.ba_iterations) + ",\"model\":\"" + json_escaped(model) +
           "\",\"cpus\":\"" + cpus + "\"}";

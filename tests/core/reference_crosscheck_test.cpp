@@ -19,10 +19,8 @@
 #include "random_window.hpp"
 #include "reference_sparsifier.hpp"
 
-#ifdef KEEPLESS_HAVE_LEMON
 #include <lemon/list_graph.h>
 #include <lemon/network_simplex.h>
-#endif
 
 namespace keepless::core {
 namespace {
@@ -68,7 +66,6 @@ const Capacities kCaps{16, 2048, 8192, 32768};
   return ::testing::AssertionSuccess();
 }
 
-#ifdef KEEPLESS_HAVE_LEMON
 // Min-cost flow of the solver's value by LEMON's network simplex.
 std::int64_t lemon_cost(const solver::MinCostFlow& s, solver::NodeId source, solver::NodeId sink) {
   using Graph = lemon::ListDigraph;
@@ -88,7 +85,6 @@ std::int64_t lemon_cost(const solver::MinCostFlow& s, solver::NodeId source, sol
   if (ns.run() != lemon::NetworkSimplex<Graph, std::int64_t, std::int64_t>::OPTIMAL) return -1;
   return ns.totalCost<std::int64_t>();
 }
-#endif
 
 // Params are fixed per Sparsifier; building one per window would dominate the
 // test's run time, so one is kept per distinct Params.
@@ -130,13 +126,11 @@ TEST(ReferenceCrossCheck, RandomWindows) {
       ASSERT_TRUE(test::flow_certificate(s.solver(), s.network().source(), s.network().sink()))
           << "seed " << seed;
     }
-#ifdef KEEPLESS_HAVE_LEMON
     if (seed % 25 == 0) {
       ASSERT_EQ(lemon_cost(s.solver(), s.network().source(), s.network().sink()),
                 s.summary().total_cost)
           << "seed " << seed;
     }
-#endif
     ++windows;
     culled += s.summary().culled;
     kept += s.summary().kept;
