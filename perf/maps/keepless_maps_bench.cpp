@@ -327,9 +327,9 @@ struct Bench {
     return culls_of(r.decisions, l);
   }
 
-  // The whole model at exactly `count` points with every image's floor
+  // The whole model at exactly `count` points with every image's `floor`
   // (sparsify::keep_exactly on one budgeted whole-model decision).
-  std::vector<bool> exact_culls(std::uint64_t count, const Labelled& l, double track_share = 0.0) {
+  std::vector<bool> exact_culls(std::uint64_t count, std::uint32_t floor, const Labelled& l, double track_share = 0.0) {
     core::Params params;
     params.budget = {core::BudgetKind::kPoints, count, 0.0};
     params.cost_model = opt.cost;
@@ -339,7 +339,7 @@ struct Bench {
     sp::ModeResult r;
     if (sp::decide(l.kfs.file, sp::Mode::kWhole, params, opt.K, &r) != core::Status::kOk) die("decide failed");
     const sp::ExactCount e =
-        sp::keep_exactly(l.images, opt.exact_floor, count, r.thresholds, &r.decisions, track_share);
+        sp::keep_exactly(l.images, floor, count, r.thresholds, &r.decisions, track_share);
     std::printf("exact whole: %llu kept (%llu by the order, %u by the floor)%s\n",
                 static_cast<unsigned long long>(e.kept), static_cast<unsigned long long>(e.from_order), e.restored,
                 e.floor_fits ? "" : ": the floor alone keeps more");
@@ -630,14 +630,16 @@ int main(int argc, char** argv) {
     const std::uint64_t target =
         std::isfinite(F) ? static_cast<std::uint64_t>(std::floor(F * b.original.points.size() + 0.5)) : 0;
     std::uint64_t exact = target;
+    std::uint32_t exact_floor = opt.exact_floor;
     if (opt.against_filter > 0) {
       io::ColmapModel filtered;
       const int t = nearest_filter(target, &filtered);
+      const std::uint32_t poorest = min_observations(filtered);
       exact = filtered.points.size();
-      opt.exact_floor = static_cast<std::uint32_t>(std::ceil(opt.against_filter * min_observations(filtered)));
+      exact_floor = static_cast<std::uint32_t>(std::ceil(opt.against_filter * poorest));
       std::printf("against the filter: --min_track_len %d keeps %" PRIu64 " points (F x points %" PRIu64
                   "), its poorest image %u observations; exact rows at %" PRIu64 " points, floor %u\n",
-                  t, exact, target, min_observations(filtered), exact, opt.exact_floor);
+                  t, exact, target, poorest, exact, exact_floor);
     } else {
       const Row replay = b.score("keepless_replay", M, b.keepless_culls(sp::Mode::kReplay, M, F, as_read));
       add_row(replay);
@@ -657,7 +659,7 @@ int main(int argc, char** argv) {
       if (!std::isfinite(F)) exact = n;
     }
     if (opt.against_filter == 0 || opt.track_shares.empty()) {
-      add_row(b.score("keepless_exact", M, b.exact_culls(exact, as_read)));
+      add_row(b.score("keepless_exact", M, b.exact_culls(exact, exact_floor, as_read)));
     }
     add_row(b.score("longest_track_exact", M, b.keep_first(as_read.longest, exact)));
     filter_row(exact, "_exact");
@@ -666,7 +668,7 @@ int main(int argc, char** argv) {
       std::vector<Row> keepless_runs, longest_runs;
       for (std::size_t k = 0; k < relabelled.size(); ++k) {
         const std::string seed = "_ties" + std::to_string(k + 1);
-        keepless_runs.push_back(b.score("keepless_exact" + seed, M, b.exact_culls(exact, relabelled[k])));
+        keepless_runs.push_back(b.score("keepless_exact" + seed, M, b.exact_culls(exact, exact_floor, relabelled[k])));
         longest_runs.push_back(b.score("longest_track_exact" + seed, M, b.keep_first(relabelled[k].longest, exact)));
       }
       add_seeds("keepless_exact_ties", M, exact, keepless_runs);
@@ -676,11 +678,11 @@ int main(int argc, char** argv) {
     for (const double S : opt.track_shares) {
       char name[48];
       std::snprintf(name, sizeof name, "keepless_exact_share%g", S);
-      add_row(b.score(name, M, b.exact_culls(exact, as_read, S)));
+      add_row(b.score(name, M, b.exact_culls(exact, exact_floor, as_read, S)));
       std::vector<Row> runs;
       for (std::size_t k = 0; k < relabelled.size(); ++k) {
         runs.push_back(b.score(name + std::string("_ties") + std::to_string(k + 1), M,
-                               b.exact_culls(exact, relabelled[k], S)));
+                               b.exact_culls(exact, exact_floor, relabelled[k], S)));
       }
       if (!runs.empty()) add_seeds(name + std::string("_ties"), M, exact, runs);
     }
