@@ -22,7 +22,7 @@ void apply_use(Use use, Params* params) {
       params->maturity_keyframes = 2;
       break;
     case Use::kMonocularDeferred: params->defer_keyframes = 2; break;
-    case Use::kOffline: params->budget.track_share = 0.5; break;
+    case Use::kOffline: params->budget.track_share = 1.0; break;
     case Use::kPaper: break;
   }
 }

@@ -99,7 +99,7 @@ if(DEFINED KEEP)
   # The uses (keepless_node's --use) with that fraction: the fields each sets,
   # checked like the rest; monocular and offline decide otherwise than the
   # plain fraction, monocular-deferred alike (its deferral is the node's).
-  foreach(use_expect "monocular;newest;2;0;0.5;0.3" "offline;window;0;0;0.5;0" "monocular-deferred;window;0;2;0;0")
+  foreach(use_expect "monocular;newest;2;0;0.5;0.3" "offline;window;0;0;1;0" "monocular-deferred;window;0;2;0;0")
     list(GET use_expect 0 use)
     run_latency(use_json --use ${use} --keep-fraction ${KEEP})
     set(i 0)

@@ -69,7 +69,7 @@ const std::vector<keepless::cli::Flag> kFlags = {
                       "(they refine it): paper (the default), monocular (--scope newest\n"
                       "--maturity 2, and --track-share 0.5 where the budget keeps >= 0.3 of\n"
                       "the points), rgbd (--scope newest --maturity 2), monocular-deferred\n"
-                      "(the paper's here), offline (--mode whole --track-share 0.5; needs\n"
+                      "(the paper's here), offline (--mode whole --track-share 1; needs\n"
                       "--keep-points or --keep-fraction)"},
     {"--mode", "replay|whole", "replay: the onboard node's sliding window; whole: one window\n"
                                "(default: replay for maps, whole for --window)"},
@@ -88,8 +88,9 @@ const std::vector<keepless::cli::Flag> kFlags = {
                              "windows (F of those new to each window, plus those kept before)"},
     {"--keep-observations", "B", "instead of --M: keep points while their observations sum to <= B"},
     {"--track-share", "S", "with --keep-points or --keep-fraction: take the share S in [0, 1] of the\n"
-                           "count by track length (most keyframes of the window first) instead of\n"
-                           "the network's order (default 0), at every budget"},
+                           "count by track length (replay: most keyframes of the window first;\n"
+                           "whole: most observations, COLMAP's track length) instead of the\n"
+                           "network's order (default 0), at every budget"},
     {"--theta", "X", "keep iff flow > X * n(n-1)/2, in [0, 1] (default 0.5)"},
     {"--box", "WxH", "spatial-diversity box in pixels (default 64x48)"},
     {"--scope", "window|newest", "decide every point, or only the newest keyframe's (default window)"},
@@ -281,7 +282,7 @@ int parse_args(int argc, char** argv, Options* opt, bool* help, bool* version) {
   if (track_share > 0.0 && track_share_from == 0.0 && opt->params.budget.kind != core::BudgetKind::kPoints &&
       opt->params.budget.kind != core::BudgetKind::kFraction) {
     return usage_error(std::string("--track-share needs --keep-points or --keep-fraction: it is a share of their count") +
-                       (use == core::Use::kOffline ? " (--use offline sets it to 0.5)" : ""));
+                       (use == core::Use::kOffline ? " (--use offline sets it to 1)" : ""));
   }
   opt->params.budget.track_share = track_share;
   opt->params.budget.track_share_from = track_share_from;

@@ -72,7 +72,7 @@ std::string node_usage() {
          "                            default), monocular (--scope newest --maturity 2, and --track-share 0.5\n"
          "                            where the budget keeps >= 0.3 of the points), monocular-deferred\n"
          "                            (--defer 2), rgbd (--scope newest --maturity 2), offline\n"
-         "                            (--track-share 0.5)\n"
+         "                            (--track-share 1)\n"
          "  --max-points N            distinct points the window holds (default 6600; 0: K*N)\n"
          "  --max-window-observations N  observations the window holds (default 19100; 0: K*N)\n"
          "  --max-pair-arcs N         point -> pair arcs of the window's network, sum of n(n-1)/2 over its points\n"
@@ -414,7 +414,7 @@ ParseResult parse_node_arguments(int argc, const char* const* argv, NodeConfig& 
   if (track_share > 0 && track_share_from == 0 && config.params.budget.kind != core::BudgetKind::kPoints &&
       config.params.budget.kind != core::BudgetKind::kFraction) {
     error = "--track-share needs --keep-points or --keep-fraction: it is a share of their count";
-    if (share_from_use) error += " (--use offline sets it to 0.5)";
+    if (share_from_use) error += " (--use offline sets it to 1)";
     return ParseResult::kError;
   }
   config.params.budget.track_share = track_share;

@@ -62,7 +62,7 @@ TEST(Use, SetsThePolicyAndLeavesTheRest) {
       EXPECT_EQ(p.scope, guarded ? Scope::kNewest : Scope::kWindow);
       EXPECT_EQ(p.maturity_keyframes, guarded ? 2u : 0u);
       EXPECT_EQ(p.defer_keyframes, u == Use::kMonocularDeferred ? 2u : 0u);
-      EXPECT_EQ(p.budget.track_share, u == Use::kOffline || u == Use::kMonocular ? 0.5 : 0.0);
+      EXPECT_EQ(p.budget.track_share, u == Use::kOffline ? 1.0 : u == Use::kMonocular ? 0.5 : 0.0);
       EXPECT_EQ(p.budget.track_share_from, u == Use::kMonocular ? 0.3 : 0.0);
     }
   }
@@ -165,7 +165,7 @@ TEST(Use, MonocularTakesHalfByTrackLengthFromAKeptFractionOf03) {
 }
 
 // Offline: a share of a count, so it needs one; with one it keeps exactly
-// the count the paper's order keeps, half of it by track length.
+// the count the paper's order keeps, all of it by track length.
 TEST(Use, OfflineNeedsACountAndKeepsItsSize) {
   Params none;
   apply_use(Use::kOffline, &none);

@@ -406,15 +406,15 @@ TEST(NodeConfig, ParsesTheUses) {
   NodeConfig both;
   ASSERT_EQ(parse({"--use", "offline", "--profile", "small", "--keep-points", "300"}, both, error),
             ParseResult::kOk) << error;
-  EXPECT_EQ(both.params.budget.track_share, 0.5);
+  EXPECT_EQ(both.params.budget.track_share, 1.0);
   EXPECT_EQ(both.window, 10u);
   NodeConfig share;
-  ASSERT_EQ(parse({"--track-share", "1", "--use", "offline", "--keep-points", "300"}, share, error), ParseResult::kOk);
-  EXPECT_EQ(share.params.budget.track_share, 1.0);
+  ASSERT_EQ(parse({"--track-share", "0.5", "--use", "offline", "--keep-points", "300"}, share, error), ParseResult::kOk);
+  EXPECT_EQ(share.params.budget.track_share, 0.5);
   // Offline's share is of a count.
   NodeConfig no_count;
   ASSERT_EQ(parse({"--use", "offline"}, no_count, error), ParseResult::kError);
-  EXPECT_NE(error.find("--use offline sets it to 0.5"), std::string::npos) << error;
+  EXPECT_NE(error.find("--use offline sets it to 1"), std::string::npos) << error;
   for (const std::vector<std::string>& bad :
        {std::vector<std::string>{"--use", "mono"}, {"--use"}, {"--use="}, {"--use", ""}}) {
     NodeConfig d;

@@ -375,14 +375,23 @@ TEST(ExactCount, KeepsExactlyTheCountWithEveryImagesFloor) {
     }
     EXPECT_GT(e.from_order, 0u);
   }
-  // A track share: the same points as the library's budget with that share
-  // (the floor restores nothing at this count).
+  // A track share ranks by observations. With an image's repeated
+  // observations of a point dropped, as the window drops them, it keeps the
+  // library's budget with that share (the floor restores nothing at this
+  // count); with them, at share 1 no culled point has more observations
+  // than a kept one, and the fixture's repeats change the set.
+  std::vector<std::vector<core::PointId>> distinct = images;
+  for (std::vector<core::PointId>& image : distinct) {
+    std::sort(image.begin(), image.end());
+    image.erase(std::unique(image.begin(), image.end()), image.end());
+  }
   for (const double share : {0.5, 1.0}) {
     core::Params p = params_for(f.model, core::CostModel::kPaper);
     p.budget = {core::BudgetKind::kPoints, 2000, 0.0};
-    sparsify::ModeResult r;
-    ASSERT_EQ(sparsify::decide(k.file, sparsify::Mode::kWhole, p, 20, &r), core::Status::kOk);
-    const sparsify::ExactCount e = sparsify::keep_exactly(images, kFloor, 2000, r.thresholds, &r.decisions, share);
+    sparsify::ModeResult decided;
+    ASSERT_EQ(sparsify::decide(k.file, sparsify::Mode::kWhole, p, 20, &decided), core::Status::kOk);
+    sparsify::ModeResult r = decided;
+    const sparsify::ExactCount e = sparsify::keep_exactly(distinct, kFloor, 2000, r.thresholds, &r.decisions, share);
     EXPECT_EQ(e.kept, 2000u);
     EXPECT_EQ(e.restored, 0u);
     p.budget.track_share = share;
@@ -392,6 +401,22 @@ TEST(ExactCount, KeepsExactlyTheCountWithEveryImagesFloor) {
     for (std::size_t i = 0; i < r.decisions.size(); ++i) {
       ASSERT_EQ(r.decisions[i].verdict, library.decisions[i].verdict) << "point " << r.decisions[i].point << ", share " << share;
     }
+    if (share < 1.0) continue;
+    sparsify::ModeResult repeats = decided;
+    EXPECT_EQ(sparsify::keep_exactly(images, 0, 2000, repeats.thresholds, &repeats.decisions, share).kept, 2000u);
+    std::unordered_map<core::PointId, std::uint32_t> observations;
+    for (const std::vector<core::PointId>& image : images) {
+      for (const core::PointId id : image) ++observations[id];
+    }
+    std::uint32_t fewest_kept = UINT32_MAX, most_culled = 0, changed = 0;
+    for (std::size_t i = 0; i < repeats.decisions.size(); ++i) {
+      const core::PointDecision& d = repeats.decisions[i];
+      if (d.verdict == core::Verdict::kKeep) fewest_kept = std::min(fewest_kept, observations[d.point]);
+      if (d.verdict == core::Verdict::kCull) most_culled = std::max(most_culled, observations[d.point]);
+      changed += d.verdict != r.decisions[i].verdict;
+    }
+    EXPECT_GE(fewest_kept, most_culled);
+    EXPECT_GT(changed, 0u);
   }
   // A count below what the floor needs: the floor's set, said so.
   core::Params p = params_for(f.model, core::CostModel::kTrack);

@@ -235,18 +235,18 @@ TEST_F(SparsifyMaps, AWholeCountKeepsItsFloorWithinTheCount) {
   EXPECT_NE(tight.err.find("alone needs more than the count of 60 points"), std::string::npos) << tight.err;
 }
 
-// --use offline is --mode whole --track-share 0.5: the same decisions and
+// --use offline is --mode whole --track-share 1: the same decisions and
 // model; its share needs a count, and the other flags refine it.
-TEST_F(SparsifyMaps, UseOfflineIsTheWholeModeWithHalfByTrackLength) {
+TEST_F(SparsifyMaps, UseOfflineIsTheWholeModeByTrackLength) {
   const maps_test::Result use = sparsify({"--colmap", fixture("sparse"), "--use", "offline", "--keep-points", "710",
                                           "--out", path("use"), "--decisions", path("use.d")});
   ASSERT_EQ(use.status, 0) << use.err;
-  const maps_test::Result flags = sparsify({"--colmap", fixture("sparse"), "--mode", "whole", "--track-share", "0.5",
+  const maps_test::Result flags = sparsify({"--colmap", fixture("sparse"), "--mode", "whole", "--track-share", "1",
                                             "--keep-points", "710", "--out", path("flags"), "--decisions", path("flags.d")});
   ASSERT_EQ(flags.status, 0) << flags.err;
   const std::string json = last_line(use.out);
   EXPECT_NE(json.find("\"mode\":\"whole\""), std::string::npos) << json;
-  EXPECT_NE(json.find("\"track_share\":0.5,"), std::string::npos) << json;
+  EXPECT_NE(json.find("\"track_share\":1,"), std::string::npos) << json;
   EXPECT_NE(json.find("\"budget\":\"points\",\"budget_value\":710}"), std::string::npos) << json;
   EXPECT_EQ(json_number(json, "points_kept"), 710);
   EXPECT_EQ(maps_test::read_all(path("use.d")), maps_test::read_all(path("flags.d")));
@@ -261,14 +261,15 @@ TEST_F(SparsifyMaps, UseOfflineIsTheWholeModeWithHalfByTrackLength) {
       << last_line(replay.out);
   const maps_test::Result no_count = sparsify({"--colmap", fixture("sparse"), "--use", "offline"});
   EXPECT_EQ(no_count.status, 2);
-  EXPECT_NE(no_count.err.find("--use offline sets it to 0.5"), std::string::npos) << no_count.err;
+  EXPECT_NE(no_count.err.find("--use offline sets it to 1"), std::string::npos) << no_count.err;
   const maps_test::Result unknown = sparsify({"--colmap", fixture("sparse"), "--use", "colmap"});
   EXPECT_EQ(unknown.status, 2);
   EXPECT_NE(unknown.err.find("bad value for --use: 'colmap'"), std::string::npos) << unknown.err;
 }
 
-// --track-share 1: the whole model's count taken entirely by track length,
-// so no culled point is seen by more images than a kept one.
+// --track-share 1: the whole model's count taken entirely by track length
+// (COLMAP's: every observation), so no culled point has a longer track than
+// a kept one.
 TEST_F(SparsifyMaps, AWholeTrackShareKeepsTheLongestTracks) {
   const std::string out = path("share1");
   const maps_test::Result r = sparsify({"--colmap", fixture("sparse"), "--mode", "whole", "--keep-points", "1420",
@@ -282,19 +283,14 @@ TEST_F(SparsifyMaps, AWholeTrackShareKeepsTheLongestTracks) {
   ASSERT_TRUE(io::read_colmap_model(fixture("sparse"), &original, &format, &error)) << error;
   ASSERT_TRUE(io::read_colmap_model(out, &kept, &format, &error)) << error;
   ASSERT_EQ(kept.points.size(), 1420u);
-  const auto images_of = [](const io::ColmapPoint3D& p) {
-    std::set<std::uint32_t> images;
-    for (const io::ColmapTrackElement& e : p.track) images.insert(e.image_id);
-    return images.size();
-  };
   std::set<std::uint64_t> kept_ids;
   std::size_t shortest_kept = SIZE_MAX, longest_culled = 0;
   for (const io::ColmapPoint3D& p : kept.points) {
     kept_ids.insert(p.id);
-    shortest_kept = std::min(shortest_kept, images_of(p));
+    shortest_kept = std::min(shortest_kept, p.track.size());
   }
   for (const io::ColmapPoint3D& p : original.points) {
-    if (kept_ids.count(p.id) == 0) longest_culled = std::max(longest_culled, images_of(p));
+    if (kept_ids.count(p.id) == 0) longest_culled = std::max(longest_culled, p.track.size());
   }
   EXPECT_GE(shortest_kept, longest_culled);
   EXPECT_GT(shortest_kept, 2u);  // the fixture's long tracks, not a degenerate cut

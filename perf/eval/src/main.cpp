@@ -88,7 +88,7 @@ const std::vector<cli::Flag> kFlags = {
                       "--keyframe-culling count-culled, and --track-share 0.5 from a kept\n"
                       "fraction of 0.3), monocular-deferred (--defer 2 --defer-refine --decide\n"
                       "window --keyframe-culling count-culled), rgbd (as monocular without\n"
-                      "the share), offline (--track-share 0.5), paper (the defaults)"},
+                      "the share), offline (--track-share 1), paper (the defaults)"},
     {"--scope", "window|newest", "keepless's decision scope (core::Params scope)"},
     {"--floor", "L", "keepless's coverage floor (core::Params coverage_floor)"},
     {"--theta", "T", "keepless's keep threshold theta_f in [0, 1] (core::Params theta; default 0.5)"},

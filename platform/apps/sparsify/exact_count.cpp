@@ -25,16 +25,16 @@ ExactCount keep_exactly(const std::vector<std::vector<core::PointId>>& images, s
   });
   if (track_share > 0.0) {
     std::vector<std::uint32_t> views(d.size()), ranked(order.begin(), order.end()), scratch(order.size());
+    // COLMAP's track length: every observation, an image seeing a point twice
+    // counting twice (by distinct images, the window's n, the fixture's
+    // deviation at 0.1-0.15 of its points was 1.2x the filter's).
+    std::uint32_t max_views = 0;
     for (const std::vector<core::PointId>& image : images) {
-      std::vector<core::PointId> seen = image;  // an image counts once per point
-      std::sort(seen.begin(), seen.end());
-      seen.erase(std::unique(seen.begin(), seen.end()), seen.end());
-      for (const core::PointId id : seen) {
+      for (const core::PointId id : image) {
         const std::int64_t i = find_decision(d, id);
-        if (i >= 0) ++views[static_cast<std::size_t>(i)];
+        if (i >= 0) max_views = std::max(max_views, ++views[static_cast<std::size_t>(i)]);
       }
     }
-    const auto max_views = static_cast<std::uint32_t>(images.size());
     std::vector<std::uint32_t> histogram(std::size_t{max_views} + 1);
     const auto wanted = static_cast<std::uint32_t>(std::min<std::uint64_t>(count > skipped ? count - skipped : 0, order.size()));
     core::take_longest_tracks(ranked.data(), static_cast<std::uint32_t>(ranked.size()), wanted, track_share, views.data(),

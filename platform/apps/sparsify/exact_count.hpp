@@ -24,8 +24,9 @@ struct ExactCount {
 // stays within `count` (binary search), then the next points of the order
 // until exactly `count` are kept. Adding points never breaks the floor.
 // A track share (core::KeepBudget::track_share) reorders the points after
-// the first count x (1 - share) by the images observing them, most first
-// (core::take_longest_tracks), before the search.
+// the first count x (1 - share) by their observations in `images` (COLMAP's
+// track length, duplicates included), most first (core::take_longest_tracks),
+// before the search.
 ExactCount keep_exactly(const std::vector<std::vector<core::PointId>>& images, std::uint32_t floor,
                         std::uint64_t count, const std::vector<std::uint32_t>& thresholds,
                         std::vector<core::PointDecision>* decisions, double track_share = 0.0);

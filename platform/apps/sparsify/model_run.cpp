@@ -570,15 +570,18 @@ int run_model(const ModelOptions& opt) {
     return kExitInternal;
   }
   // Whole mode with a count: a floor that binds takes its points from within
-  // the count (the order's last make way), so the count stays exact.
+  // the count (the order's last make way), so the count stays exact; a track
+  // share ranks by the model's track length (the window holds an image's
+  // observation of a point once), floor or not.
   std::uint64_t count = 0;
   for (const core::PointDecision& d : r.decisions) count += d.verdict != core::Verdict::kCull;
   std::uint32_t restored = apply_floor(m.images, floor, &r.decisions);
   bool floor_fits = true;
   const core::BudgetKind kind = params.budget.kind;
-  if (restored > 0 && mode == Mode::kWhole && (kind == core::BudgetKind::kPoints || kind == core::BudgetKind::kFraction)) {
-    const ExactCount e = keep_exactly(m.images, floor, count, r.thresholds, &r.decisions,
-                                        core::track_share_at(params.budget, count, r.decisions.size()));
+  const double share = core::track_share_at(params.budget, count, r.decisions.size());
+  if ((restored > 0 || share > 0.0) && mode == Mode::kWhole &&
+      (kind == core::BudgetKind::kPoints || kind == core::BudgetKind::kFraction)) {
+    const ExactCount e = keep_exactly(m.images, floor, count, r.thresholds, &r.decisions, share);
     restored = e.restored;
     floor_fits = e.floor_fits;
   }

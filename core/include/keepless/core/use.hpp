@@ -36,9 +36,11 @@ enum class Use : std::uint8_t {
   // 1.04x at F = 0.4, with about the same local BA). No track share: it
   // cost 0.9-1.2 mm at F = 0.3-0.4 there.
   kRgbd,
-  // A finished model, with a point count: half the count by track length,
-  // half by the network's order (within 1.2x of COLMAP's point_filtering in
-  // 13 of 15 cells, against 6 for the order alone).
+  // A finished model, with a point count: the count by track length, the
+  // network's order breaking ties (keepless_sparsify ranks by COLMAP's track
+  // length). With a per-image floor 10 % above the filter's poorest image,
+  // within 1.2x of COLMAP's point_filtering at its count in 15 of 15 cells
+  // (half by the order: 14).
   kOffline,
 };
 
