@@ -37,10 +37,10 @@ enum class Use : std::uint8_t {
   // cost 0.9-1.2 mm at F = 0.3-0.4 there.
   kRgbd,
   // A finished model, with a point count: the count by track length, the
-  // network's order breaking ties (keepless_sparsify ranks by COLMAP's track
-  // length). With a per-image floor 10 % above the filter's poorest image,
-  // within 1.2x of COLMAP's point_filtering at its count in 15 of 15 cells
-  // (half by the order: 14).
+  // network's order breaking ties. keepless_sparsify, ranking by COLMAP's
+  // track length with a per-image floor 10 % above the filter's poorest
+  // image, was within 1.2x of COLMAP's point_filtering at its count in 15 of
+  // 15 cells (half by the order: 14; ranked by images: 12).
   kOffline,
 };
 
