@@ -69,8 +69,8 @@ const std::vector<keepless::cli::Flag> kFlags = {
                       "(they refine it): paper (the default), monocular (--scope newest\n"
                       "--maturity 2, and --track-share 0.5 where the budget keeps >= 0.3 of\n"
                       "the points), rgbd (--scope newest --maturity 2), monocular-deferred\n"
-                      "(the paper's here), offline (--mode whole --track-share 1; needs\n"
-                      "--keep-points or --keep-fraction)"},
+                      "(the paper's here), offline (--mode whole --track-share 1\n"
+                      "--floor-over-longest 1.1; needs --keep-points or --keep-fraction)"},
     {"--mode", "replay|whole", "replay: the onboard node's sliding window; whole: one window\n"
                                "(default: replay for maps, whole for --window)"},
     {"--K", "N", "replay window in keyframes (default 20)"},
@@ -81,6 +81,11 @@ const std::vector<keepless::cli::Flag> kFlags = {
                                  "(default 30 for COLMAP and BAL, 0 for a window file); in whole mode\n"
                                  "with --keep-points or --keep-fraction from within the count: the\n"
                                  "order's last points make way"},
+    {"--floor-over-longest", "R", "whole mode with --keep-points or --keep-fraction: raise that floor\n"
+                                  "to R x the observations of the image the count's longest tracks\n"
+                                  "(COLMAP's point_filtering at that count) leave poorest, rounded up;\n"
+                                  "0 or R in [1, 100] (default 0; --use offline without\n"
+                                  "--min-obs-per-image: 1.1)"},
     {"--decisions", "OUT", "write '<point_id> <keep|cull|skip> <flow> <capacity>' a line"},
     {"--M", "N", "pair -> sink capacity, 1..2147483647 (default 100)"},
     {"--keep-points", "K", "instead of --M: keep exactly K of the evaluated points (or all)"},
@@ -297,6 +302,19 @@ int parse_args(int argc, char** argv, Options* opt, bool* help, bool* version) {
   if (opt->model.path.empty()) {
     opt->model.input = keepless::sparsify::Input::kWindow;
     opt->model.path = opt->window;
+  }
+  // The whole mode is the default for a window file; a floor given refines
+  // the offline use's.
+  double& over_longest = opt->model.floor_over_longest;
+  const bool whole = opt->model.mode_given ? opt->model.mode == keepless::sparsify::Mode::kWhole
+                                           : opt->model.input == keepless::sparsify::Input::kWindow;
+  if (over_longest > 0 && (!whole || (opt->params.budget.kind != core::BudgetKind::kPoints &&
+                                      opt->params.budget.kind != core::BudgetKind::kFraction))) {
+    return usage_error("--floor-over-longest needs --mode whole and --keep-points or --keep-fraction");
+  }
+  if (over_longest < 0) {
+    const bool use_sets = use == core::Use::kOffline && whole && opt->model.floor < 0;
+    over_longest = use_sets ? keepless::sparsify::kOfflineFloorOverLongest : 0;
   }
   if (core::Sparsifier::validate(opt->params) != core::Status::kOk) {
     return usage_error("invalid parameters");

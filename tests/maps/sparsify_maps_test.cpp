@@ -235,18 +235,21 @@ TEST_F(SparsifyMaps, AWholeCountKeepsItsFloorWithinTheCount) {
   EXPECT_NE(tight.err.find("alone needs more than the count of 60 points"), std::string::npos) << tight.err;
 }
 
-// --use offline is --mode whole --track-share 1: the same decisions and
-// model; its share needs a count, and the other flags refine it.
+// --use offline is --mode whole --track-share 1 --floor-over-longest 1.1:
+// the same decisions and model; its share needs a count, and the other flags
+// refine it.
 TEST_F(SparsifyMaps, UseOfflineIsTheWholeModeByTrackLength) {
   const maps_test::Result use = sparsify({"--colmap", fixture("sparse"), "--use", "offline", "--keep-points", "710",
                                           "--out", path("use"), "--decisions", path("use.d")});
   ASSERT_EQ(use.status, 0) << use.err;
   const maps_test::Result flags = sparsify({"--colmap", fixture("sparse"), "--mode", "whole", "--track-share", "1",
+                                            "--floor-over-longest", "1.1",
                                             "--keep-points", "710", "--out", path("flags"), "--decisions", path("flags.d")});
   ASSERT_EQ(flags.status, 0) << flags.err;
   const std::string json = last_line(use.out);
   EXPECT_NE(json.find("\"mode\":\"whole\""), std::string::npos) << json;
   EXPECT_NE(json.find("\"track_share\":1,"), std::string::npos) << json;
+  EXPECT_NE(json.find("\"floor_over_longest\":1.1,"), std::string::npos) << json;
   EXPECT_NE(json.find("\"budget\":\"points\",\"budget_value\":710}"), std::string::npos) << json;
   EXPECT_EQ(json_number(json, "points_kept"), 710);
   EXPECT_EQ(maps_test::read_all(path("use.d")), maps_test::read_all(path("flags.d")));
@@ -265,6 +268,45 @@ TEST_F(SparsifyMaps, UseOfflineIsTheWholeModeByTrackLength) {
   const maps_test::Result unknown = sparsify({"--colmap", fixture("sparse"), "--use", "colmap"});
   EXPECT_EQ(unknown.status, 2);
   EXPECT_NE(unknown.err.find("bad value for --use: 'colmap'"), std::string::npos) << unknown.err;
+}
+
+// --floor-over-longest R: the floor is R x the poorest image the count's
+// longest tracks leave (1,927 points: the fixture's tracks of 10 and more,
+// no tie at the cut), rounded up and taken within the count; the offline
+// use sets 1.1 unless a floor is given; it needs the whole mode and a count.
+TEST_F(SparsifyMaps, AFloorOverTheLongestTracksLiftsThePoorestImage) {
+  const auto run = [&](std::vector<std::string> extra) {
+    std::vector<std::string> args = {"--colmap", fixture("sparse"), "--mode", "whole", "--keep-points", "1927",
+                                     "--track-share", "1"};
+    args.insert(args.end(), extra.begin(), extra.end());
+    return sparsify(args);
+  };
+  const maps_test::Result longest = run({"--min-obs-per-image", "0"});
+  ASSERT_EQ(longest.status, 0) << longest.err;
+  const double poorest = json_number(last_line(longest.out), "min_obs_per_image");
+  ASSERT_GT(poorest, 0);
+  const maps_test::Result lifted = run({"--min-obs-per-image", "0", "--floor-over-longest", "1.1"});
+  ASSERT_EQ(lifted.status, 0) << lifted.err;
+  const std::string json = last_line(lifted.out);
+  const double floor = std::ceil(1.1 * poorest);
+  EXPECT_EQ(json_number(json, "obs_floor"), floor);
+  EXPECT_GE(json_number(json, "min_obs_per_image"), floor);
+  EXPECT_EQ(json_number(json, "points_kept"), 1927);
+  EXPECT_GT(json_number(json, "floor_restored"), 0);
+  const maps_test::Result own_floor = sparsify({"--colmap", fixture("sparse"), "--use", "offline", "--keep-points",
+                                                "1927", "--min-obs-per-image", "0"});
+  ASSERT_EQ(own_floor.status, 0) << own_floor.err;
+  EXPECT_EQ(json_number(last_line(own_floor.out), "floor_over_longest"), 0);
+  EXPECT_EQ(json_number(last_line(own_floor.out), "min_obs_per_image"), poorest);
+  const maps_test::Result replay = sparsify({"--colmap", fixture("sparse"), "--mode", "replay", "--keep-points",
+                                             "1927", "--floor-over-longest", "1.1"});
+  EXPECT_EQ(replay.status, 2);
+  EXPECT_NE(replay.err.find("--floor-over-longest needs --mode whole and --keep-points or --keep-fraction"),
+            std::string::npos)
+      << replay.err;
+  const maps_test::Result below_one = run({"--floor-over-longest", "0.5"});
+  EXPECT_EQ(below_one.status, 2);
+  EXPECT_NE(below_one.err.find("(0, or a number in [1, 100])"), std::string::npos) << below_one.err;
 }
 
 // --track-share 1: the whole model's count taken entirely by track length

@@ -31,4 +31,12 @@ ExactCount keep_exactly(const std::vector<std::vector<core::PointId>>& images, s
                         std::uint64_t count, const std::vector<std::uint32_t>& thresholds,
                         std::vector<core::PointDecision>* decisions, double track_share = 0.0);
 
+// The observations of the poorest image (kept_observations) when the
+// skipped points and the `count` minus them with the most observations in
+// `images` (ties to the smaller id) are kept: where longest-track-first, and
+// so COLMAP's point_filtering at its own count, leaves the poorest image
+// (--floor-over-longest).
+std::uint32_t longest_tracks_poorest(const std::vector<std::vector<core::PointId>>& images,
+                                     std::vector<core::PointDecision> decisions, std::uint64_t count);
+
 }  // namespace keepless::sparsify

@@ -414,6 +414,11 @@ bool parse_map_flag(const std::string& flag, const char* value, ModelOptions* op
     }
   } else if (flag == "--scale") {
     if (!core::parse_finite_double(value, &opt->scale) || !(opt->scale > 0)) *error = bad + " (a number > 0)";
+  } else if (flag == "--floor-over-longest") {
+    double& r = opt->floor_over_longest;
+    if (!core::parse_finite_double(value, &r) || !(r == 0 || (r >= 1 && r <= 100))) {
+      *error = bad + " (0, or a number in [1, 100])";
+    }
   } else {
     return false;
   }
@@ -485,8 +490,8 @@ int run_model(const ModelOptions& opt) {
     return kExitInput;
   }
   const Mode mode = opt.mode_given ? opt.mode : (opt.input == Input::kWindow ? Mode::kWhole : Mode::kReplay);
-  const std::uint32_t floor = opt.floor >= 0 ? static_cast<std::uint32_t>(opt.floor)
-                                             : (opt.input == Input::kWindow ? 0 : kDefaultFloor);
+  std::uint32_t floor = opt.floor >= 0 ? static_cast<std::uint32_t>(opt.floor)
+                                       : (opt.input == Input::kWindow ? 0 : kDefaultFloor);
 
   // --max-memory-mb, estimated before allocating: reading a COLMAP or BAL
   // model holds its files and the parsed model (ReadCost: per byte, and per
@@ -575,12 +580,17 @@ int run_model(const ModelOptions& opt) {
   // observation of a point once), floor or not.
   std::uint64_t count = 0;
   for (const core::PointDecision& d : r.decisions) count += d.verdict != core::Verdict::kCull;
+  const core::BudgetKind kind = params.budget.kind;
+  const bool whole_count =
+      mode == Mode::kWhole && (kind == core::BudgetKind::kPoints || kind == core::BudgetKind::kFraction);
+  if (whole_count && opt.floor_over_longest > 0) {
+    const double above = std::ceil(opt.floor_over_longest * longest_tracks_poorest(m.images, r.decisions, count));
+    floor = std::max(floor, static_cast<std::uint32_t>(above));
+  }
   std::uint32_t restored = apply_floor(m.images, floor, &r.decisions);
   bool floor_fits = true;
-  const core::BudgetKind kind = params.budget.kind;
   const double share = core::track_share_at(params.budget, count, r.decisions.size());
-  if ((restored > 0 || share > 0.0) && mode == Mode::kWhole &&
-      (kind == core::BudgetKind::kPoints || kind == core::BudgetKind::kFraction)) {
+  if ((restored > 0 || share > 0.0) && whole_count) {
     const ExactCount e = keep_exactly(m.images, floor, count, r.thresholds, &r.decisions, share);
     restored = e.restored;
     floor_fits = e.floor_fits;
@@ -613,7 +623,7 @@ int run_model(const ModelOptions& opt) {
   warn_thin_images(m, r.decisions);
   if (!floor_fits) {
     std::fprintf(stderr,
-                 "keepless_sparsify: warning: the floor (--min-obs-per-image %u) alone needs more than the count of "
+                 "keepless_sparsify: warning: the floor of %u observations per image alone needs more than the count of "
                  "%" PRIu64 " points: %u kept for it, none by the order\n",
                  floor, count, restored);
   }
@@ -659,7 +669,7 @@ int run_model(const ModelOptions& opt) {
       "\"parse_ms\":%.3f,\"build_ms\":0,\"solve_ms\":%.3f,\"memory_bytes\":%zu,"
       "\"input\":\"%s\",\"format\":\"%s\",\"mode\":\"%s\",\"K\":%u,\"order\":\"%s\",\"slides\":%u,"
       "\"images\":%zu,\"model_points\":%" PRIu64 ",\"points_kept\":%" PRIu64 ",\"kept_fraction\":%.6f,"
-      "\"min_obs_per_image\":%u,\"median_obs_per_image\":%g,\"obs_floor\":%u,\"floor_restored\":%u,"
+      "\"min_obs_per_image\":%u,\"median_obs_per_image\":%g,\"obs_floor\":%u,\"floor_over_longest\":%g,\"floor_restored\":%u,"
       "\"duplicate_observations\":%" PRIu64 ",\"time_ms\":%.3f,"
       "\"scope\":\"%s\",\"floor\":%u,\"cost\":\"%s\",\"out_of_scope\":%u,"
       "\"floor_keyframes\":%u,\"floor_promoted\":%u,\"floor_short\":%u,"
@@ -673,7 +683,7 @@ int run_model(const ModelOptions& opt) {
       to_string(mode), mode == Mode::kReplay ? opt.K : t.keyframes, io::to_string(order), r.slides,
       m.images.size(), m.model_points, points_kept,
       m.model_points ? static_cast<double>(points_kept) / static_cast<double>(m.model_points) : 1.0, min_obs,
-      med_obs, floor, restored, m.keyframes.duplicates, time_ms, core::to_string(opt.params.scope),
+      med_obs, floor, opt.floor_over_longest, restored, m.keyframes.duplicates, time_ms, core::to_string(opt.params.scope),
       opt.params.coverage_floor, core::to_string(opt.params.cost_model), t.out_of_scope, t.floor_keyframes,
       t.floor_promoted, t.floor_short, input_bytes, output_bytes, m.compacted,
       opt.params.maturity_keyframes, t.guarded, t.track_fallback, opt.params.budget.track_share_from,

@@ -32,6 +32,9 @@ struct ModelOptions {
   std::string sim3;          // --sim3 FILE (wins over scale)
   double scale = 1;          // --scale S
   std::int64_t floor = -1;   // --min-obs-per-image; -1: 30 for COLMAP/BAL, 0 for a window file
+  // --floor-over-longest R (whole mode with a count): the floor is at least
+  // ceil(R x longest_tracks_poorest); 0: off, -1: not given (--use offline: 1.1).
+  double floor_over_longest = -1;
   core::Params params;
   // --image was given; else a COLMAP model's one camera size (all cameras
   // alike) sets params' image_width x image_height.
@@ -43,7 +46,8 @@ struct ModelOptions {
 };
 
 // Parses one of keepless_sparsify's map flags (--colmap, --bal, --out,
-// --out-format, --mode, --K, --order, --scale, --sim3, --min-obs-per-image)
+// --out-format, --mode, --K, --order, --scale, --sim3, --min-obs-per-image,
+// --floor-over-longest)
 // into *options. False if `flag` is none of them; else true, with *error
 // empty or the reason its value is bad.
 bool parse_map_flag(const std::string& flag, const char* value, ModelOptions* options, std::string* error);
@@ -52,6 +56,12 @@ bool parse_map_flag(const std::string& flag, const char* value, ModelOptions* op
 // below which a warning names the images left under it: COLMAP's
 // Mapper.abs_pose_min_num_inliers.
 constexpr std::uint32_t kDefaultFloor = 30;
+
+// The offline use's --floor-over-longest: every image 10 % above where the
+// longest tracks leave the poorest. With the whole count by track length,
+// 0.96-1.08x point_filtering's camera deviation at its count on three
+// models (perf/eval/results/maps/equal_count).
+constexpr double kOfflineFloorOverLongest = 1.1;
 
 // The smallest M at which a sparsified COLMAP model kept the full model's
 // accuracy after colmap bundle_adjuster in the evidence (keepless_maps_bench
