@@ -636,7 +636,7 @@ int main(int argc, char** argv) {
       const int t = nearest_filter(target, &filtered);
       const std::uint32_t poorest = min_observations(filtered);
       exact = filtered.points.size();
-      exact_floor = static_cast<std::uint32_t>(std::ceil(opt.against_filter * poorest));
+      exact_floor = sp::floor_over(opt.against_filter, poorest);
       std::printf("against the filter: --min_track_len %d keeps %" PRIu64 " points (F x points %" PRIu64
                   "), its poorest image %u observations; exact rows at %" PRIu64 " points, floor %u\n",
                   t, exact, target, poorest, exact, exact_floor);

@@ -84,8 +84,8 @@ const std::vector<keepless::cli::Flag> kFlags = {
     {"--floor-over-longest", "R", "whole mode with --keep-points or --keep-fraction: raise that floor\n"
                                   "to R x the observations of the image the count's longest tracks\n"
                                   "(COLMAP's point_filtering at that count) leave poorest, rounded up;\n"
-                                  "0 or R in [1, 100] (default 0; --use offline without\n"
-                                  "--min-obs-per-image: 1.1)"},
+                                  "0 or R in [1, 100] (default 0; --use offline on a COLMAP or BAL\n"
+                                  "model without --min-obs-per-image: 1.1)"},
     {"--decisions", "OUT", "write '<point_id> <keep|cull|skip> <flow> <capacity>' a line"},
     {"--M", "N", "pair -> sink capacity, 1..2147483647 (default 100)"},
     {"--keep-points", "K", "instead of --M: keep exactly K of the evaluated points (or all)"},
@@ -303,8 +303,9 @@ int parse_args(int argc, char** argv, Options* opt, bool* help, bool* version) {
     opt->model.input = keepless::sparsify::Input::kWindow;
     opt->model.path = opt->window;
   }
-  // The whole mode is the default for a window file; a floor given refines
-  // the offline use's.
+  // The whole mode is the default for a window file; a floor given replaces
+  // the offline use's R, which applies to COLMAP and BAL models (a window
+  // file alone takes the single-window path, without a floor).
   double& over_longest = opt->model.floor_over_longest;
   const bool whole = opt->model.mode_given ? opt->model.mode == keepless::sparsify::Mode::kWhole
                                            : opt->model.input == keepless::sparsify::Input::kWindow;
@@ -313,7 +314,8 @@ int parse_args(int argc, char** argv, Options* opt, bool* help, bool* version) {
     return usage_error("--floor-over-longest needs --mode whole and --keep-points or --keep-fraction");
   }
   if (over_longest < 0) {
-    const bool use_sets = use == core::Use::kOffline && whole && opt->model.floor < 0;
+    const bool use_sets = use == core::Use::kOffline && whole && opt->model.floor < 0 &&
+                          opt->model.input != keepless::sparsify::Input::kWindow;
     over_longest = use_sets ? keepless::sparsify::kOfflineFloorOverLongest : 0;
   }
   if (core::Sparsifier::validate(opt->params) != core::Status::kOk) {

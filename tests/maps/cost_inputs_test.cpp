@@ -428,6 +428,27 @@ TEST(ExactCount, KeepsExactlyTheCountWithEveryImagesFloor) {
   EXPECT_GT(e.kept, 10u);
 }
 
+// Where the longest tracks leave the poorest image: by observations (repeats
+// count), ties to the smaller id, skipped points kept; and the floor above
+// it rounded up as the decimal product is.
+TEST(ExactCount, LongestTracksPoorestAndTheFloorOverIt) {
+  const std::vector<std::vector<core::PointId>> images = {{1, 2, 2}, {2, 3}, {3, 4}};
+  std::vector<core::PointDecision> d(4);
+  for (std::size_t i = 0; i < d.size(); ++i) d[i] = {static_cast<core::PointId>(i + 1), core::Verdict::kKeep, 0, 0};
+  // Observations: point 1 one, 2 three (twice in image 0), 3 two, 4 one.
+  EXPECT_EQ(sparsify::longest_tracks_poorest(images, d, 1), 0u);  // point 2: image 2 keeps none
+  EXPECT_EQ(sparsify::longest_tracks_poorest(images, d, 2), 1u);  // 2 and 3: 2, 2, 1
+  EXPECT_EQ(sparsify::longest_tracks_poorest(images, d, 3), 1u);  // and 1, not 4 (a tie, smaller id): 3, 2, 1
+  EXPECT_EQ(sparsify::longest_tracks_poorest(images, d, 4), 2u);  // everything: 3, 2, 2
+  d[3].verdict = core::Verdict::kSkip;                            // point 4 skipped: kept, and counted
+  EXPECT_EQ(sparsify::longest_tracks_poorest(images, d, 2), 1u);  // 4 and the longest, 2: 2, 1, 1
+  EXPECT_EQ(sparsify::longest_tracks_poorest({}, d, 2), 0u);
+  EXPECT_EQ(sparsify::floor_over(1.1, 330), 363u);
+  EXPECT_EQ(sparsify::floor_over(1.1, 207), 228u);
+  EXPECT_EQ(sparsify::floor_over(1.1, 0), 0u);
+  EXPECT_EQ(sparsify::floor_over(100, UINT32_MAX), UINT32_MAX);
+}
+
 class CostModelsCli : public maps_test::MapsTest {};
 
 // Through keepless_sparsify: each model's decisions repeat byte for byte

@@ -22,6 +22,7 @@
 #include "keepless/io/keyframes.hpp"
 #include "keepless/platform/window_file_io.hpp"
 #include "maps_support.hpp"
+#include "sparsify/exact_count.hpp"
 #include "sparsify/modes.hpp"
 
 namespace keepless {
@@ -250,6 +251,7 @@ TEST_F(SparsifyMaps, UseOfflineIsTheWholeModeByTrackLength) {
   EXPECT_NE(json.find("\"mode\":\"whole\""), std::string::npos) << json;
   EXPECT_NE(json.find("\"track_share\":1,"), std::string::npos) << json;
   EXPECT_NE(json.find("\"floor_over_longest\":1.1,"), std::string::npos) << json;
+  EXPECT_GT(json_number(json, "obs_floor"), 30);  // R, not the default floor, set it
   EXPECT_NE(json.find("\"budget\":\"points\",\"budget_value\":710}"), std::string::npos) << json;
   EXPECT_EQ(json_number(json, "points_kept"), 710);
   EXPECT_EQ(maps_test::read_all(path("use.d")), maps_test::read_all(path("flags.d")));
@@ -260,6 +262,7 @@ TEST_F(SparsifyMaps, UseOfflineIsTheWholeModeByTrackLength) {
                                              "--keep-fraction", "0.1"});
   ASSERT_EQ(replay.status, 0) << replay.err;
   EXPECT_NE(last_line(replay.out).find("\"mode\":\"replay\""), std::string::npos);
+  EXPECT_EQ(json_number(last_line(replay.out), "floor_over_longest"), 0);
   EXPECT_NE(last_line(replay.out).find("\"budget\":\"fraction\",\"budget_value\":0.1}"), std::string::npos)
       << last_line(replay.out);
   const maps_test::Result no_count = sparsify({"--colmap", fixture("sparse"), "--use", "offline"});
@@ -288,7 +291,8 @@ TEST_F(SparsifyMaps, AFloorOverTheLongestTracksLiftsThePoorestImage) {
   const maps_test::Result lifted = run({"--min-obs-per-image", "0", "--floor-over-longest", "1.1"});
   ASSERT_EQ(lifted.status, 0) << lifted.err;
   const std::string json = last_line(lifted.out);
-  const double floor = std::ceil(1.1 * poorest);
+  const double floor = sparsify::floor_over(1.1, static_cast<std::uint32_t>(poorest));
+  EXPECT_GT(floor, poorest);
   EXPECT_EQ(json_number(json, "obs_floor"), floor);
   EXPECT_GE(json_number(json, "min_obs_per_image"), floor);
   EXPECT_EQ(json_number(json, "points_kept"), 1927);

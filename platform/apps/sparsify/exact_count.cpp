@@ -1,6 +1,8 @@
 #include "sparsify/exact_count.hpp"
 
 #include <algorithm>
+#include <cmath>
+#include <cstdint>
 
 #include "keepless/core/keep_thresholds.hpp"
 #include "sparsify/modes.hpp"
@@ -47,7 +49,7 @@ std::uint32_t longest_tracks_poorest(const std::vector<std::vector<core::PointId
   count_observations(images, decisions, &views);
   std::vector<std::size_t> order;
   const std::uint64_t skipped = judged(decisions, &order);
-  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
     return views[a] != views[b] ? views[a] > views[b] : decisions[a].point < decisions[b].point;
   });
   const std::uint64_t take = count > skipped ? count - skipped : 0;
@@ -56,6 +58,11 @@ std::uint32_t longest_tracks_poorest(const std::vector<std::vector<core::PointId
   }
   const std::vector<std::uint32_t> per_image = kept_observations(images, decisions);
   return per_image.empty() ? 0 : *std::min_element(per_image.begin(), per_image.end());
+}
+
+std::uint32_t floor_over(double r, std::uint32_t observations) {
+  const double floor = std::ceil(r * observations * (1 - 1e-12));
+  return floor >= double{UINT32_MAX} ? UINT32_MAX : static_cast<std::uint32_t>(floor);
 }
 
 ExactCount keep_exactly(const std::vector<std::vector<core::PointId>>& images, std::uint32_t floor,

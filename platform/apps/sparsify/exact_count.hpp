@@ -33,10 +33,16 @@ ExactCount keep_exactly(const std::vector<std::vector<core::PointId>>& images, s
 
 // The observations of the poorest image (kept_observations) when the
 // skipped points and the `count` minus them with the most observations in
-// `images` (ties to the smaller id) are kept: where longest-track-first, and
-// so COLMAP's point_filtering at its own count, leaves the poorest image
-// (--floor-over-longest).
+// `images` are kept: where longest-track-first, and so COLMAP's
+// point_filtering at its own count, leaves the poorest image
+// (--floor-over-longest). Ties at the cut go to the smaller id (keep_exactly
+// breaks them by the threshold order); 0 when an image is left none.
 std::uint32_t longest_tracks_poorest(const std::vector<std::vector<core::PointId>>& images,
                                      std::vector<core::PointDecision> decisions, std::uint64_t count);
+
+// ceil(r x observations), saturated: the floor r above an image's
+// observations. The product is rounded down by a relative 1e-12 first, so
+// 1.1 x 330 is 363, not 364 (363.00000000000006 in binary).
+std::uint32_t floor_over(double r, std::uint32_t observations);
 
 }  // namespace keepless::sparsify

@@ -584,8 +584,7 @@ int run_model(const ModelOptions& opt) {
   const bool whole_count =
       mode == Mode::kWhole && (kind == core::BudgetKind::kPoints || kind == core::BudgetKind::kFraction);
   if (whole_count && opt.floor_over_longest > 0) {
-    const double above = std::ceil(opt.floor_over_longest * longest_tracks_poorest(m.images, r.decisions, count));
-    floor = std::max(floor, static_cast<std::uint32_t>(above));
+    floor = std::max(floor, floor_over(opt.floor_over_longest, longest_tracks_poorest(m.images, r.decisions, count)));
   }
   std::uint32_t restored = apply_floor(m.images, floor, &r.decisions);
   bool floor_fits = true;
@@ -659,8 +658,9 @@ int run_model(const ModelOptions& opt) {
   }
   std::printf("\n");
 
-  char theta[32];
+  char theta[32], over_longest[32];
   *std::to_chars(theta, theta + sizeof theta - 1, opt.params.theta).ptr = '\0';
+  *std::to_chars(over_longest, over_longest + sizeof over_longest - 1, opt.floor_over_longest).ptr = '\0';
   const core::Summary& t = r.totals;
   std::printf(
       "{\"keyframes\":%u,\"points\":%u,\"evaluated\":%u,\"kept\":%" PRIu64 ",\"culled\":%u,"
@@ -669,7 +669,7 @@ int run_model(const ModelOptions& opt) {
       "\"parse_ms\":%.3f,\"build_ms\":0,\"solve_ms\":%.3f,\"memory_bytes\":%zu,"
       "\"input\":\"%s\",\"format\":\"%s\",\"mode\":\"%s\",\"K\":%u,\"order\":\"%s\",\"slides\":%u,"
       "\"images\":%zu,\"model_points\":%" PRIu64 ",\"points_kept\":%" PRIu64 ",\"kept_fraction\":%.6f,"
-      "\"min_obs_per_image\":%u,\"median_obs_per_image\":%g,\"obs_floor\":%u,\"floor_over_longest\":%g,\"floor_restored\":%u,"
+      "\"min_obs_per_image\":%u,\"median_obs_per_image\":%g,\"obs_floor\":%u,\"floor_over_longest\":%s,\"floor_restored\":%u,"
       "\"duplicate_observations\":%" PRIu64 ",\"time_ms\":%.3f,"
       "\"scope\":\"%s\",\"floor\":%u,\"cost\":\"%s\",\"out_of_scope\":%u,"
       "\"floor_keyframes\":%u,\"floor_promoted\":%u,\"floor_short\":%u,"
@@ -683,7 +683,7 @@ int run_model(const ModelOptions& opt) {
       to_string(mode), mode == Mode::kReplay ? opt.K : t.keyframes, io::to_string(order), r.slides,
       m.images.size(), m.model_points, points_kept,
       m.model_points ? static_cast<double>(points_kept) / static_cast<double>(m.model_points) : 1.0, min_obs,
-      med_obs, floor, opt.floor_over_longest, restored, m.keyframes.duplicates, time_ms, core::to_string(opt.params.scope),
+      med_obs, floor, over_longest, restored, m.keyframes.duplicates, time_ms, core::to_string(opt.params.scope),
       opt.params.coverage_floor, core::to_string(opt.params.cost_model), t.out_of_scope, t.floor_keyframes,
       t.floor_promoted, t.floor_short, input_bytes, output_bytes, m.compacted,
       opt.params.maturity_keyframes, t.guarded, t.track_fallback, opt.params.budget.track_share_from,
