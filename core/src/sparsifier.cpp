@@ -549,7 +549,7 @@ Status Sparsifier::validate(const Params& p) {
   // threshold (a use's) just never applies without one.
   const double from = p.budget.track_share_from;
   if (!std::isfinite(from) || from < 0.0 || from > 1.0) return Status::kInvalidArgument;
-  if (share > 0.0 && from == 0.0 && p.budget.kind != BudgetKind::kPoints && p.budget.kind != BudgetKind::kFraction) {
+  if (share > 0.0 && from == 0.0 && !keeps_a_count(p.budget.kind)) {
     return Status::kInvalidArgument;
   }
   switch (p.cost_model) {

@@ -284,8 +284,7 @@ int parse_args(int argc, char** argv, Options* opt, bool* help, bool* version) {
     return usage_error(std::string("--M and --keep-") + core::to_string(opt->params.budget.kind) +
                        " exclude each other: a keep budget replaces M");
   }
-  if (track_share > 0.0 && track_share_from == 0.0 && opt->params.budget.kind != core::BudgetKind::kPoints &&
-      opt->params.budget.kind != core::BudgetKind::kFraction) {
+  if (track_share > 0.0 && track_share_from == 0.0 && !core::keeps_a_count(opt->params.budget.kind)) {
     return usage_error(std::string("--track-share needs --keep-points or --keep-fraction: it is a share of their count") +
                        (use == core::Use::kOffline ? " (--use offline sets it to 1)" : ""));
   }
@@ -307,10 +306,8 @@ int parse_args(int argc, char** argv, Options* opt, bool* help, bool* version) {
   // the offline use's R, which applies to COLMAP and BAL models (a window
   // file alone takes the single-window path, without a floor).
   double& over_longest = opt->model.floor_over_longest;
-  const bool whole = opt->model.mode_given ? opt->model.mode == keepless::sparsify::Mode::kWhole
-                                           : opt->model.input == keepless::sparsify::Input::kWindow;
-  if (over_longest > 0 && (!whole || (opt->params.budget.kind != core::BudgetKind::kPoints &&
-                                      opt->params.budget.kind != core::BudgetKind::kFraction))) {
+  const bool whole = keepless::sparsify::mode_of(opt->model) == keepless::sparsify::Mode::kWhole;
+  if (over_longest > 0 && (!whole || !core::keeps_a_count(opt->params.budget.kind))) {
     return usage_error("--floor-over-longest needs --mode whole and --keep-points or --keep-fraction");
   }
   if (over_longest < 0) {

@@ -411,8 +411,7 @@ ParseResult parse_node_arguments(int argc, const char* const* argv, NodeConfig& 
             " exclude each other: a keep budget replaces M";
     return ParseResult::kError;
   }
-  if (track_share > 0 && track_share_from == 0 && config.params.budget.kind != core::BudgetKind::kPoints &&
-      config.params.budget.kind != core::BudgetKind::kFraction) {
+  if (track_share > 0 && track_share_from == 0 && !core::keeps_a_count(config.params.budget.kind)) {
     error = "--track-share needs --keep-points or --keep-fraction: it is a share of their count";
     if (share_from_use) error += " (--use offline sets it to 1)";
     return ParseResult::kError;

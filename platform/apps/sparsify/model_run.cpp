@@ -470,6 +470,10 @@ std::vector<NamedPath> model_outputs(const ModelOptions& opt) {
 
 }  // namespace
 
+Mode mode_of(const ModelOptions& opt) {
+  return opt.mode_given ? opt.mode : (opt.input == Input::kWindow ? Mode::kWhole : Mode::kReplay);
+}
+
 int run_model(const ModelOptions& opt) {
   if (opt.order_given && opt.order == io::KeyframeOrder::kName && opt.input != Input::kColmap) {
     std::fprintf(stderr, "keepless_sparsify: --order name needs --colmap (BAL cameras and window keyframes have no names)\n");
@@ -489,7 +493,7 @@ int run_model(const ModelOptions& opt) {
     std::fprintf(stderr, "%s\n", error.c_str());
     return kExitInput;
   }
-  const Mode mode = opt.mode_given ? opt.mode : (opt.input == Input::kWindow ? Mode::kWhole : Mode::kReplay);
+  const Mode mode = mode_of(opt);
   std::uint32_t floor = opt.floor >= 0 ? static_cast<std::uint32_t>(opt.floor)
                                        : (opt.input == Input::kWindow ? 0 : kDefaultFloor);
 
@@ -580,9 +584,7 @@ int run_model(const ModelOptions& opt) {
   // observation of a point once), floor or not.
   std::uint64_t count = 0;
   for (const core::PointDecision& d : r.decisions) count += d.verdict != core::Verdict::kCull;
-  const core::BudgetKind kind = params.budget.kind;
-  const bool whole_count =
-      mode == Mode::kWhole && (kind == core::BudgetKind::kPoints || kind == core::BudgetKind::kFraction);
+  const bool whole_count = mode == Mode::kWhole && core::keeps_a_count(params.budget.kind);
   if (whole_count && opt.floor_over_longest > 0) {
     floor = std::max(floor, floor_over(opt.floor_over_longest, longest_tracks_poorest(m.images, r.decisions, count)));
   }

@@ -52,6 +52,9 @@ struct ModelOptions {
 // empty or the reason its value is bad.
 bool parse_map_flag(const std::string& flag, const char* value, ModelOptions* options, std::string* error);
 
+// The mode a run takes: --mode, else whole for a window file, replay otherwise.
+Mode mode_of(const ModelOptions& options);
+
 // The default per-image floor for COLMAP and BAL inputs, and the floor
 // below which a warning names the images left under it: COLMAP's
 // Mapper.abs_pose_min_num_inliers.

@@ -129,6 +129,9 @@ struct KeepBudget {
 
 // "none", "points", "fraction", "observations".
 const char* to_string(BudgetKind kind);
+// A budget that keeps a number of points (kPoints, kFraction): what a track
+// share, an exact count and a floor taken within it need.
+constexpr bool keeps_a_count(BudgetKind kind) { return kind == BudgetKind::kPoints || kind == BudgetKind::kFraction; }
 // --- end keep budgets -------------------------------------------------------
 
 constexpr std::int32_t kMaxSpatialWeight = 1 << 16;
