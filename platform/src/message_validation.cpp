@@ -4,6 +4,7 @@
 #include <bitset>
 #include <cmath>
 #include <cstring>
+#include <iterator>
 
 #include "keepless/core/window_file.hpp"
 #include "keepless/map_event_ack_t.hpp"
@@ -215,6 +216,7 @@ bool OrderTracker::continues(const Run& run, std::int64_t sequence, std::int64_t
 bool OrderTracker::retransmits(std::int64_t sequence, std::uint64_t hash) const {
   if (!owned_) return false;
   if (sequence == last_sequence_ && hash == last_hash_) return true;
+  if (sequence >= 0 && sequence <= kRestartMaxFirstSequence && start_hash_[sequence] == hash) return true;
   for (std::size_t i = 0; i < recent_used_; ++i) {
     if (recent_[i].sequence == sequence && recent_[i].hash == hash) return true;
   }
@@ -231,6 +233,11 @@ bool OrderTracker::repeats(std::int64_t sequence, std::uint64_t hash) const {
     if (r.length != 0 && r.sequence == sequence) return true;
   }
   return false;
+}
+
+bool OrderTracker::behind_the_stream(std::int64_t sequence, std::int64_t utime) const {
+  return has_previous_ && sequence < last_sequence_ && utime < last_utime_ &&
+         (sequence <= previous_sequence_ || utime < previous_utime_);
 }
 
 int OrderTracker::extended_run(std::int64_t sequence, std::int64_t utime) const {
@@ -281,7 +288,7 @@ OrderTracker::Verdict OrderTracker::check(std::int64_t publisher, std::int64_t s
   if (runs_[r].restart) {
     v.reason = RejectReason::kNone;
     v.restart = true;
-  } else if (quiet_ns >= silence) {
+  } else if (quiet_ns >= silence && !behind_the_stream(sequence, utime)) {
     v.reason = RejectReason::kNone;
     v.resync = true;
   }
@@ -313,6 +320,8 @@ void OrderTracker::accept(const Verdict& v, std::int64_t publisher, std::int64_t
   last_utime_ = utime;
   last_hash_ = hash;
   last_heard_ns_ = now_ns;
+  if (v.takeover) std::fill(std::begin(start_hash_), std::end(start_hash_), 0);
+  if (keyframe && sequence >= 0 && sequence <= kRestartMaxFirstSequence) start_hash_[sequence] = hash;
   if (keyframe && !recent_.empty()) {
     recent_[recent_next_] = {sequence, hash};
     recent_next_ = (recent_next_ + 1) % recent_.size();

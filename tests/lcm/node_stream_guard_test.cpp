@@ -704,6 +704,57 @@ TEST_F(ResyncOnMemq, NegativeSequencesAreResynchronised) {
   expect_resynchronised(22);
 }
 
+// Review: exact copies of a stream's first keyframes arriving late (a relay
+// flushing its queue, a log replayed onto the bus) were a restart run once
+// their ids had left the window and the last --window keyframes' memory:
+// three of them cleared the window and the cull memory. The order remembers
+// its keyframes with sequences 0..16, so the copies change nothing.
+TEST_F(ResyncOnMemq, LateCopiesOfTheStreamsStartNeverRestart) {
+  stream_at_10hz(1, 40);
+  const auto before = kt::snapshot(node_->window());
+  const std::uint32_t culls = node_->cull_memory().size();
+  ASSERT_GT(culls, 0u);
+  for (std::int64_t s = 1; s <= 5; ++s) send(owner_keyframe(s));
+  EXPECT_EQ(rejected(RejectReason::kOutOfOrder), 5u);
+  EXPECT_EQ(node_->order().restarts(), 0u);
+  EXPECT_TRUE(kt::snapshot(node_->window()) == before) << "the window kept";
+  EXPECT_EQ(node_->cull_memory().size(), culls) << "the cull memory kept";
+  stream_at_10hz(41, 41);
+  EXPECT_EQ(decisions_.back().status, decision_t::STATUS_OPTIMAL);
+  EXPECT_EQ(node_->order().last_sequence(), 41);
+}
+
+// Review: after the VO paused (1 s or more), late copies of keyframes it sent
+// before the pause were a resync run: three took the order back 18 sequences
+// and 1.8 s, and every older copy after them was decided over a window of
+// stale keyframes. A run behind the order in both sequence and utime, and not
+// after the order before it, never resyncs.
+TEST_F(ResyncOnMemq, LateCopiesAfterAPauseNeverResync) {
+  stream_at_10hz(1, 40);
+  clock_.advance(2000000000);
+  const auto before = kt::snapshot(node_->window());
+  for (std::int64_t s = 20; s <= 30; ++s) send(owner_keyframe(s));
+  EXPECT_EQ(rejected(RejectReason::kOutOfOrder), 11u);
+  EXPECT_EQ(node_->order().resyncs(), 0u);
+  EXPECT_EQ(node_->order().last_sequence(), 40);
+  EXPECT_TRUE(kt::snapshot(node_->window()) == before) << "the window kept";
+  stream_at_10hz(41, 41);
+  EXPECT_EQ(decisions_.back().status, decision_t::STATUS_OPTIMAL);
+}
+
+// The rule above spares the resync it exists for: one message ahead in both
+// sequence and utime (within the bounds) is outvoted by the stream, which
+// follows the order before it.
+TEST_F(ResyncOnMemq, AKeyframeAheadInSequenceAndUtimeIsOutvoted) {
+  stream_at_10hz(1, 20);
+  keepless::keyframe_t ahead = kt::make_keyframe(21 + (1 << 19), 21, kt::id_range(105, 30));
+  ahead.utime = kt::make_keyframe(21, 0, {}).utime + 500ll * 1000000;
+  clock_.advance(100000000);
+  send(ahead);
+  ASSERT_EQ(decisions_.back().status, decision_t::STATUS_OPTIMAL);
+  expect_resynchronised(22);
+}
+
 // Review: the resync waited for --owner-timeout-s, so with 30 s one flipped
 // sequence locked the owner out for 30 s. It waits 1 s at most.
 TEST_F(ResyncOnMemq, ALongOwnerTimeoutDoesNotDelayTheResync) {

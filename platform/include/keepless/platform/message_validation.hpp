@@ -188,13 +188,17 @@ class OrderTracker {
     std::uint64_t touched = 0;             // extend_restart() call that last started or extended it
   };
   bool continues(const Run& run, std::int64_t sequence, std::int64_t utime) const;
-  // A copy of the last accepted message or of a remembered keyframe: the
-  // same sequence and hash (a retransmission).
+  // A copy of the last accepted message or of a remembered keyframe (the
+  // last recent_keyframes, and the stream's start): the same sequence and
+  // hash (a retransmission).
   bool retransmits(std::int64_t sequence, std::uint64_t hash) const;
   // A retransmission, or the sequence of a run's last keyframe.
   bool repeats(std::int64_t sequence, std::uint64_t hash) const;
   // The run the keyframe would extend, or -1.
   int extended_run(std::int64_t sequence, std::int64_t utime) const;
+  // Behind the order in both sequence and utime and not after the order
+  // before it: a late copy of the stream's past, which no resync may take.
+  bool behind_the_stream(std::int64_t sequence, std::int64_t utime) const;
 
   OrderBounds bounds_;
   bool owned_ = false;
@@ -215,6 +219,10 @@ class OrderTracker {
   };
   std::vector<Recent> recent_;
   std::size_t recent_next_ = 0, recent_used_ = 0;
+  // The hashes of the accepted keyframes with sequence 0 ..
+  // kRestartMaxFirstSequence, by sequence (0: none): late copies of a
+  // stream's start never start a restart run.
+  std::uint64_t start_hash_[kRestartMaxFirstSequence + 1] = {};
   std::uint64_t run_clock_ = 0;
   std::uint64_t gaps_ = 0, restarts_ = 0, resyncs_ = 0, takeovers_ = 0, owners_seen_ = 0;
 };
