@@ -429,24 +429,40 @@ bool parse_map_flag(const std::string& flag, const char* value, ModelOptions* op
 namespace {
 
 // What a run reads and writes, by flag, for outputs_are_safe. A COLMAP
-// --out folder's files are its outputs (--out itself is out_is_safe's).
+// model's files are both formats' (the one not read is still the user's
+// model); a COLMAP --out folder's files are its outputs (--out itself is
+// out_is_safe's).
 std::vector<NamedPath> model_inputs(const ModelOptions& opt) {
   const char* flag = opt.input == Input::kColmap ? "--colmap" : opt.input == Input::kBal ? "--bal" : "--window";
   std::vector<NamedPath> in;
-  for (const std::string& f : model_files(opt.input, opt.path)) in.push_back({flag, f});
+  if (opt.input == Input::kColmap) {
+    for (const char* ext : {"bin", "txt"}) {
+      for (const std::string& f : model_files(Input::kColmap, opt.path, ext)) in.push_back({flag, f});
+    }
+  } else {
+    in.push_back({flag, opt.path});
+  }
   if (!opt.sim3.empty()) in.push_back({"--sim3", opt.sim3});
   return in;
 }
 
-// --out's and --decisions' folders, checked before deciding: one missing
-// would fail the second write after the first was done.
+// --out's and --decisions' folders, and a file output that is a folder,
+// checked before deciding: either would fail the second write after the
+// first was done. (A COLMAP --out that is a file, or holds a folder by a
+// model file's name, is colmap_model_writable's.)
 bool folders_exist(const ModelOptions& opt, std::string* error) {
   for (const std::string* p : {&opt.out, &opt.decisions}) {
     if (p->empty()) continue;
+    std::error_code ec;
+    if (p != &opt.out || opt.input != Input::kColmap) {
+      if (fs::is_directory(*p, ec)) {
+        *error = *p + ":0: cannot write: it is a folder";
+        return false;
+      }
+    }
     fs::path path(*p);
     if (!path.has_filename()) path = path.parent_path();  // "out/" is the folder out
     const fs::path parent = path.parent_path();
-    std::error_code ec;
     if (parent.empty() || fs::is_directory(parent, ec)) continue;
     *error = *p + ":0: cannot write: its folder " + parent.string() + " does not exist (create it first)";
     return false;

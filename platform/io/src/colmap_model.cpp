@@ -250,6 +250,12 @@ bool colmap_model_writable(const std::string& dir_as_given, const ColmapModel& m
       }
     }
   }
+  struct stat st {};
+  if (::stat(dir.c_str(), &st) != 0) return true;  // a new folder
+  if (!S_ISDIR(st.st_mode)) {
+    *error = dir + ":0: cannot write model: it is a file, not a folder";
+    return false;
+  }
   // The other format's files beside ours would be what COLMAP (and
   // read_colmap_model) reads first, or be read instead of ours.
   const detail::FileNames other =
@@ -257,6 +263,15 @@ bool colmap_model_writable(const std::string& dir_as_given, const ColmapModel& m
   for (const std::string* f : {&other.cameras, &other.images, &other.points3D}) {
     if (exists(*f)) {
       *error = *f + ":0: a model in the other format is already there; write to another directory";
+      return false;
+    }
+  }
+  // Ours are renamed in one by one: one that cannot be replaced (a folder
+  // by its name) would leave the others' new files beside its old one.
+  const detail::FileNames ours = detail::file_names(dir, format);
+  for (const std::string* f : {&ours.cameras, &ours.images, &ours.points3D}) {
+    if (::stat(f->c_str(), &st) == 0 && !S_ISREG(st.st_mode)) {
+      *error = *f + ":0: cannot write model: it is there and not a file";
       return false;
     }
   }
@@ -272,10 +287,6 @@ bool write_colmap_model(const std::string& dir_as_given, const ColmapModel& mode
   // (which may be a mount point), so the renames never cross devices.
   struct stat st {};
   const bool existing = ::stat(dir.c_str(), &st) == 0;
-  if (existing && !S_ISDIR(st.st_mode)) {
-    *error = dir + ":0: cannot write model: it is a file, not a folder";
-    return false;
-  }
   const std::string tmp = existing ? dir + "/.keepless.tmp-" + std::to_string(::getpid())
                                    : dir + ".tmp-" + std::to_string(::getpid());
   const detail::FileNames staged = detail::file_names(tmp, format);

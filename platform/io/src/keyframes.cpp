@@ -51,6 +51,25 @@ bool read_similarity(const std::string& path, Similarity* out, std::string* erro
     *error = path + ":1: the scale must be positive";
     return false;
   }
+  // A similarity's R is a rotation: R^T R = I to 1e-4 (a matrix printed with
+  // six decimals passes) and det R > 0; anything else would silently distort
+  // every camera centre.
+  const double* r = v + 1;
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) {
+      const double dot = r[i] * r[j] + r[3 + i] * r[3 + j] + r[6 + i] * r[6 + j];
+      if (!(std::fabs(dot - (i == j ? 1.0 : 0.0)) <= 1e-4)) {
+        *error = path + ":1: R is not a rotation (its columns must be orthonormal)";
+        return false;
+      }
+    }
+  }
+  const double det = r[0] * (r[4] * r[8] - r[5] * r[7]) - r[1] * (r[3] * r[8] - r[5] * r[6]) +
+                     r[2] * (r[3] * r[7] - r[4] * r[6]);
+  if (!(det > 0)) {
+    *error = path + ":1: R is not a rotation (a reflection: det R = -1)";
+    return false;
+  }
   out->scale = v[0];
   std::copy(v + 1, v + 10, out->rotation);
   std::copy(v + 10, v + 13, out->translation);
@@ -147,9 +166,8 @@ Keyframes keyframes_from_colmap(const ColmapModel& model, KeyframeOrder order, c
     colmap_camera_centre(image, c);
     to_metric(to_metric_frame, c, kf.centre);
     // Camera-to-model rotation, the conjugate of COLMAP's world-to-camera.
-    const double n = detail::quaternion_norm(image.qvec);
-    kf.orientation[0] = image.qvec[0] / n;
-    for (int k = 1; k < 4; ++k) kf.orientation[k] = -image.qvec[k] / n;
+    detail::unit_quaternion(image.qvec, kf.orientation);
+    for (int k = 1; k < 4; ++k) kf.orientation[k] = -kf.orientation[k];
     const auto camera = cameras.find(image.camera_id);
     if (camera != cameras.end()) colmap_intrinsics(*camera->second, &kf);
     double r[9];

@@ -22,21 +22,26 @@ inline void angle_axis_rotate(const double r[3], const double p[3], double out[3
   }
 }
 
-// |q|, scaled by its largest component first, so that neither a huge nor a
-// subnormal quaternion over- or underflows on the way (0 for a zero one).
-inline double quaternion_norm(const double q[4]) {
+// q / |q|, scaled by its largest component first, so that neither a huge
+// nor a subnormal quaternion over- or underflows on the way (the product
+// m |q / m| of a component near DBL_MAX is infinite). q must not be zero.
+inline void unit_quaternion(const double q[4], double u[4]) {
   double m = 0;
   for (int i = 0; i < 4; ++i) m = std::fmax(m, std::fabs(q[i]));
-  if (!(m > 0) || !std::isfinite(m)) return m;
   double sum = 0;
-  for (int i = 0; i < 4; ++i) sum += (q[i] / m) * (q[i] / m);
-  return m * std::sqrt(sum);
+  for (int i = 0; i < 4; ++i) {
+    u[i] = q[i] / m;
+    sum += u[i] * u[i];
+  }
+  const double n = std::sqrt(sum);
+  for (int i = 0; i < 4; ++i) u[i] /= n;
 }
 
 // Row-major R(q) of a quaternion (w, x, y, z), normalised first.
 inline void quaternion_matrix(const double q_in[4], double m[9]) {
-  const double n = quaternion_norm(q_in);
-  const double w = q_in[0] / n, x = q_in[1] / n, y = q_in[2] / n, z = q_in[3] / n;
+  double u[4];
+  unit_quaternion(q_in, u);
+  const double w = u[0], x = u[1], y = u[2], z = u[3];
   m[0] = 1 - 2 * (y * y + z * z);
   m[1] = 2 * (x * y - w * z);
   m[2] = 2 * (x * z + w * y);

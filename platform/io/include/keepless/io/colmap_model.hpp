@@ -106,9 +106,10 @@ ColmapFiles format_colmap(const ColmapModel& model, ColmapFormat format);
 // works), then renames the files into DIR: a failure leaves no partial file in
 // DIR (the three renames into an existing DIR are one at a time, on one file
 // system). A trailing '/' names the same DIR.
-// Refused when DIR holds a file of the other format (it would shadow ours),
-// and in text when an image name holds a blank (COLMAP's text reader would
-// cut it there).
+// Refused when DIR is a file, holds a file of the other format (it would
+// shadow ours) or something other than a file by one of ours (it could not
+// be replaced after the others were), and in text when an image name holds
+// a blank (COLMAP's text reader would cut it there).
 // write_colmap_model's refusals, checked before it writes anything (a caller
 // writing other outputs first checks them before those, too).
 [[nodiscard]] bool colmap_model_writable(const std::string& dir, const ColmapModel& model, ColmapFormat format,
