@@ -74,6 +74,7 @@ struct Sparsifier::Impl {
   // PaperNetwork::point_slots); per window slot its evaluated points not
   // culled and its culled ones (indices into decisions, grouped by slot).
   std::vector<std::uint8_t> in_scope;      // [max_points]
+  std::vector<std::uint8_t> tracked_now;   // [max_points] (Params::tracked_first)
   std::vector<std::uint32_t> slots_at;     // [max_points + 1]
   std::vector<std::uint32_t> slots;        // [max_observations]
   std::vector<std::uint32_t> covered;      // [max_keyframes]
@@ -149,6 +150,7 @@ struct Sparsifier::Impl {
     if (p.budget.kind == BudgetKind::kFraction) fraction = std::make_unique<FractionBudget>(c.max_points);
     // The policies' scratch only where they are on (Params are fixed).
     if (p.scope == Scope::kNewest) in_scope.resize(c.max_points);
+    if (budgeted && p.tracked_first) tracked_now.resize(c.max_points);
     if (p.coverage_floor > 0 || p.maturity_keyframes > 0) {
       slots_at.resize(std::size_t{c.max_points} + 1);
       slots.resize(c.max_observations);
@@ -292,6 +294,10 @@ struct Sparsifier::Impl {
     for (std::uint32_t i = 0; i < count; ++i) ranked[cursor[bucket(i)]++] = i;
 
     const KeepBudget& b = params.budget;
+    // Params::tracked_first: the budget's order with the tracked first. A
+    // count's share swaps by the network's order first; B's prefix is taken
+    // from the tracked-first order.
+    if (b.kind == BudgetKind::kObservations) tracked_to_front(candidates);
     std::uint32_t take = 0;
     std::uint64_t observations = 0;
     if (b.kind == BudgetKind::kPoints) {
@@ -307,6 +313,7 @@ struct Sparsifier::Impl {
       take_longest_tracks(ranked.data(), candidates, take, track_share_at(b, take, candidates), views_of.data(),
                           caps.max_keyframes, views_histogram.data(), cursor.data());
     }
+    if (b.kind != BudgetKind::kObservations) tracked_to_front(candidates);
     observations = 0;
     std::uint32_t kept_top = 0;
     for (std::uint32_t j = 0; j < take; ++j) {
@@ -329,6 +336,24 @@ struct Sparsifier::Impl {
     }
     sum.max_flow = thresholds->max_flow();
     sum.total_cost = thresholds->total_cost();
+  }
+
+  // Params::tracked_first: the tracked candidates ahead of the others in
+  // ranked[0, candidates), each part in its order (a stable partition;
+  // cursor is the scratch), counted in Summary::tracked.
+  void tracked_to_front(std::uint32_t candidates) {
+    if (tracked_now.empty()) return;
+    std::uint32_t front = 0, rest = 0;
+    for (std::uint32_t j = 0; j < candidates; ++j) {
+      const std::uint32_t i = ranked[j];
+      if (tracked_now[i]) {
+        ranked[front++] = i;
+      } else {
+        cursor[rest++] = i;
+      }
+    }
+    std::copy(cursor.begin(), cursor.begin() + rest, ranked.begin() + front);
+    summary.tracked = front;
   }
 
   // Every call starts with no decisions and an empty curve: a call that
@@ -412,6 +437,8 @@ struct Sparsifier::Impl {
         ++summary.guarded;
       }
     }
+    const bool first_in_budget = !tracked_now.empty();
+    if (first_in_budget) std::fill(tracked_now.begin(), tracked_now.begin() + count, std::uint8_t{0});
     if (k == 0 || window.keyframe(k - 1).tracked == nullptr) return;
     const std::uint8_t* tracked = window.keyframe(k - 1).tracked;
     const Observation* obs = window.observations(k - 1);
@@ -422,6 +449,10 @@ struct Sparsifier::Impl {
           decisions.data(), decisions.data() + count, obs[o].point,
           [](const PointDecision& x, PointId id) { return x.point < id; });
       if (d == first + count || d->point != obs[o].point || d->verdict == Verdict::kSkip) continue;
+      if (first_in_budget) {  // counted among the candidates (decide_budget)
+        tracked_now[static_cast<std::size_t>(d - first)] = 1;
+        continue;
+      }
       skip(*d);
       ++summary.tracked;
     }

@@ -122,6 +122,8 @@ std::string node_usage() {
          "  --image WxH               the image the authors' 64x48 grid covers (default 640x480)\n"
          "  --maturity A              points first seen in the newest A window keyframes are not decided\n"
          "                            yet (default 0: off); a keyframe_t's tracked flags are always honoured\n"
+         "  --tracked-first           with a keep budget: the newest keyframe's tracked points are kept first\n"
+         "                            within the budget (they count toward it) instead of beside it\n"
          "  --budget-work N           solver work units per decision (default unlimited)\n"
          "  --latency-target-ms X     solve deadline from keyframe arrival (default 5; 0 = none)\n"
          "  --cpus LIST               pin to these CPUs, e.g. 0,1 or 2-3 (reported if refused)\n"
@@ -249,6 +251,10 @@ ParseResult parse_node_arguments(int argc, const char* const* argv, NodeConfig& 
     }
     if (flag == "--quiet") {
       config.quiet = true;
+      continue;
+    }
+    if (flag == "--tracked-first") {
+      config.params.tracked_first = true;  // no use sets it
       continue;
     }
     if (!has_inline_value) {
@@ -414,6 +420,11 @@ ParseResult parse_node_arguments(int argc, const char* const* argv, NodeConfig& 
   if (track_share > 0 && track_share_from == 0 && !core::keeps_a_count(config.params.budget.kind)) {
     error = "--track-share needs --keep-points or --keep-fraction: it is a share of their count";
     if (share_from_use) error += " (--use offline sets it to 1)";
+    return ParseResult::kError;
+  }
+  if (config.params.tracked_first && config.params.budget.kind == core::BudgetKind::kNone) {
+    error = "--tracked-first needs a keep budget (--keep-points, --keep-fraction or --keep-observations): "
+            "the tracked are kept first within it";
     return ParseResult::kError;
   }
   config.params.budget.track_share = track_share;

@@ -17,6 +17,7 @@
 #include <map>
 #include <memory>
 #include <set>
+#include <tuple>
 #include <vector>
 
 #include "case_count.hpp"
@@ -362,6 +363,86 @@ TEST(KeepBudgets, TakenFromWhatTheGuardLeaves) {
   EXPECT_GT(guarded, 0u) << "the guard should have skipped points";
 }
 
+// Params::tracked_first: the points the newest keyframe flags tracked are
+// candidates like the others (counted in Summary::tracked, not skipped), and
+// a budget of K keeps them first: min(K, candidates) points, the tracked ones
+// in the network's order (M*, id), then the others in that order; run() and
+// update() agree. Without the option they are skipped (the guard's test).
+TEST(KeepBudgets, TrackedFirstKeepsTheTrackedWithinTheBudget) {
+  std::uint32_t windows = 0, short_of_tracked = 0, beyond_tracked = 0;
+  for (std::uint64_t seed = 1; seed <= 40 && !HasFailure(); ++seed) {
+    test::RandomCase c = test::random_case(9100 + seed, 16, 160);
+    test::random_policies(c, 9100 + seed);
+    test::random_guard(c, 9100 + seed);
+    c.params.coverage_floor = 0;
+    c.params.tracked_first = true;
+    Params order_params = c.params;
+    order_params.budget = KeepBudget{BudgetKind::kPoints, 0, 0.0};
+    Params budgeted = c.params;
+    const std::uint32_t k_points = 3 + static_cast<std::uint32_t>(seed % 25);
+    budgeted.budget = KeepBudget{BudgetKind::kPoints, k_points, 0.0};
+    Window window(kCaps);
+    Sparsifier order_of(kCaps, order_params);
+    Sparsifier run(kCaps, budgeted);
+    Sparsifier update(kCaps, budgeted, SolveMode::kIncremental, Start::kClosedForm);
+    const std::uint32_t size = 4 + static_cast<std::uint32_t>(seed % 5);
+    for (const auto& f : c.frames) {
+      if (window.keyframe_count() == size) {
+        ASSERT_EQ(window.remove_keyframe(window.keyframe(0).id), Status::kOk);
+      }
+      ASSERT_EQ(test::add_frame(window, f), Status::kOk);
+      ASSERT_EQ(order_of.run(window), Status::kOk);
+      ASSERT_EQ(run.run(window), Status::kOk);
+      ASSERT_EQ(update.update(window), Status::kOk);
+      ASSERT_TRUE(same(run, update)) << "seed " << seed << " keyframe " << f.id;
+      std::set<PointId> flagged;
+      const std::uint32_t newest = window.keyframe_count() - 1;
+      if (window.keyframe(newest).tracked != nullptr) {
+        for (std::uint32_t i = 0; i < window.observation_count(newest); ++i) {
+          if (window.keyframe(newest).tracked[i] != 0) flagged.insert(window.observations(newest)[i].point);
+        }
+      }
+      // The candidates in the network's order, the tracked first.
+      std::vector<std::tuple<bool, std::uint32_t, PointId>> order;  // (not tracked, M*, id)
+      std::uint32_t tracked_candidates = 0;
+      for (std::uint32_t i = 0; i < order_of.decision_count(); ++i) {
+        if (order_of.decisions()[i].verdict == Verdict::kSkip) continue;
+        const PointId id = order_of.decisions()[i].point;
+        const bool tracked = flagged.count(id) > 0;
+        tracked_candidates += tracked;
+        order.emplace_back(!tracked, order_of.keep_thresholds()[i], id);
+      }
+      ASSERT_EQ(run.summary().tracked, tracked_candidates) << "seed " << seed;
+      std::sort(order.begin(), order.end());
+      std::set<PointId> expected;
+      for (std::size_t j = 0; j < std::min<std::size_t>(k_points, order.size()); ++j) {
+        expected.insert(std::get<2>(order[j]));
+      }
+      ASSERT_EQ(kept_of(run), expected) << "seed " << seed << " keyframe " << f.id;
+      // An observations budget B: the longest prefix of that order within B.
+      Params by_obs = c.params;
+      by_obs.budget = KeepBudget{BudgetKind::kObservations, 3ull * k_points, 0.0};
+      Sparsifier obs(kCaps, by_obs);
+      ASSERT_EQ(obs.run(window), Status::kOk);
+      const auto views = views_of(window);
+      std::set<PointId> within;
+      std::uint64_t sum = 0;
+      for (const auto& [untracked, m, id] : order) {
+        if (sum + views.at(id) > by_obs.budget.count) break;
+        sum += views.at(id);
+        within.insert(id);
+      }
+      ASSERT_EQ(kept_of(obs), within) << "seed " << seed << " keyframe " << f.id;
+      short_of_tracked += k_points < tracked_candidates;
+      beyond_tracked += tracked_candidates > 0 && k_points > tracked_candidates && order.size() > k_points;
+      ++windows;
+    }
+  }
+  EXPECT_GT(windows, 200u);
+  EXPECT_GT(short_of_tracked, 10u) << "budgets below the tracked count";
+  EXPECT_GT(beyond_tracked, 10u) << "budgets beyond it, the others by the order";
+}
+
 // The fraction budget over a sliding window whose culled points leave the
 // map, as a SLAM's do: each decision keeps (the candidates it kept before)
 // + the grant, the grants summing to floor(F x N + 0.5) over the N points
@@ -640,6 +721,30 @@ TEST(KeepBudgets, TrackShareTakesTheLongestTracksAfterTheOrder) {
     ASSERT_EQ(s.summary().kept, static_cast<std::uint32_t>(std::floor(0.3 * e + 0.5))) << "seed " << seed;
   }
   EXPECT_GT(differs, test::cases(50));  // the share changes what is kept, not only in theory
+}
+
+// Without a budget the option changes nothing: the tracked are skipped.
+TEST(KeepBudgets, TrackedFirstWithoutABudgetSkipsAsBefore) {
+  Window window(kCaps);
+  for (std::uint64_t seed = 1; seed <= 10 && !HasFailure(); ++seed) {
+    test::RandomCase c = test::random_case(9300 + seed, 12, 120);
+    test::random_policies(c, 9300 + seed);
+    test::random_guard(c, 9300 + seed);
+    ASSERT_TRUE(test::load(window, c.frames));
+    Params first = c.params;
+    first.tracked_first = true;
+    ASSERT_EQ(Sparsifier::validate(first), Status::kOk);
+    Sparsifier a(kCaps, c.params), b(kCaps, first);
+    ASSERT_EQ(a.run(window), Status::kOk);
+    ASSERT_EQ(b.run(window), Status::kOk);
+    ASSERT_EQ(a.decision_count(), b.decision_count());
+    for (std::uint32_t i = 0; i < a.decision_count(); ++i) {
+      const PointDecision &x = a.decisions()[i], &y = b.decisions()[i];
+      ASSERT_TRUE(x.point == y.point && x.verdict == y.verdict && x.flow == y.flow) << "seed " << seed;
+    }
+    ASSERT_EQ(a.summary().tracked, b.summary().tracked);
+    ASSERT_EQ(a.summary().skipped, b.summary().skipped);
+  }
 }
 
 TEST(KeepBudgets, InvalidBudgets) {

@@ -237,7 +237,8 @@ TEST(ZeroAllocation, MemoryBytesCountsWhatConstructionAllocates) {
 }
 
 // Tracking-safe culling on: a maturity guard with each scope and a floor,
-// and tracked flags on the keyframes; from-scratch and incremental.
+// and tracked flags on the keyframes; incremental, and from scratch with a
+// fraction that keeps the tracked first.
 TEST(ZeroAllocation, TrackingGuardAllocatesNothing) {
   const Capacities caps{12, 2048, 8192, 32768, 2048};
   std::vector<std::unique_ptr<Sparsifier>> sparsifiers;
@@ -250,6 +251,10 @@ TEST(ZeroAllocation, TrackingGuardAllocatesNothing) {
     for (Start start : {Start::kClosedForm, Start::kZeroFlow}) {
       sparsifiers.push_back(std::make_unique<Sparsifier>(caps, p, SolveMode::kIncremental, start));
     }
+    // And a kept fraction that keeps the tracked first (Params::tracked_first).
+    p.budget = KeepBudget{BudgetKind::kFraction, 0, 0.3};
+    p.tracked_first = true;
+    sparsifiers.push_back(std::make_unique<Sparsifier>(caps, p));
   }
   const Counted c = slide_counted(caps, sparsifiers, policy_windows(true),
                                   [](const Summary& s) -> std::uint64_t { return s.guarded + s.tracked; });

@@ -436,6 +436,18 @@ TEST(NodeConfig, ParsesTheMaturityGuard) {
   }
 }
 
+TEST(NodeConfig, ParsesTrackedFirst) {
+  NodeConfig c;
+  std::string error;
+  ASSERT_EQ(parse({}, c, error), ParseResult::kOk);
+  EXPECT_FALSE(c.params.tracked_first);  // off by default
+  ASSERT_EQ(parse({"--tracked-first", "--keep-fraction", "0.2"}, c, error), ParseResult::kOk) << error;
+  EXPECT_TRUE(c.params.tracked_first);
+  NodeConfig d;
+  EXPECT_EQ(parse({"--tracked-first"}, d, error), ParseResult::kError);
+  EXPECT_NE(error.find("--tracked-first needs a keep budget"), std::string::npos) << error;
+}
+
 TEST(NodeConfig, ParsesDeferredCulling) {
   NodeConfig c;
   std::string error;

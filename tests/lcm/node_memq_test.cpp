@@ -619,6 +619,35 @@ TEST_F(NodeOnMemq, TrackedFlagsAndMaturityMatchTheLibrary) {
   ASSERT_NE(w.keyframe(w.keyframe_count() - 1).tracked, nullptr);
 }
 
+// --tracked-first: with a keep budget smaller than the flagged points, the
+// newest keyframe's flagged points are candidates kept first, so some are
+// culled (never, when skipped); the decisions equal the library's.
+TEST_F(NodeOnMemq, TrackedFirstWithinAKeepBudgetMatchesTheLibrary) {
+  NodeConfig c = default_config();
+  c.params.budget = keepless::core::KeepBudget{keepless::core::BudgetKind::kPoints, 5, 0.0};
+  c.params.tracked_first = true;
+  make_node(c);
+  kt::ReferenceNode ref(keepless::platform::window_capacities(config_), config_.params, config_.window);
+  int flagged_culled = 0;
+  for (int i = 0; i < 8; ++i) {
+    keepless::keyframe_t m = kt::make_keyframe(i + 1, 100 + i, kt::id_range(i * 8, 40));
+    m.num_tracked = m.num_observations;
+    for (int j = 0; j < m.num_observations; ++j) m.tracked.push_back(static_cast<std::int8_t>((j + i) % 3 == 0));
+    const kt::ReferenceDecision expected = ref.step(m);
+    send(m);
+    ASSERT_EQ(decisions_.size(), static_cast<std::size_t>(i + 1));
+    kt::expect_same(expected, decisions_.back(), ("keyframe " + std::to_string(i)).c_str());
+    for (int j = 0; j < m.num_tracked; ++j) {
+      if (m.tracked[static_cast<std::size_t>(j)] == 0) continue;
+      flagged_culled += static_cast<int>(std::count(decisions_.back().culled_point_id.begin(),
+                                                    decisions_.back().culled_point_id.end(),
+                                                    m.point_id[static_cast<std::size_t>(j)]));
+    }
+  }
+  EXPECT_EQ(node_->counters().messages_rejected, 0u);
+  EXPECT_GT(flagged_culled, 0) << "beyond the budget flagged points are culled: they count toward it";
+}
+
 // --cost track: keyframe_t's point quality reaches the window (through
 // slides and the culled points' removal) and the decisions equal the
 // library's on the same windows; keyframes without it are counted.

@@ -77,10 +77,11 @@ const std::vector<cli::Flag> kFlags = {
     {"--no-baselines", nullptr, "keepless only, no baselines"},
     {"--vo-baselines", "LIST", "the real VO's baselines, comma-separated from random, longest-track, anms\n"
                                "(default all three; keepless and the original always run)"},
-    {"--anms-variant", "ssc|spread|response",
+    {"--anms-variant", "ssc|spread|response|track",
      "what the real VO's ANMS ranks by: ssc, SSC on the keypoints' responses\n"
      "(default); spread, SSC on the random baseline's priorities (spread alone);\n"
-     "response, the strongest responses without suppression (strength alone)"},
+     "response, the strongest responses without suppression (strength alone);\n"
+     "track, SSC on the track lengths (spread and long tracks)"},
     {"--no-ablation", nullptr, "no ablation variants"},
     {"--ablation-all", nullptr, "every ablation variant"},
     {"--use", "NAME", "a use (core::apply_use) and what it asks of the real VO, applied before\n"
@@ -129,6 +130,8 @@ const std::vector<cli::Flag> kFlags = {
                               "ids grow with the points' age) or by a bijective hash of it"},
     {"--tracked-flags", nullptr, "the real VO sends the new keyframe's tracked flags (the points it\n"
                                  "matched in that frame), which no selector culls"},
+    {"--tracked-first", nullptr, "as --tracked-flags, but keepless keeps the tracked points first within\n"
+                                 "its budget (core::Params::tracked_first) and every selector may cull them"},
     {"--keyframe-culling", "on|off|count-culled",
      "the real VO's culling of a keyframe 90 % of whose points three others\n"
      "see (ORB-SLAM's), every run alike: on (default); off, every keyframe it\n"
@@ -343,7 +346,8 @@ Args parse(int argc, char** argv) {
       if (v == "ssc") a.anms_variant = AnmsVariant::kSsc;
       else if (v == "spread") a.anms_variant = AnmsVariant::kSpread;
       else if (v == "response") a.anms_variant = AnmsVariant::kResponse;
-      else fail("--anms-variant: ssc, spread or response, got '" + v + "'");
+      else if (v == "track") a.anms_variant = AnmsVariant::kTrack;
+      else fail("--anms-variant: ssc, spread, response or track, got '" + v + "'");
     }
     else if (f == "--no-ablation") a.ablation = false;
     else if (f == "--ablation-all") a.ablation_all = true;
@@ -358,6 +362,7 @@ Args parse(int argc, char** argv) {
     }
     else if (f == "--maturity") a.policy.maturity_keyframes = static_cast<std::uint32_t>(parse_int(f, val(), 0, 1000));
     else if (f == "--tracked-flags") a.tracked_flags = true;
+    else if (f == "--tracked-first") a.tracked_flags = a.policy.tracked_first = true;
     else if (f == "--weak-keyframe") a.weak_keyframe = static_cast<int>(parse_int(f, val(), 0, 100000));
     else if (f == "--keyframe-ratio") a.keyframe_ratio = parse_double(f, val(), 0.3, 1);
     else if (f == "--defer") a.policy.defer_keyframes = static_cast<std::uint32_t>(parse_int(f, val(), 1, 1000));
@@ -627,11 +632,12 @@ int main(int argc, char** argv) {
   if (a.policy.budget.track_share > 0 && a.policy.budget.track_share_from > 0)
     summary.settings += " from F " + std::to_string(a.policy.budget.track_share_from);
   if (a.policy.maturity_keyframes > 0) summary.settings += ", maturity " + std::to_string(a.policy.maturity_keyframes);
-  if (a.tracked_flags) summary.settings += ", tracked flags";
+  if (a.tracked_flags) summary.settings += a.policy.tracked_first ? ", tracked first" : ", tracked flags";
   if (a.weak_keyframe > 0) summary.settings += ", a keyframe below " + std::to_string(a.weak_keyframe) + " inliers";
   if (a.keyframe_ratio != 0.9) summary.settings += ", keyframe ratio " + std::to_string(a.keyframe_ratio);
   if (a.anms_variant == keepless::eval::vo::AnmsVariant::kSpread) summary.settings += ", ANMS by spread alone";
   if (a.anms_variant == keepless::eval::vo::AnmsVariant::kResponse) summary.settings += ", ANMS by response alone";
+  if (a.anms_variant == keepless::eval::vo::AnmsVariant::kTrack) summary.settings += ", ANMS by track length";
   if (a.policy.defer_keyframes > 0) summary.settings += ", defer " + std::to_string(a.policy.defer_keyframes);
   if (a.defer_fixed) summary.settings += ", excluded points fixed in BA";
   if (a.defer_refine) summary.settings += ", excluded points refined";

@@ -56,9 +56,12 @@ std::vector<core::PointId> baseline_culls(Selector selector, const std::vector<C
         }
         const auto k = static_cast<std::size_t>(at - frames.begin());
         per[k].push_back(i);
-        // kSpread: a priority in [0, 1) that knows nothing of the keypoint.
-        const double rank = anms == AnmsVariant::kSpread ? static_cast<double>(mix(seed, c.id) >> 11) * 0x1p-53
-                                                         : static_cast<double>(c.response);
+        // kSpread: a priority in [0, 1) that knows nothing of the keypoint;
+        // kTrack: the track length, ties by that priority.
+        const double priority = static_cast<double>(mix(seed, c.id) >> 11) * 0x1p-53;
+        const double rank = anms == AnmsVariant::kSpread ? priority
+                            : anms == AnmsVariant::kTrack ? c.track_length + priority
+                                                          : static_cast<double>(c.response);
         groups[k].push_back({c.u, c.v, rank, c.id});
       }
       const auto chosen = ssc_select_shared(groups, static_cast<std::uint32_t>(n - cull), width, height);

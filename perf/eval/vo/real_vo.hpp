@@ -26,7 +26,7 @@ enum class Selector : std::uint8_t { kOriginal, kKeepless, kRandom, kLongestTrac
 // SSC on the keypoints' responses (strong corners, spread); kSpread, SSC on
 // a seeded random priority (spread alone); kResponse, the strongest
 // responses without suppression (strength alone).
-enum class AnmsVariant : std::uint8_t { kSsc, kSpread, kResponse };
+enum class AnmsVariant : std::uint8_t { kSsc, kSpread, kResponse, kTrack };
 enum class KeyframeCulling : std::uint8_t { kOn, kOff, kCountCulled };
 const char* to_string(Selector s);
 

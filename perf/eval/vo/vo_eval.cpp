@@ -88,6 +88,7 @@ bool evaluate_real_vo(const VoInput& in, const VoEvalOptions& o, std::vector<Com
     vo.params.cost_terms = o.policy.cost_terms;
     vo.params.spatial_weight = o.policy.spatial_weight;
     vo.params.maturity_keyframes = o.policy.maturity_keyframes;
+    vo.params.tracked_first = o.policy.tracked_first;
     vo.params.defer_keyframes = o.policy.defer_keyframes;
     vo.tracked_flags = o.tracked_flags;
     vo.weak_keyframe = o.weak_keyframe;

@@ -180,6 +180,12 @@ struct Params {
   // the newest (none while the window holds A keyframes or fewer). 0: off.
   // (A keyframe's tracked flags, Keyframe::tracked, need no parameter.)
   std::uint32_t maturity_keyframes = 0;
+  // With a keep budget: the points the newest keyframe flags tracked
+  // (Keyframe::tracked) stay candidates and the budget keeps them first
+  // (the network's order, a track share's swaps included, with the tracked
+  // ahead), so they count toward it; Summary::tracked counts them. false,
+  // or no budget: they are skipped (kept beside a budget).
+  bool tracked_first = false;
   // Deferred culling (DeferredCulls, keepless/core/deferred_culls.hpp): T.
   // A culled point is excluded from local BA at once and deleted only once
   // T keyframes in a row have not matched it (none of the newest T observes

@@ -52,7 +52,8 @@ struct Summary {
   // Tracking-safe culling: evaluated points skipped because they are younger
   // than Params::maturity_keyframes, then those skipped because the newest
   // keyframe flags them tracked (Keyframe::tracked); both counted in
-  // `skipped`, each point in one of them.
+  // `skipped`, each point in one of them. With Params::tracked_first and a
+  // budget, `tracked` counts the flagged candidates instead (not skipped).
   std::uint32_t guarded = 0;
   std::uint32_t tracked = 0;
   // CostModel::kTrack: window keyframes without point quality
