@@ -450,7 +450,7 @@ std::vector<NamedPath> model_inputs(const ModelOptions& opt) {
 // checked before deciding: either would fail the second write after the
 // first was done. (A COLMAP --out that is a file, or holds a folder by a
 // model file's name, is colmap_model_writable's.)
-bool folders_exist(const ModelOptions& opt, std::string* error) {
+bool output_paths_usable(const ModelOptions& opt, std::string* error) {
   for (const std::string* p : {&opt.out, &opt.decisions}) {
     if (p->empty()) continue;
     std::error_code ec;
@@ -505,7 +505,7 @@ int run_model(const ModelOptions& opt) {
   }
   std::string error;
   if ((!opt.out.empty() && !out_is_safe(opt, &error)) ||
-      !outputs_are_safe(model_inputs(opt), model_outputs(opt), &error) || !folders_exist(opt, &error)) {
+      !outputs_are_safe(model_inputs(opt), model_outputs(opt), &error) || !output_paths_usable(opt, &error)) {
     std::fprintf(stderr, "%s\n", error.c_str());
     return kExitInput;
   }
