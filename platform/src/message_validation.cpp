@@ -169,6 +169,9 @@ RejectReason follows(std::int64_t last_sequence, std::int64_t last_utime, std::i
   return RejectReason::kNone;
 }
 
+// A sequence a restarted stream may start at (0 .. kRestartMaxFirstSequence).
+bool at_stream_start(std::int64_t sequence) { return sequence >= 0 && sequence <= kRestartMaxFirstSequence; }
+
 }  // namespace
 
 std::uint64_t message_hash(const void* data, std::size_t size) {
@@ -216,7 +219,7 @@ bool OrderTracker::continues(const Run& run, std::int64_t sequence, std::int64_t
 bool OrderTracker::retransmits(std::int64_t sequence, std::uint64_t hash) const {
   if (!owned_) return false;
   if (sequence == last_sequence_ && hash == last_hash_) return true;
-  if (sequence >= 0 && sequence <= kRestartMaxFirstSequence && start_hash_[sequence] == hash) return true;
+  if (at_stream_start(sequence) && start_hash_[sequence] == hash) return true;
   for (std::size_t i = 0; i < recent_used_; ++i) {
     if (recent_[i].sequence == sequence && recent_[i].hash == hash) return true;
   }
@@ -321,7 +324,7 @@ void OrderTracker::accept(const Verdict& v, std::int64_t publisher, std::int64_t
   last_hash_ = hash;
   last_heard_ns_ = now_ns;
   if (v.takeover) std::fill(std::begin(start_hash_), std::end(start_hash_), 0);
-  if (keyframe && sequence >= 0 && sequence <= kRestartMaxFirstSequence) start_hash_[sequence] = hash;
+  if (keyframe && at_stream_start(sequence)) start_hash_[sequence] = hash;
   if (keyframe && !recent_.empty()) {
     recent_[recent_next_] = {sequence, hash};
     recent_next_ = (recent_next_ + 1) % recent_.size();
@@ -358,7 +361,7 @@ bool OrderTracker::extend_restart(std::int64_t publisher, std::int64_t sequence,
       has_previous_ && follows(previous_sequence_, previous_utime_, sequence, utime, bounds_.max_sequence_jump,
                                bounds_.max_utime_jump_us) == RejectReason::kNone;
   runs_[slot].length = 1;
-  runs_[slot].restart = sequence >= 0 && sequence <= kRestartMaxFirstSequence && !continues_previous;
+  runs_[slot].restart = at_stream_start(sequence) && !continues_previous;
   runs_[slot].sequence = sequence;
   runs_[slot].utime = utime;
   runs_[slot].touched = run_clock_;

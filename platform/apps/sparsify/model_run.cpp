@@ -428,6 +428,18 @@ bool parse_map_flag(const std::string& flag, const char* value, ModelOptions* op
 
 namespace {
 
+// A path's files as NamedPaths: a COLMAP folder's in both formats (the one
+// not read or written is still a model there), else the path itself.
+void add_files(const char* flag, Input input, const std::string& path, std::vector<NamedPath>* out) {
+  if (input != Input::kColmap) {
+    out->push_back({flag, path});
+    return;
+  }
+  for (const char* ext : {"bin", "txt"}) {
+    for (const std::string& f : model_files(Input::kColmap, path, ext)) out->push_back({flag, f});
+  }
+}
+
 // What a run reads and writes, by flag, for outputs_are_safe. A COLMAP
 // model's files are both formats' (the one not read is still the user's
 // model); a COLMAP --out folder's files are its outputs (--out itself is
@@ -435,13 +447,7 @@ namespace {
 std::vector<NamedPath> model_inputs(const ModelOptions& opt) {
   const char* flag = opt.input == Input::kColmap ? "--colmap" : opt.input == Input::kBal ? "--bal" : "--window";
   std::vector<NamedPath> in;
-  if (opt.input == Input::kColmap) {
-    for (const char* ext : {"bin", "txt"}) {
-      for (const std::string& f : model_files(Input::kColmap, opt.path, ext)) in.push_back({flag, f});
-    }
-  } else {
-    in.push_back({flag, opt.path});
-  }
+  add_files(flag, opt.input, opt.path, &in);
   if (!opt.sim3.empty()) in.push_back({"--sim3", opt.sim3});
   return in;
 }
@@ -473,14 +479,7 @@ bool output_paths_usable(const ModelOptions& opt, std::string* error) {
 std::vector<NamedPath> model_outputs(const ModelOptions& opt) {
   std::vector<NamedPath> out;
   if (!opt.decisions.empty()) out.push_back({"--decisions", opt.decisions});
-  if (opt.out.empty()) return out;
-  if (opt.input != Input::kColmap) {
-    out.push_back({"--out", opt.out});
-  } else {
-    for (const char* ext : {"bin", "txt"}) {
-      for (const std::string& f : model_files(Input::kColmap, opt.out, ext)) out.push_back({"--out", f});
-    }
-  }
+  if (!opt.out.empty()) add_files("--out", opt.input, opt.out, &out);
   return out;
 }
 
