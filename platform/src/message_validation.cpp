@@ -288,10 +288,17 @@ OrderTracker::Verdict OrderTracker::check(std::int64_t publisher, std::int64_t s
   // own short bound, so a long --owner-timeout-s does not lock the owner out.
   const std::uint64_t silence = bounds_.owner_timeout_ns > 0 ? std::min(bounds_.owner_timeout_ns, kResyncSilenceNs)
                                                              : kResyncSilenceNs;
-  if (runs_[r].restart) {
+  // A restarted VO clocks on, or its old process fell silent; late copies
+  // of a start the order never accepted (a node started after its VO, lost
+  // datagrams, a dead process) are earlier, into a live order.
+  if (runs_[r].restart && (utime > last_utime_ || quiet_ns >= silence)) {
     v.reason = RejectReason::kNone;
     v.restart = true;
-  } else if (quiet_ns >= silence && !behind_the_stream(sequence, utime)) {
+  } else if (!runs_[r].restart && quiet_ns >= silence &&
+             (!behind_the_stream(sequence, utime) || (now_ns >= runs_[r].first_ns && now_ns - runs_[r].first_ns >= silence))) {
+    // The stream's past is a flush, heard at once; a live stream behind an
+    // order set by a burst ahead in both fields is heard for the silence.
+    v.reason = RejectReason::kNone;
     v.reason = RejectReason::kNone;
     v.resync = true;
   }
@@ -333,7 +340,7 @@ void OrderTracker::accept(const Verdict& v, std::int64_t publisher, std::int64_t
 }
 
 bool OrderTracker::extend_restart(std::int64_t publisher, std::int64_t sequence, std::int64_t utime,
-                                  std::uint64_t hash) {
+                                  std::uint64_t hash, std::uint64_t now_ns) {
   // A duplicate (a datagram delivered twice) changes no run: extending
   // one would let copies confirm it, starting one would displace one.
   if (!owned_ || publisher != owner_ || repeats(sequence, hash)) return false;
@@ -365,6 +372,7 @@ bool OrderTracker::extend_restart(std::int64_t publisher, std::int64_t sequence,
   runs_[slot].sequence = sequence;
   runs_[slot].utime = utime;
   runs_[slot].touched = run_clock_;
+  runs_[slot].first_ns = now_ns;
   return true;
 }
 

@@ -330,7 +330,7 @@ struct Node::Impl {
       if (c.verdict.takeover || c.verdict.restart) decide_pending();
       r = admit_keyframe(c.verdict, &evicted);
     } else if (candidate(c, hash)) {
-      (void)order.extend_restart(kf.publisher_id, kf.sequence, kf.utime, hash);
+      (void)order.extend_restart(kf.publisher_id, kf.sequence, kf.utime, hash, arrival);
     }
     const std::uint64_t t1 = clock->now_ns();
     if (r != RejectReason::kNone) {

@@ -250,9 +250,11 @@ TEST_F(GuardOnMemq, RetransmissionsDoNotRestart) {
 
 // Defect 2(c): 1, 2, then 3 with a NaN centre: the third was rejected, yet
 // the window went 4 -> 0 and the order 20 -> 3. A real restart (1, 2, then
-// a valid 4) is still recognised at its third valid keyframe.
+// a valid 4; its clock from the start again, after the old order's second
+// of silence) is still recognised at its third valid keyframe.
 TEST_F(GuardOnMemq, AnInvalidKeyframeNeverCompletesARestart) {
   live_stream(20);
+  clock_.advance(1000000000);
   const State before = state();
   send(kt::make_keyframe(1, 501, kt::id_range(300, 10)));
   send(kt::make_keyframe(2, 502, kt::id_range(300, 10)));
@@ -290,6 +292,7 @@ TEST_F(GuardOnMemq, AStragglerDoesNotLockARestartOut) {
   for (std::int64_t s = 1020; s <= 1029; ++s) send(kt::make_keyframe(s, s, kt::id_range(s % kPoints, 30)));
   send(kt::make_keyframe(1, 1, kt::id_range(0, 20)));            // the new process
   send(kt::make_keyframe(1030, 1030, kt::id_range(230, 30)));     // the old one's straggler
+  clock_.advance(1000000000);  // its last message: then the old order falls silent
   const std::size_t first = decisions_.size();
   for (std::int64_t s = 2; s <= 200; ++s) send(kt::make_keyframe(s, s, kt::id_range(s, 20)));
   // Served from its fourth keyframe: the straggler, accepted, clears the run
@@ -622,6 +625,7 @@ TEST_F(ResyncOnMemq, AStrayLowSequenceDoesNotBlockTheResync) {
 // a restarted VO's keyframes never delay its restart.
 TEST_F(ResyncOnMemq, RefusedStragglersDoNotDelayARestart) {
   stream_at_10hz(1020, 1029);
+  clock_.advance(1000000000);  // the old process died; the new one's clock starts again
   send(kt::make_keyframe(1, 1, kt::id_range(0, 20)));             // the new process
   send(kt::make_keyframe(1025, 5025, kt::id_range(230, 30)));     // the old one's, late: refused
   send(kt::make_keyframe(2, 2, kt::id_range(1, 20)));
@@ -755,6 +759,72 @@ TEST_F(ResyncOnMemq, AKeyframeAheadInSequenceAndUtimeIsOutvoted) {
   expect_resynchronised(22);
 }
 
+// Review: two such messages locked the owner out until its utime passed
+// theirs (20 minutes; twelve, 2 hours): the stream was behind the last and
+// not after the one before it, so it was taken for late copies. The
+// stream's past arrives as a flush, at once; a live stream heard for the
+// resync's silence is outvoting the burst.
+TEST_F(ResyncOnMemq, ABurstAheadInSequenceAndUtimeIsOutvoted) {
+  stream_at_10hz(1, 20);
+  std::int64_t utime = kt::make_keyframe(21, 0, {}).utime;
+  for (std::int64_t i = 0; i < 12; ++i) {
+    keepless::keyframe_t ahead = kt::make_keyframe(21 + (1 << 19) + i, 900000 + i, kt::id_range(105, 30));
+    utime += 599ll * 1000000;  // each within --max-utime-jump-s of the last
+    ahead.utime = utime;
+    clock_.advance(1000000);
+    send(ahead);
+    ASSERT_EQ(decisions_.back().status, decision_t::STATUS_OPTIMAL) << i;
+  }
+  expect_resynchronised(21);
+}
+
+// Review: late copies of start keyframes the order never accepted were a
+// restart run: three wiped the window and the cull memory, and the stale
+// keyframes became the order the live stream was decided over. While the
+// order is live a restart needs later utimes (a restarted VO's clock goes
+// on; copies are earlier): the node started after its VO ...
+TEST_F(ResyncOnMemq, LateCopiesOfAStartTheNodeMissedNeverRestart) {
+  stream_at_10hz(20, 40);
+  const auto before = kt::snapshot(node_->window());
+  const std::uint32_t culls = node_->cull_memory().size();
+  ASSERT_GT(culls, 0u);
+  for (std::int64_t s = 1; s <= 5; ++s) send(owner_keyframe(s));
+  EXPECT_EQ(node_->order().restarts(), 0u);
+  EXPECT_TRUE(kt::snapshot(node_->window()) == before) << "the window kept";
+  EXPECT_EQ(node_->cull_memory().size(), culls) << "the cull memory kept";
+  stream_at_10hz(41, 41);
+  EXPECT_EQ(decisions_.back().status, decision_t::STATUS_OPTIMAL);
+  for (std::int64_t id : decisions_.back().window_keyframe_id) EXPECT_GE(id, 38) << "a stale keyframe decided over";
+}
+
+// ... or lost the datagrams of 2, 3 and 4.
+TEST_F(ResyncOnMemq, LateCopiesOfLostStartKeyframesNeverRestart) {
+  stream_at_10hz(1, 1);
+  stream_at_10hz(5, 40);
+  const auto before = kt::snapshot(node_->window());
+  for (std::int64_t s = 1; s <= 5; ++s) send(owner_keyframe(s));
+  EXPECT_EQ(node_->order().restarts(), 0u);
+  EXPECT_TRUE(kt::snapshot(node_->window()) == before) << "the window kept";
+}
+
+// A restarted VO whose utimes start again (a replayed log, a clock from
+// boot) is served once its old order has been silent for the resync's
+// second: 10 Hz keyframes, refused for about a second, then a restart.
+TEST_F(ResyncOnMemq, ARestartWithAnEarlierClockIsServedAfterTheOldOrdersSilence) {
+  stream_at_10hz(101, 140);
+  const std::size_t first = decisions_.size();
+  for (std::int64_t s = 1; s <= 30; ++s) {
+    clock_.advance(100000000);
+    send(kt::make_keyframe(s, 500 + s, kt::id_range(300 + s, 20)));
+  }
+  EXPECT_EQ(node_->order().restarts(), 1u);
+  EXPECT_EQ(node_->order().resyncs(), 0u);
+  EXPECT_EQ(node_->order().last_sequence(), 30);
+  EXPECT_GE(count(decision_t::STATUS_OPTIMAL, first), 30u - 11u) << "refused for about a second";
+  EXPECT_LE(count(decision_t::STATUS_OPTIMAL, first), 30u - 9u) << "not before the old order's silence";
+  for (std::int64_t id : decisions_.back().window_keyframe_id) EXPECT_GT(id, 500) << "an old keyframe kept";
+}
+
 // Review: the resync waited for --owner-timeout-s, so with 30 s one flipped
 // sequence locked the owner out for 30 s. It waits 1 s at most.
 TEST_F(ResyncOnMemq, ALongOwnerTimeoutDoesNotDelayTheResync) {
@@ -797,6 +867,7 @@ TEST_F(ResyncOnMemq, AnEarlyFlippedSequenceIsResynchronisedNotARestart) {
 // not follow the order before the last accepted message.
 TEST_F(ResyncOnMemq, AnEarlyRestartIsStillARestart) {
   stream_at_10hz(1, 5);
+  clock_.advance(1000000000);
   const std::size_t first = decisions_.size();
   for (std::int64_t s = 1; s <= 3; ++s) send(kt::make_keyframe(s, 500 + s, kt::id_range(300 + s, 20)));
   EXPECT_EQ(count(decision_t::STATUS_OPTIMAL, first), 1u) << "served from its third keyframe";
@@ -933,6 +1004,30 @@ TEST_F(EarlyRestartOnMemq, LateCopiesOfTheDeadProcessDoNotRestartAgain) {
   EXPECT_EQ(node_->cull_memory().size(), culls);
   send(new_keyframe(11));
   EXPECT_TRUE(window_only_new()) << "the dead process's keyframe 5 is back in the window";
+}
+
+// Review: the same once the new process's own ids had pushed the dead one's
+// out of the window: its accepted keyframes had replaced the start's hashes,
+// so copies of the dead process's 3, 4, 5 restarted the live stream again.
+TEST_F(EarlyRestartOnMemq, LateCopiesOfTheDeadProcessAfterTheWindowChangeNothing) {
+  for (std::int64_t s = 1; s <= 5; ++s) send(old_keyframe(s));
+  for (std::int64_t s = 1; s <= 30; ++s) {
+    keepless::keyframe_t m = new_keyframe(s);
+    m.keyframe_id = 1000 + s;  // the new process's own ids
+    send(m);
+  }
+  ASSERT_EQ(node_->order().restarts(), 1u);
+  const auto before = kt::snapshot(node_->window());
+  const std::uint32_t culls = node_->cull_memory().size();
+  for (std::int64_t s = 3; s <= 5; ++s) send(old_keyframe(s));
+  EXPECT_EQ(node_->order().restarts(), 1u);
+  EXPECT_EQ(node_->order().last_sequence(), 30);
+  EXPECT_TRUE(kt::snapshot(node_->window()) == before) << "the window kept";
+  EXPECT_EQ(node_->cull_memory().size(), culls) << "the cull memory kept";
+  keepless::keyframe_t m = new_keyframe(31);
+  m.keyframe_id = 1031;
+  send(m);
+  EXPECT_TRUE(window_only_new());
 }
 
 // Copies of keyframes after a plain and after a reset map event change nothing.

@@ -105,11 +105,16 @@ RejectReason check_map_event_bytes(const void* data, std::size_t size, const Mes
 //    before the last accepted message, and is continued only in steps of at
 //    most kRestartMaxFirstSequence (stragglers of an old run never break or
 //    complete it): `restart_confirm` keyframes are a restart (the last one
-//    is accepted, the window and the cull memory are cleared). Every other
-//    run is a resync run: `restart_confirm` keyframes, once the order has
-//    accepted nothing for kResyncSilenceNs (or owner_timeout_ns if shorter
-//    and not 0), are a resync: the last one is accepted and becomes the
-//    order, the window kept. A resync undoes an order set by one message the
+//    is accepted, the window and the cull memory are cleared), if its last
+//    is later than the last accepted message or the order has accepted
+//    nothing for the resync's silence (late copies of a start the order never
+//    accepted are earlier, into a live order). Every other run is a resync
+//    run: `restart_confirm` keyframes, once the order has accepted nothing
+//    for kResyncSilenceNs (or owner_timeout_ns if shorter and not 0), are a
+//    resync: the last one is accepted and becomes the order, the window
+//    kept; a run behind the order in both fields (behind_the_stream) only
+//    once it has been heard for that silence too (a flush of the stream's
+//    past arrives at once). A resync undoes an order set by messages the
 //    stream does not continue (a corrupted sequence, a clock step, a first
 //    message heard mid-run), early in a stream too; without it such a
 //    message locked the owner out.
@@ -162,7 +167,8 @@ class OrderTracker {
   // An owner keyframe, valid against the window (or valid but for an id in
   // it), refused by the order: extends (or starts) a candidate run. Returns
   // true if it did.
-  bool extend_restart(std::int64_t publisher, std::int64_t sequence, std::int64_t utime, std::uint64_t hash);
+  bool extend_restart(std::int64_t publisher, std::int64_t sequence, std::int64_t utime, std::uint64_t hash,
+                      std::uint64_t now_ns);
   // A keyframe later than the last accepted message and no retransmission:
   // one that may belong to a restart though its id is in the window (rule 3).
   bool reissues(std::int64_t sequence, std::int64_t utime, std::uint64_t hash) const;
@@ -186,6 +192,7 @@ class OrderTracker {
     bool restart = false;      // a restart run, else a resync run
     std::int64_t sequence = 0, utime = 0;  // its last keyframe's
     std::uint64_t touched = 0;             // extend_restart() call that last started or extended it
+    std::uint64_t first_ns = 0;            // node time of its first keyframe
   };
   bool continues(const Run& run, std::int64_t sequence, std::int64_t utime) const;
   // A copy of the last accepted message or of a remembered keyframe (the
