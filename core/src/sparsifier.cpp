@@ -779,7 +779,7 @@ std::size_t Sparsifier::memory_bytes() const {
              sizeof(std::uint32_t) +
          s.rank_of.capacity() * sizeof(std::int32_t) +
          s.decisions.capacity() * sizeof(PointDecision) +
-         s.in_scope.capacity() +
+         s.in_scope.capacity() + s.tracked_now.capacity() +
          (s.slots_at.capacity() + s.slots.capacity() + s.covered.capacity() +
           s.culled_at.capacity() + s.culled_list.capacity() + s.candidates.capacity()) *
              sizeof(std::uint32_t);

@@ -245,6 +245,11 @@ ParseResult parse_node_arguments(int argc, const char* const* argv, NodeConfig& 
       error = "unknown option '" + flag + "'";
       return ParseResult::kError;
     }
+    const bool is_switch = flag == "--mlock" || flag == "--quiet" || flag == "--tracked-first";
+    if (is_switch && has_inline_value) {  // --tracked-first=0 must not turn it on
+      error = "option '" + flag + "' takes no value";
+      return ParseResult::kError;
+    }
     if (flag == "--mlock") {
       config.mlock = true;
       continue;

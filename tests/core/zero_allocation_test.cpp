@@ -221,6 +221,7 @@ TEST(ZeroAllocation, MemoryBytesCountsWhatConstructionAllocates) {
           p.scope = scope;
           p.budget = budget;
           p.coverage_floor = scope == Scope::kNewest ? 10 : 0;
+          p.tracked_first = budget.kind == BudgetKind::kFraction && scope == Scope::kNewest;  // its scratch too
           test::AllocationCounter counter;
           auto s = std::make_unique<Sparsifier>(caps, p, mode, start);
           const std::uint64_t allocated = counter.stop();

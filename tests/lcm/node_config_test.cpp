@@ -448,6 +448,17 @@ TEST(NodeConfig, ParsesTrackedFirst) {
   EXPECT_NE(error.find("--tracked-first needs a keep budget"), std::string::npos) << error;
 }
 
+// Review: a switch's inline value was dropped, so --tracked-first=0 turned it on.
+TEST(NodeConfig, ASwitchRefusesAValue) {
+  for (const char* arg : {"--tracked-first=0", "--mlock=false", "--quiet=off", "--tracked-first="}) {
+    NodeConfig c;
+    std::string error;
+    EXPECT_EQ(parse({arg, "--keep-fraction", "0.2"}, c, error), ParseResult::kError) << arg;
+    EXPECT_NE(error.find("takes no value"), std::string::npos) << arg << ": " << error;
+    EXPECT_FALSE(c.params.tracked_first || c.mlock || c.quiet) << arg;
+  }
+}
+
 TEST(NodeConfig, ParsesDeferredCulling) {
   NodeConfig c;
   std::string error;

@@ -131,7 +131,8 @@ const std::vector<cli::Flag> kFlags = {
     {"--tracked-flags", nullptr, "the real VO sends the new keyframe's tracked flags (the points it\n"
                                  "matched in that frame), which no selector culls"},
     {"--tracked-first", nullptr, "as --tracked-flags, but keepless keeps the tracked points first within\n"
-                                 "its budget (core::Params::tracked_first) and every selector may cull them"},
+                                 "its --kept-fraction budget (core::Params::tracked_first; not with --M) and\n"
+                                 "every selector may cull them"},
     {"--keyframe-culling", "on|off|count-culled",
      "the real VO's culling of a keyframe 90 % of whose points three others\n"
      "see (ORB-SLAM's), every run alike: on (default); off, every keyframe it\n"
@@ -407,6 +408,7 @@ Args parse(int argc, char** argv) {
     else std::exit(cli::usage_error(kTool, cli::unknown_option(f)));
   }
   if (by_M && by_fraction) fail("--M and --kept-fraction exclude each other");
+  if (by_M && a.policy.tracked_first) fail("--tracked-first needs --kept-fraction: under --M there is no budget to keep the tracked first within (--tracked-flags skips them)");
   if (a.policy.budget.track_share > 0 && a.policy.budget.track_share_from == 0 && !by_fraction) fail("--track-share needs --kept-fraction: it is a share of its count");
   if (!a.images.empty() && (a.calib.empty() || a.poses.empty())) fail("--image-tracks needs --calib and --poses");
   for (const auto& v : a.vo)

@@ -183,8 +183,10 @@ struct Params {
   // With a keep budget: the points the newest keyframe flags tracked
   // (Keyframe::tracked) stay candidates and the budget keeps them first
   // (the network's order, a track share's swaps included, with the tracked
-  // ahead), so they count toward it; Summary::tracked counts them. false,
-  // or no budget: they are skipped (kept beside a budget).
+  // ahead), so they count toward it; Summary::tracked counts them. The kept
+  // set is then not {M* <= Summary::budget_m}: budget_m and the flows follow
+  // the network's order. false, or no budget: they are skipped (kept beside
+  // a budget).
   bool tracked_first = false;
   // Deferred culling (DeferredCulls, keepless/core/deferred_culls.hpp): T.
   // A culled point is excluded from local BA at once and deleted only once
