@@ -77,6 +77,7 @@ std::uint32_t DeferredCulls::defer(const PointId* culled, std::uint32_t n, Point
                                    std::uint32_t* excluded_count, PointId* deleted) {
   std::uint32_t kept = 0, refused = 0;
   for (std::uint32_t i = 0; i < n; ++i) {
+    if (contains(culled[i])) continue;  // held already, or a repeat in `culled`: listed once
     if (exclude(culled[i]) == Status::kOk) {
       excluded[kept++] = culled[i];
     } else {
@@ -84,9 +85,26 @@ std::uint32_t DeferredCulls::defer(const PointId* culled, std::uint32_t n, Point
     }
   }
   *excluded_count = kept;
-  const std::uint32_t total = refused + expire(deleted + refused);
-  std::sort(deleted, deleted + total);
+  // A refused id repeated in `culled` is deleted and counted once.
+  std::sort(deleted, deleted + refused);
+  const auto distinct = static_cast<std::uint32_t>(std::unique(deleted, deleted + refused) - deleted);
+  impl_->refused -= refused - distinct;
+  const std::uint32_t total = distinct + expire(deleted + distinct);
+  std::sort(deleted, deleted + total);  // (inplace_merge may allocate)
   return total;
+}
+
+bool DeferredCulls::merge(PointId from, PointId into, bool from_in_window) {
+  Impl& d = *impl_;
+  const std::uint32_t* i = d.index.find(into);
+  if (i == nullptr) return false;
+  if (const std::uint32_t* f = d.index.find(from); f != nullptr && f != i) {
+    d.last[*i] = std::max(d.last[*i], d.last[*f]);
+    d.remove_at(*f);
+  } else if (from_in_window) {
+    d.last[*i] = d.clock;
+  }
+  return true;
 }
 
 bool DeferredCulls::forget(PointId point) {

@@ -95,6 +95,7 @@ struct Node::Impl {
     pending_window.resize(capacities.max_keyframes);
     max_decision = reserve_decision(decision, capacities, deferring ? deferred.capacity() : 0);
     merged_kept.resize(c.max_event_ids);
+    merged_kept_into.resize(c.max_event_ids);
     observations.resize(c.max_observations);
     id_scratch.resize(std::max<std::size_t>(c.max_observations, 3 * std::size_t{c.max_event_ids}));
     out.resize(max_decision);
@@ -522,7 +523,8 @@ struct Node::Impl {
         // Applied where the source was in the window (as merges_effective counts).
         std::uint32_t present = 0;
         for (std::uint32_t i = 0; i < into_excluded; ++i) {
-          present += sliding.window().point_views(static_cast<core::PointId>(merged_kept[i])) > 0 ? 1 : 0;
+          merged_kept_into[i].present = sliding.window().point_views(static_cast<core::PointId>(merged_kept[i])) > 0;
+          present += merged_kept_into[i].present ? 1 : 0;
         }
         s = sliding.drop_points(reinterpret_cast<const core::PointId*>(merged_kept.data()), into_excluded);
         if (s == core::Status::kOk) merges_applied += present;
@@ -542,13 +544,14 @@ struct Node::Impl {
   }
 
   // Deferred culling and a map event's valid items: a merge into an excluded
-  // point is taken out of the merges and its source moved to merged_kept, to
-  // be dropped from the window (its observations now belong to a point out
-  // of BA). Returns how many were.
+  // point is taken out of the merges and its source moved to merged_kept
+  // (its target to merged_kept_into), to be dropped from the window (its
+  // observations now belong to a point out of BA). Returns how many were.
   std::uint32_t split_merges_into_excluded(MapEventItems& items) {
     std::uint32_t kept = 0, moved = 0;
     for (std::uint32_t i = 0; i < items.merged; ++i) {
       if (deferred.contains(static_cast<core::PointId>(items.merged_into[i]))) {
+        merged_kept_into[moved].into = items.merged_into[i];
         merged_kept[moved++] = items.merged_from[i];
       } else {
         items.merged_from[kept] = items.merged_from[i];
@@ -561,12 +564,16 @@ struct Node::Impl {
   }
 
   // After the edit succeeded: the deleted points and merge sources are
-  // forgotten (the VO removed them itself).
+  // forgotten (the VO removed them itself); an excluded target takes over
+  // its source's matches, so it is never deleted while they are recent.
   void forget_edited_points(const MapEventItems& items, std::uint32_t into_excluded) {
     const auto nd = static_cast<std::uint32_t>(event.num_deleted_points);
     for (std::uint32_t i = 0; i < nd; ++i) (void)deferred.forget(static_cast<core::PointId>(event.deleted_point_id[i]));
     for (std::uint32_t i = 0; i < items.merged; ++i) (void)deferred.forget(static_cast<core::PointId>(items.merged_from[i]));
-    for (std::uint32_t i = 0; i < into_excluded; ++i) (void)deferred.forget(static_cast<core::PointId>(merged_kept[i]));
+    for (std::uint32_t i = 0; i < into_excluded; ++i) {
+      (void)deferred.merge(static_cast<core::PointId>(merged_kept[i]),
+                           static_cast<core::PointId>(merged_kept_into[i].into), merged_kept_into[i].present);
+    }
   }
 
   // `cleared`: this event reset the window; `merges`: merges that changed it.
@@ -654,6 +661,7 @@ struct Node::Impl {
            (merged_from.size() + merged_into.size() + removed.size()) * 8 + ack.refused_id.capacity() * 9 +
            ack_out.size() + pending_window.size() * 8 + culls.memory_bytes() + order.memory_bytes() +
            (decision.excluded_point_id.capacity() + decision.deleted_point_id.capacity() + merged_kept.size()) * 8 +
+           merged_kept_into.size() * sizeof(KeptMerge) +
            deferred.memory_bytes();
   }
 
@@ -711,6 +719,11 @@ struct Node::Impl {
   bool deferring;                  // --defer T
   core::DeferredCulls deferred;    // excluded points not yet deleted (capacity 0 unless deferring)
   std::vector<std::int64_t> merged_kept;  // [max_event_ids] merge sources into excluded points
+  struct KeptMerge {
+    std::int64_t into = 0;  // the excluded target
+    bool present = false;   // the source had observations in the window
+  };
+  std::vector<KeptMerge> merged_kept_into;  // [max_event_ids], beside merged_kept
   keepless::map_event_ack_t ack{};
   std::vector<std::uint8_t> ack_out;
   std::vector<std::int64_t> merged_from, merged_into, removed;  // a map event's items to apply

@@ -486,7 +486,7 @@ double estimate_node_bytes(const NodeConfig& config) {
   const double ids = config.cull_memory != 0 ? config.cull_memory : caps.max_points;
   // Sliding-window scratch, message objects and buffers, decision arrays, cull memory,
   // the order's record of the window's keyframes (sequence and hash).
-  const double messages = 158.0 * config.max_observations + 132.0 * config.max_event_ids +
+  const double messages = 158.0 * config.max_observations + 148.0 * config.max_event_ids +
                           16.0 * (caps.max_points + 2.0 * caps.max_keyframes) + 8.0 * caps.max_points;
   // Deferred culling: the held points (a 16-byte slot table at <= 1/2 load,
   // id and last match) and the decision's two lists.

@@ -240,5 +240,60 @@ TEST_F(DeferredNode, AFullMemoryDeletesAtOnceAndCountsIt) {
   EXPECT_EQ(statuses_.back().capacity_deferred, 1);
 }
 
+// Review: a merge into an excluded point lost its source's matches, so the
+// point was deleted while a keyframe within the newest T had matched it (the
+// source) - ORB-SLAM's fusing of a new keyframe's duplicate into an older
+// point. T = 3: p excluded at c, a one-view point matched at c + 2 merged
+// into p, c + 3 misses it: one keyframe in a row.
+TEST_F(DeferredNode, AMergeIntoAnExcludedPointKeepsTheSourcesMatches) {
+  make_deferred(3);
+  const std::int64_t p = exclude_one();  // tick c
+  ASSERT_GE(p, 0);
+  const std::int64_t live = 777777;
+  send_fresh();        // c + 1: p not matched
+  send_fresh({live});  // c + 2: live matched (one view: stays in the window)
+  ASSERT_FALSE(has(decisions_.back().deleted_point_id, p));
+  ASSERT_TRUE(in_window(node_->window(), static_cast<std::uint64_t>(live)));
+  keepless::map_event_t e = kt::make_event(++seq_);
+  e.merged_from_id = {live};
+  e.merged_into_id = {p};
+  send(e);
+  ASSERT_EQ(acks_.back().status, keepless::map_event_ack_t::STATUS_APPLIED);
+  ASSERT_EQ(acks_.back().merged_applied, 1);
+  EXPECT_FALSE(in_window(node_->window(), static_cast<std::uint64_t>(live))) << "now a point out of BA";
+  for (int k = 3; k <= 4; ++k) {
+    send_fresh();  // c + 3, c + 4
+    EXPECT_FALSE(has(decisions_.back().deleted_point_id, p)) << "matched (as live) at c + 2; c + " << k;
+  }
+  send_fresh();  // c + 5: three in a row since c + 2
+  EXPECT_TRUE(has(decisions_.back().deleted_point_id, p));
+}
+
+// The same when both are excluded: q, matched at c + 1 and c + 2, merged
+// into p (last matched at c): p takes q's last match and q is forgotten.
+TEST_F(DeferredNode, AMergeOfAnExcludedPointIntoAnotherKeepsItsMatches) {
+  make_deferred(3);
+  const std::int64_t p = exclude_one();  // tick c
+  ASSERT_GE(p, 0);
+  const std::vector<std::int64_t> excluded = decisions_.back().excluded_point_id;
+  ASSERT_GE(excluded.size(), 2u);
+  const std::int64_t q = excluded[1];
+  send_fresh({q});  // c + 1
+  send_fresh({q});  // c + 2
+  keepless::map_event_t e = kt::make_event(++seq_);
+  e.merged_from_id = {q};
+  e.merged_into_id = {p};
+  send(e);
+  ASSERT_EQ(acks_.back().status, keepless::map_event_ack_t::STATUS_APPLIED);
+  EXPECT_FALSE(node_->deferred_culls().contains(static_cast<std::uint64_t>(q))) << "the source is forgotten";
+  for (int k = 3; k <= 4; ++k) {
+    send_fresh();  // c + 3, c + 4
+    EXPECT_FALSE(has(decisions_.back().deleted_point_id, p)) << "matched (as q) at c + 2; c + " << k;
+  }
+  send_fresh();  // c + 5
+  EXPECT_TRUE(has(decisions_.back().deleted_point_id, p));
+  EXPECT_FALSE(has(decisions_.back().deleted_point_id, q)) << "the VO merged it away: never reported";
+}
+
 }  // namespace
 }  // namespace keepless::testing

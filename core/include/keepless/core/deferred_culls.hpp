@@ -50,9 +50,16 @@ class DeferredCulls {
   // (copied to `excluded` in the order given; *excluded_count set) or, when
   // refused, deleted at once; the points expire() deletes at this tick join
   // those in `deleted` (room for n + capacity() ids), ascending. Returns how
-  // many are deleted.
+  // many are deleted. A point held already, or repeated in `culled`, is
+  // listed (and refused) once.
   std::uint32_t defer(const PointId* culled, std::uint32_t n, PointId* excluded, std::uint32_t* excluded_count,
                       PointId* deleted);
+  // The map merged `from` into the held `into`: the source's observations
+  // are now its, so `into` keeps the later of their last matches and a held
+  // `from` is forgotten; `from_in_window` (the source had observations in
+  // the window, whose ticks are not kept) counts as a match at this tick:
+  // never early, at most T keyframes late. False if `into` is not held.
+  bool merge(PointId from, PointId into, bool from_in_window);
   // The map deleted or merged `point` itself: forgotten without a deletion
   // to report. False if it was not held.
   bool forget(PointId point);
