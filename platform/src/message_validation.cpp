@@ -288,20 +288,18 @@ OrderTracker::Verdict OrderTracker::check(std::int64_t publisher, std::int64_t s
   // own short bound, so a long --owner-timeout-s does not lock the owner out.
   const std::uint64_t silence = bounds_.owner_timeout_ns > 0 ? std::min(bounds_.owner_timeout_ns, kResyncSilenceNs)
                                                              : kResyncSilenceNs;
-  // A restarted VO clocks on, or its old process fell silent; late copies
-  // of a start the order never accepted (a node started after its VO, lost
-  // datagrams, a dead process) are earlier, into a live order.
-  if (runs_[r].restart && (utime > last_utime_ || quiet_ns >= silence)) {
-    v.reason = RejectReason::kNone;
-    v.restart = true;
-  } else if (!runs_[r].restart && quiet_ns >= silence &&
-             (!behind_the_stream(sequence, utime) || (now_ns >= runs_[r].first_ns && now_ns - runs_[r].first_ns >= silence))) {
+  if (runs_[r].restart) {
+    // A restarted VO clocks on, or its old process fell silent; late copies
+    // of a start the order never accepted (a node started after its VO, lost
+    // datagrams, a dead process) are earlier, into a live order.
+    v.restart = utime > last_utime_ || quiet_ns >= silence;
+  } else {
     // The stream's past is a flush, heard at once; a live stream behind an
     // order set by a burst ahead in both fields is heard for the silence.
-    v.reason = RejectReason::kNone;
-    v.reason = RejectReason::kNone;
-    v.resync = true;
+    const bool heard = now_ns >= runs_[r].first_ns && now_ns - runs_[r].first_ns >= silence;
+    v.resync = quiet_ns >= silence && (!behind_the_stream(sequence, utime) || heard);
   }
+  if (v.restart || v.resync) v.reason = RejectReason::kNone;
   return v;
 }
 
