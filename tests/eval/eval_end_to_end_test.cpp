@@ -393,6 +393,7 @@ TEST(KeeplessEval, RejectsBadFlagsWithStatus2) {
       {"--M 100 --kept-fraction 0.3", "exclude each other"},
       {"--seeds 0", "--seeds"},
       {"--error-floor tum", "--error-floor"},
+      {"--bal /tmp/a,b.txt", "comma"},  // runs.csv could not hold it (it shifted every column)
   };
   for (const auto& [flags, says] : cases) {
     const RunOutput r = run(std::string(flags) + " --bal /nonexistent", /*stderr_only=*/true);

@@ -307,6 +307,33 @@ TEST(EvalContract, RatiosToTheOriginalSkipTheSeedsItFailed) {
   EXPECT_NE(md.find("| 2 / 3 (-2.333 ± 2.892) | – | – |"), std::string::npos) << md;
 }
 
+// Review: runs were paired by position, so `--report` merging a directory
+// with keepless's seed 1 and one with random's seed 2 set seed 2's random
+// against seed 1's original and keepless. Paired by seed: what has no
+// partner is left out.
+TEST(EvalContract, RunsArePairedBySeedNotPosition) {
+  ke::Comparison c;
+  c.info.input = "seq";
+  c.info.name = "seq";
+  c.info.kind = "images";
+  c.target_fraction = 0.2;
+  c.original = {rec(1.0, 100, 400, 1), rec(2.0, 100, 400, 2)};
+  c.ours = {rec(1.5, 30, 100, 1)};
+  c.random = {rec(4.0, 30, 100, 2), rec(3.0, 30, 100, 3)};  // seed 3: no original, no keepless run
+  for (auto* v : {&c.original, &c.ours, &c.random})
+    for (ke::RunRecord& r : *v) r.frames = 60, r.frames_tracked = 60;
+  const ke::ContractRun r = ke::summarize(c);
+  EXPECT_DOUBLE_EQ(r.ate_ratio, 1.5);         // seed 1: 1.5 / 1
+  EXPECT_DOUBLE_EQ(r.ate_ratio_random, 2.0);  // seed 2: 4 / 2 (seed 3 has no original)
+  EXPECT_EQ(r.ate_diff_random.n, 0);          // no seed both ran
+  EXPECT_EQ(r.below_random_seeds, 0);
+  c.random.push_back(rec(1.0, 30, 100, 1));
+  const ke::ContractRun q = ke::summarize(c);
+  EXPECT_EQ(q.ate_diff_random.n, 1);
+  EXPECT_DOUBLE_EQ(q.ate_diff_random.mean, 0.5);  // seed 1: 1.5 - 1
+  EXPECT_EQ(q.below_random_seeds, 0);
+}
+
 // A diverged BA is a failure too; the tables mark every mean that includes one.
 TEST(EvalContract, FailuresAreCountedInTheTables) {
   ke::Comparison c;

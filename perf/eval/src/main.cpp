@@ -413,6 +413,13 @@ Args parse(int argc, char** argv) {
   if (!a.images.empty() && (a.calib.empty() || a.poses.empty())) fail("--image-tracks needs --calib and --poses");
   for (const auto& v : a.vo)
     if (!v.rgbd && (v.calib.empty() || v.poses.empty())) fail("--images " + v.dir + " needs --calib and --poses");
+  // runs.csv holds each input's path unquoted: refuse what it cannot hold before any run.
+  std::vector<std::string> inputs = a.bal;
+  for (const auto& t : a.trajectories) inputs.push_back(t.path);
+  for (const auto& v : a.vo) inputs.push_back(v.dir);
+  if (!a.images.empty()) inputs.push_back(a.images);
+  for (const std::string& p : inputs)
+    if (p.find_first_of(",\n") != std::string::npos) fail("'" + p + "': an input path with a comma or line break cannot be written to runs.csv");
   if (a.ops.empty()) a.ops.push_back({0.3, 0});
   if (a.seeds < 0) a.seeds = a.quick ? 2 : 5;
   return a;
@@ -629,6 +636,12 @@ int main(int argc, char** argv) {
   summary.coverage_floor = a.policy.coverage_floor;
   summary.settings += "; keepless scope " + summary.scope + ", coverage floor " +
                       std::to_string(summary.coverage_floor) + ", cost " + summary.cost_model;
+  // The real VO's own scope (vo_eval.cpp): a kept fraction decides the new
+  // keyframe's points unless --decide window; its local BA is its own.
+  const bool fraction_ops = std::any_of(a.ops.begin(), a.ops.end(), [](const auto& op) { return std::isfinite(op.fraction); });
+  if (!a.vo.empty() && a.decide_window) summary.settings += " (the real VO: scope window, deciding its window)";
+  else if (!a.vo.empty() && fraction_ops && a.policy.scope != keepless::core::Scope::kNewest)
+    summary.settings += " (the real VO: scope newest under a kept fraction)";
   if (a.policy.theta != keepless::core::Params{}.theta) summary.settings += ", theta " + std::to_string(a.policy.theta);
   if (a.policy.budget.track_share > 0) summary.settings += ", track share " + std::to_string(a.policy.budget.track_share);
   if (a.policy.budget.track_share > 0 && a.policy.budget.track_share_from > 0)

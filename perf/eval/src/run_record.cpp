@@ -21,11 +21,19 @@ Stat stat_over(const std::vector<RunRecord>& v, F f) {
 // Every comparison with the original goes through here: a lost original's ATE is that of its
 // few tracked frames held still, its map and BA those of a few frames, and would make every
 // method look better than the original.
+// The record of `seed` in v, or null: runs are paired by seed, never by
+// position (--report may merge directories holding different seeds).
+const RunRecord* of_seed(const std::vector<RunRecord>& v, std::uint64_t seed) {
+  for (const RunRecord& r : v)
+    if (r.seed == seed) return &r;
+  return nullptr;
+}
+
 template <typename F>
 Stat paired(const std::vector<RunRecord>& v, const std::vector<RunRecord>& original, F f) {
   std::vector<double> x;
-  for (std::size_t i = 0; i < v.size() && i < original.size(); ++i)
-    if (!original[i].failed()) x.push_back(f(v[i], original[i]));
+  for (const RunRecord& a : v)
+    if (const RunRecord* o = of_seed(original, a.seed); o && !o->failed()) x.push_back(f(a, *o));
   return stat_of(x);
 }
 
@@ -33,15 +41,19 @@ Stat paired(const std::vector<RunRecord>& v, const std::vector<RunRecord>& origi
 int count_below(const std::vector<RunRecord>& a, const std::vector<RunRecord>& b,
                 const std::vector<RunRecord>* reference = nullptr) {
   int n = 0;
-  for (std::size_t i = 0; i < a.size() && i < b.size(); ++i)
-    if (!reference || (i < reference->size() && !(*reference)[i].failed())) n += a[i].ate_m < b[i].ate_m ? 1 : 0;
+  for (const RunRecord& x : a) {
+    const RunRecord* y = of_seed(b, x.seed);
+    const RunRecord* o = reference ? of_seed(*reference, x.seed) : nullptr;
+    if (y && (!reference || (o && !o->failed()))) n += x.ate_m < y->ate_m ? 1 : 0;
+  }
   return n;
 }
 
 // a's ATE minus b's, seed by seed.
 Stat ate_differences(const std::vector<RunRecord>& a, const std::vector<RunRecord>& b) {
   std::vector<double> d;
-  for (std::size_t i = 0; i < a.size() && i < b.size(); ++i) d.push_back(a[i].ate_m - b[i].ate_m);
+  for (const RunRecord& x : a)
+    if (const RunRecord* y = of_seed(b, x.seed)) d.push_back(x.ate_m - y->ate_m);
   return stat_of(d);
 }
 

@@ -170,6 +170,12 @@ RealRunResult Vo::run() {
     estimate.push_back(p);
     truth.push_back(seq_.ground_truth[static_cast<std::size_t>(r.frame)]);
   }
+  if (estimate.empty()) {
+    // Never tracked (it never initialised): held still at the origin over
+    // every frame, a failure scored as one, never the ATE of nothing (0).
+    estimate.assign(seq_.ground_truth.size(), Pose{});
+    truth = seq_.ground_truth;
+  }
   if (!estimate.empty()) {
     const Ate ate = absolute_trajectory_error(estimate, truth, !seq_.rgbd);
     result_.ate_m = ate.rms_m;
