@@ -8,7 +8,9 @@
 #include <algorithm>
 #include <cstring>
 #include <limits>
+#include <iterator>
 #include <unordered_map>
+#include <unordered_set>
 
 namespace keepless::core {
 
@@ -211,6 +213,7 @@ const char* WindowFileParser::line_problem(const char* data, std::size_t size, s
 
 bool WindowFileParser::feed(const char* data, std::size_t size) {
   if (failed_) return false;
+  if (finished_) return fail("input after the end (finish() was called)");
   const char* const stop = data + size;
   while (data < stop) {
     const char* nl = static_cast<const char*>(std::memchr(data, '\n', static_cast<std::size_t>(stop - data)));
@@ -241,6 +244,7 @@ bool WindowFileParser::feed(const char* data, std::size_t size) {
 
 bool WindowFileParser::feed_line(const char* data, std::size_t size) {
   if (failed_) return false;
+  if (finished_) return fail("input after the end (finish() was called)");
   ++line_no_;
   if (const char* problem = line_problem(data, size, 0)) return fail(problem);
   // Tokens are split in place, in a bounded copy of the line.
@@ -371,6 +375,7 @@ bool WindowFileParser::observation_record(char** tokens) {
 }
 
 bool WindowFileParser::finish(WindowFile* out) {
+  if (finished_) return fail("finish() after the end of the input");
   if (!failed_ && !partial_.empty()) {
     const std::string last = std::move(partial_);
     partial_.clear();
@@ -383,6 +388,7 @@ bool WindowFileParser::finish(WindowFile* out) {
   file_.needs.max_pair_arcs = static_cast<std::uint32_t>(pair_arcs_);
   *out = std::move(file_);
   file_ = WindowFile{};
+  finished_ = true;
   return true;
 }
 
@@ -415,10 +421,40 @@ Capacities compute_needs(const WindowFile& file) {
   return c;
 }
 
+std::string window_file_problem(const WindowFile& file) {
+  if (file.observations.size() != file.keyframes.size()) {
+    return std::to_string(file.keyframes.size()) + " keyframes but " + std::to_string(file.observations.size()) +
+           " observation lists";
+  }
+  std::unordered_set<KeyframeId> ids;
+  std::vector<PointId> points;
+  for (std::size_t k = 0; k < file.keyframes.size(); ++k) {
+    const Keyframe& kf = file.keyframes[k];
+    const auto at = [&](const char* reason) { return "keyframe " + std::to_string(k) + " (id " + std::to_string(kf.id) + "): " + reason; };
+    if (!ids.insert(kf.id).second) return at("duplicate keyframe id");
+    double norm2 = 0;
+    for (double q : kf.orientation) norm2 += q * q;
+    if (!std::all_of(std::begin(kf.centre), std::end(kf.centre), [](double c) { return std::isfinite(c); }) ||
+        !std::isfinite(norm2)) {
+      return at("non-finite centre or orientation");
+    }
+    if (std::fabs(norm2 - 1.0) > kQuaternionNormTolerance) return at("orientation is not a unit quaternion");
+    points.clear();
+    for (const Observation& o : file.observations[k]) {
+      if (!std::isfinite(o.u) || !std::isfinite(o.v)) return at("non-finite keypoint");
+      points.push_back(o.point);
+    }
+    std::sort(points.begin(), points.end());
+    if (std::adjacent_find(points.begin(), points.end()) != points.end()) return at("duplicate observation");
+  }
+  return {};
+}
+
 std::string format_window_file(const WindowFile& file) {
+  static const std::vector<Observation> kNone;
   std::string s;
   for (std::size_t k = 0; k < file.keyframes.size(); ++k) {
-    append_window_keyframe(&s, file.keyframes[k], file.observations[k]);
+    append_window_keyframe(&s, file.keyframes[k], k < file.observations.size() ? file.observations[k] : kNone);
   }
   return s;
 }

@@ -37,6 +37,10 @@ bool read_window_file(const std::string& path, core::WindowFile* out, std::strin
 }
 
 bool write_window_file(const std::string& path, const core::WindowFile& file, std::string* error) {
+  if (const std::string problem = core::window_file_problem(file); !problem.empty()) {
+    *error = path + ": " + problem + " (nothing written)";
+    return false;
+  }
   AtomicFileWriter out(path);
   if (out.open_error() != 0) {
     *error = path + ": cannot open for writing: " + std::strerror(out.open_error());

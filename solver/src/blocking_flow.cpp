@@ -198,11 +198,12 @@ Status MinCostFlow::Impl::solve_scratch(NodeId s, NodeId t, const Budget& budget
   overflow = false;
   const Cost max_cost = count_degrees();
   set_terminals(s, t);
-  // Distances stay below nodes * max cost.
+  // Distances stay below nodes * max cost, and labels must hold them: a
+  // network too large for its costs is beyond a capacity, not bad input.
   if (base > kLabelLimit / base / static_cast<std::uint64_t>(max_cost + 1)) {
     laid_out = false;
     have_state = false;
-    return Status::kInvalidInput;
+    return Status::kCapacityExceeded;
   }
   std::fill(pot_ext.begin(), pot_ext.begin() + nodes, 0);
   std::fill(arc_flow.begin(), arc_flow.begin() + arcs, 0);

@@ -493,5 +493,73 @@ TEST(WindowFileTest, NonRegularFilesAreRefusedWithoutBlocking) {
   ::rmdir(dir);
 }
 
+// Review: fed after finish() the parser wrote through its old keyframe
+// index into the moved-out file (a crash), and a second finish() returned
+// an empty file with the first one's needs. Both are refused now.
+TEST(WindowFileTest, AParserRefusesInputAfterFinish) {
+  WindowFileParser p("w.txt");
+  const std::string text = "kf 1 0 0 0\nobs 1 5 1 2\n";
+  ASSERT_TRUE(p.feed(text.data(), text.size()));
+  WindowFile first;
+  ASSERT_TRUE(p.finish(&first));
+  ASSERT_EQ(first.observations.size(), 1u);
+  const std::string more = "obs 1 6 3 4\n";
+  EXPECT_FALSE(p.feed(more.data(), more.size()));
+  EXPECT_NE(p.error().find("after the end"), std::string::npos) << p.error();
+  EXPECT_FALSE(p.feed_line("kf 2 0 0 0", 10));
+  WindowFile second;
+  EXPECT_FALSE(p.finish(&second));
+  EXPECT_TRUE(second.keyframes.empty());
+  WindowFileParser q("w.txt");
+  ASSERT_TRUE(q.finish(&second));
+  EXPECT_FALSE(q.finish(&second)) << "finish() twice";
+}
+
+// Review: a WindowFile built in code was written whatever it held, and the
+// reader then refused the file (or, with fewer observation lists than
+// keyframes, formatting it read past the end). The writer refuses what
+// would not read back, and writes nothing.
+TEST(WindowFileTest, TheWriterRefusesWhatWouldNotReadBack) {
+  const std::string path = ::testing::TempDir() + "keepless_window_file_refused.txt";
+  std::remove(path.c_str());
+  const auto base = [] {
+    WindowFile f;
+    f.keyframes.resize(2);
+    f.keyframes[0].id = 3;
+    f.keyframes[1].id = 4;
+    f.observations.resize(2);
+    f.observations[0].push_back({42, 1.25, 2.0, 0.0});
+    return f;
+  };
+  ASSERT_EQ(window_file_problem(base()), "");
+  std::vector<std::pair<WindowFile, const char*>> cases(6, {base(), ""});
+  cases[0].first.keyframes[0].centre[1] = std::nan("");
+  cases[0].second = "non-finite";
+  cases[1].first.observations[0][0].u = INFINITY;
+  cases[1].second = "non-finite keypoint";
+  cases[2].first.keyframes[0].orientation[0] = 2.0;
+  cases[2].second = "not a unit quaternion";
+  cases[3].first.observations[0].push_back({42, 5, 6, 0});
+  cases[3].second = "duplicate observation";
+  cases[4].first.keyframes[1].id = 3;
+  cases[4].second = "duplicate keyframe id";
+  cases[5].first.observations.resize(1);
+  cases[5].second = "2 keyframes but 1 observation lists";
+  for (const auto& [file, says] : cases) {
+    EXPECT_NE(window_file_problem(file).find(says), std::string::npos) << says << ": " << window_file_problem(file);
+    std::string error;
+    EXPECT_FALSE(platform::write_window_file(path, file, &error)) << says;
+    EXPECT_NE(error.find(says), std::string::npos) << error;
+    EXPECT_FALSE(std::filesystem::exists(path)) << says << ": nothing written";
+  }
+  EXPECT_EQ(format_window_file(cases[5].first), "kf 3 0 0 0\nobs 3 42 1.25 2\nkf 4 0 0 0\n") << "no read past the end";
+  std::string error;
+  ASSERT_TRUE(platform::write_window_file(path, base(), &error)) << error;
+  WindowFile back;
+  ASSERT_TRUE(platform::read_window_file(path, &back, &error)) << error;
+  EXPECT_EQ(back.keyframes.size(), 2u);
+  std::remove(path.c_str());
+}
+
 }  // namespace
 }  // namespace keepless::core

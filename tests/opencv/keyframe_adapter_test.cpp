@@ -645,5 +645,21 @@ TEST(OpencvDeferred, ReservedIdSetsNeverGrow) {
   EXPECT_GT(deleted_total, 0u);  // the rule deleted, the refusals too
 }
 
+// Review: a finite translation near DBL_MAX, rotated, overflowed the
+// centre to infinity and the pose was kOk. Refused as non-finite.
+TEST(OpencvPose, ACentreThatOverflowsIsRefused) {
+  Eigen::Matrix4d Tcw = Eigen::Matrix4d::Identity();
+  Tcw.topLeftCorner<3, 3>() = Eigen::AngleAxisd(M_PI / 4, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  Tcw(0, 3) = Tcw(1, 3) = 1.7e308;
+  CameraPose pose;
+  pose.centre = Eigen::Vector3d(1, 2, 3);
+  EXPECT_EQ(pose_from_tcw(Tcw, &pose), Status::kNonFinite);
+  EXPECT_EQ(pose.centre, Eigen::Vector3d(1, 2, 3)) << "unchanged";
+  cv::Mat m(4, 4, CV_64F);
+  for (int r = 0; r < 4; ++r)
+    for (int c = 0; c < 4; ++c) m.at<double>(r, c) = Tcw(r, c);
+  EXPECT_EQ(pose_from_tcw(m, &pose), Status::kNonFinite);
+}
+
 }  // namespace
 }  // namespace keepless::opencv

@@ -29,8 +29,10 @@ Status pose_from_rotation(const Eigen::Matrix3d& Rcw, const Eigen::Vector3d& tcw
   if (off > kRotationTolerance || Rcw.determinant() <= 0) return Status::kNotRotation;
   // Re-orthonormalised through the quaternion: float poses come back unit.
   const Eigen::Matrix3d Rwc = Rcw.transpose();
+  const Eigen::Vector3d centre = -(Rwc * tcw);
+  if (!centre.allFinite()) return Status::kNonFinite;  // a finite translation near DBL_MAX, rotated
   out->orientation = Eigen::Quaterniond(Rwc).normalized();
-  out->centre = -(Rwc * tcw);
+  out->centre = centre;
   return Status::kOk;
 }
 

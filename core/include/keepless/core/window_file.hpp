@@ -94,6 +94,7 @@ class WindowFileParser {
   std::unordered_map<std::uint64_t, std::uint32_t> keyframe_index_;  // id -> declaration index
   std::unordered_map<std::uint64_t, PointEntry> points_;              // id -> entry
   std::unordered_map<std::uint64_t, std::uint64_t> observed_;         // (kf index, point index) -> line
+  bool finished_ = false;  // finish() succeeded: later calls fail
   std::uint64_t observation_total_ = 0;
   std::uint64_t pair_arcs_ = 0;
   std::uint64_t line_no_ = 0;
@@ -111,10 +112,16 @@ class WindowFileParser {
 // at UINT32_MAX.
 Capacities compute_needs(const WindowFile& file);
 
+// Why `file` (built in code) would not read back: one observation list per
+// keyframe, unique keyframe ids, finite numbers, unit orientations, a point
+// once per keyframe; "keyframe N: reason", or empty when it would.
+std::string window_file_problem(const WindowFile& file);
+
 // `file` in the format above: each kf line followed by its observations;
 // doubles in shortest round-trip form, so reading the text back gives
 // bit-identical values (-0 included). Orientation omitted when it is exactly
-// (+1, +0, +0, +0).
+// (+1, +0, +0, +0). For a file with a window_file_problem() the text does
+// not read back (a keyframe without an observation list gets none).
 std::string format_window_file(const WindowFile& file);
 // One keyframe's lines (for writers that stream a map keyframe by keyframe).
 void append_window_keyframe(std::string* out, const Keyframe& keyframe, const std::vector<Observation>& observations);

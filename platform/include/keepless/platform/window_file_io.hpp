@@ -17,7 +17,8 @@ namespace keepless::platform {
                                     const core::WindowFileLimits& limits = {});
 
 // Writes `file` to `path` keyframe by keyframe, under a temporary name
-// renamed over it; false + *error on I/O failure (nothing at PATH changed).
+// renamed over it; false + *error on I/O failure or a file that would not
+// read back (core::window_file_problem), nothing at PATH changed.
 [[nodiscard]] bool write_window_file(const std::string& path, const core::WindowFile& file, std::string* error);
 
 }  // namespace keepless::platform

@@ -2,7 +2,8 @@
 // keepless::opencv: what an ORB-SLAM-style system holds (cv::KeyPoint, map
 // point ids, a pose as cv::Mat Tcw or Eigen) to core::Window keyframes, and
 // the Sparsifier's decisions back to sets of map point ids. Every call that
-// can fail returns a Status and leaves its outputs and the window unchanged.
+// can fail returns a Status and leaves its outputs and the window unchanged
+// (but KeyframeAdapter::last(), the record the window refused).
 //
 // Unmapped keypoints: the authors' N(p, f) counts every detected keypoint
 // near a point, not only the mapped ones. Two ways in (UnmappedAs):
@@ -160,6 +161,8 @@ class KeyframeAdapter {
     return add_keyframe(window, id, pose, keypoints, point_ids, as_reserved_ids(unmapped));
   }
   core::Status window_status() const { return window_status_; }
+  // The last record add_keyframe() converted, also one the window then
+  // refused (kWindowRejected: what it was sent).
   const KeyframeRecord& last() const { return record_; }
   // Bytes reserved at construction (the record's buffers and the duplicate
   // check's), fixed from then on.
