@@ -314,7 +314,9 @@ void OrderTracker::accept(const Verdict& v, std::int64_t publisher, std::int64_t
     if (v.restart) ++restarts_;
     if (v.resync) ++resyncs_;
   } else if (sequence > last_sequence_) {
-    gaps_ += static_cast<std::uint64_t>(sequence) - static_cast<std::uint64_t>(last_sequence_) - 1;
+    // Saturated: with --max-sequence-jump near 2^63 two gaps would wrap it.
+    const std::uint64_t gap = static_cast<std::uint64_t>(sequence) - static_cast<std::uint64_t>(last_sequence_) - 1;
+    gaps_ = gap > UINT64_MAX - gaps_ ? UINT64_MAX : gaps_ + gap;
   }
   // A run matters only while the order refuses everything: keyframes refused
   // around accepted ones (late or repeated) never count toward a later run.

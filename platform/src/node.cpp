@@ -422,8 +422,11 @@ struct Node::Impl {
     } else {
       counters.points_culled += n_culled;
     }
-    finish_timing(req, arrival, t0, t1, t2, t3, sparsifier.solver().stats().work_units,
-                  sparsifier.solver().stats().phases);
+    // The solver's figures only if this decision ran it (a deferred update
+    // or a held window did not: the stats are an earlier decision's).
+    const bool solved = evicted == 0 && !sparsifier.deferred();
+    finish_timing(req, arrival, t0, t1, t2, t3, solved ? sparsifier.solver().stats().work_units : 0,
+                  solved ? sparsifier.solver().stats().phases : 0);
 
     // The VO deletes culled points; so does the window, off the latency path.
     // The ids are the decision's own (int64 and uint64 may alias).
@@ -618,7 +621,7 @@ struct Node::Impl {
     status.large_decisions = static_cast<std::int64_t>(counters.large_decisions);
     status.points_culled = static_cast<std::int64_t>(counters.points_culled);
     status.last_sequence = order.last_sequence();
-    status.sequence_gaps = static_cast<std::int64_t>(order.sequence_gaps());
+    status.sequence_gaps = static_cast<std::int64_t>(std::min<std::uint64_t>(order.sequence_gaps(), INT64_MAX));
     status.keyframes_skipped = static_cast<std::int64_t>(counters.keyframes_skipped);
     status.stream_restarts = static_cast<std::int64_t>(order.restarts() + order.resyncs());
     status.stream_conflicts = static_cast<std::int64_t>(counters.not_owner);
@@ -667,17 +670,16 @@ struct Node::Impl {
 
   // The arrival stamp: when the handler runs, moved back by the time the
   // message already waited in LCM's queue (LCM stamps its receipt on the wall
-  // clock: the kernel's for udpm, the publish for memq). An injected clock
-  // is the only time there is: its reading alone.
+  // clock: the kernel's for udpm, the publish for memq), at most back to when
+  // the queue was last seen empty. An injected clock is the only time there
+  // is: its reading alone.
   std::uint64_t arrival_ns(const lcm_recv_buf_t* rbuf) const {
     const std::uint64_t now = clock->now_ns();
-    if (clock != &own_clock || rbuf->recv_utime <= 0) return now;
+    if (clock != &own_clock) return now;
     timespec wall{};
     clock_gettime(CLOCK_REALTIME, &wall);
     const std::int64_t wall_us = static_cast<std::int64_t>(wall.tv_sec) * 1000000 + wall.tv_nsec / 1000;
-    // A wall-clock step must not invent an hour of queueing: at most 60 s.
-    const std::int64_t waited_us = std::clamp<std::int64_t>(wall_us - rbuf->recv_utime, 0, 60 * 1000000);
-    return now - std::min<std::uint64_t>(now, static_cast<std::uint64_t>(waited_us) * 1000u);
+    return queued_arrival_ns(now, wall_us, rbuf->recv_utime, queue_empty_ns);
   }
 
   static void keyframe_cb(const lcm_recv_buf_t* rbuf, const char*, void* user) {
@@ -698,6 +700,9 @@ struct Node::Impl {
   // Arrival stamps, deadlines and latencies: CLOCK_MONOTONIC unless a clock
   // was injected.
   MonotonicClock own_clock;
+  // The last time LCM's queue was seen empty (start, then every spin that
+  // found nothing more): no message handled later waited longer than since.
+  std::uint64_t queue_empty_ns = 0;
   const solver::Clock* clock;
   core::Window empty_window;  // what a keyframe taking the window over is checked against
   solver::Budget budget;
@@ -758,6 +763,7 @@ Node::~Node() {
 bool Node::start() {
   lcm_t* l = impl_->lcm.getUnderlyingLCM();
   if (!impl_->lcm.good() || l == nullptr) return false;
+  impl_->queue_empty_ns = impl_->clock->now_ns();  // nothing is queued before the subscriptions
   // The C API: the C++ wrapper would build a std::string per message.
   impl_->keyframe_sub = lcm_subscribe(l, impl_->config.keyframe_channel.c_str(), &Impl::keyframe_cb, impl_.get());
   impl_->event_sub = lcm_subscribe(l, impl_->config.event_channel.c_str(), &Impl::event_cb, impl_.get());
@@ -781,8 +787,12 @@ int Node::spin_once(int timeout_ms) {
   n.draining = n.config.latency_target_ms > 0;
   const int got = n.lcm.handleTimeout(wait);
   lcm_t* l = n.lcm.getUnderlyingLCM();
+  if (got <= 0) n.queue_empty_ns = n.clock->now_ns();
   for (std::uint32_t i = 0; got > 0 && n.draining && i < 2 * n.config.queue_capacity; ++i) {
-    if (lcm_handle_timeout(l, 0) <= 0) break;
+    if (lcm_handle_timeout(l, 0) <= 0) {
+      n.queue_empty_ns = n.clock->now_ns();
+      break;
+    }
   }
   n.draining = false;
   n.decide_pending();

@@ -321,6 +321,7 @@ ParseResult parse_node_arguments(int argc, const char* const* argv, NodeConfig& 
     } else if (flag == "--owner-timeout-s") {
       double t = 0;
       if (!parse_double(value, t) || t < 0 || t > 1e6) return bad("expected seconds in [0, 1e6]");
+      if (t > 0 && t < 1e-9) return bad("below a nanosecond, which would read as 0 (never)");
       config.owner_timeout_s = t;
     } else if (flag == "--cull-memory") {
       if (!parse_u64(value, 0, 1u << 26, n)) return bad("expected an integer in 0..2^26");

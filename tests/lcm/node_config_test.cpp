@@ -496,6 +496,7 @@ TEST(NodeConfig, ParsesTheReliabilityFlags) {
                                                                {"--max-sequence-jump", "0"},
                                                                {"--max-utime-jump-s", "-1"},
                                                                {"--owner-timeout-s", "-1"},
+                                                               {"--owner-timeout-s", "1e-10"},  // would read as 0: never
                                                                {"--max-publishers", "4"},  // removed: one owner
                                                                {"--max-memory-mb", "0"}}) {
     NodeConfig d;

@@ -533,6 +533,28 @@ TEST_F(NodeOnMemq, AStopForBudgetIsFlaggedAndCullsNothing) {
   EXPECT_EQ(node_->counters().budget_exhaustions, 3u);
 }
 
+// Review: a decision the deadline stopped before any solve reported the
+// previous decision's solver work in its decision_timing_t.
+TEST_F(NodeOnMemq, ADeadlineStopReportsNoSolverWork) {
+  NodeConfig c = default_config();
+  c.latency_target_ms = NodeConfig{}.latency_target_ms;  // the default target
+  make_node(c);
+  std::vector<std::int64_t> work;
+  void (*on_timing)(const lcm::ReceiveBuffer*, const std::string&, const keepless::decision_timing_t*,
+                    std::vector<std::int64_t>*) =
+      [](const lcm::ReceiveBuffer*, const std::string&, const keepless::decision_timing_t* t,
+         std::vector<std::int64_t>* w) { w->push_back(t->solver_work_units); };
+  bus_->subscribeFunction(c.timing_channel, on_timing, &work);
+  for (int i = 1; i <= 3; ++i) send(kt::make_keyframe(i, i, kt::id_range(i * 5, 30)));
+  clock_.tick = 100000000ull;  // 100 ms a reading: past the deadline before the update
+  send(kt::make_keyframe(4, 4, kt::id_range(20, 30)));
+  ASSERT_EQ(decisions_.size(), 4u);
+  ASSERT_EQ(work.size(), 4u);
+  EXPECT_EQ(decisions_[3].status, keepless::decision_t::STATUS_BUDGET_EXHAUSTED);
+  EXPECT_GT(work[2], 0);
+  EXPECT_EQ(work[3], 0) << "no solve ran: keyframe 3's work was reported";
+}
+
 // The optional keyframe_t arrays reach the cost models, and the policies
 // flags the library: the node decides what the library does on the same
 // keyframes (depths, intrinsics, unmapped keypoints), for each cost model.

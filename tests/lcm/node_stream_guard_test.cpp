@@ -248,6 +248,23 @@ TEST_F(GuardOnMemq, RetransmissionsDoNotRestart) {
   EXPECT_EQ(decisions_.back().status, decision_t::STATUS_OPTIMAL);
 }
 
+// Review: with --max-sequence-jump at its largest, the gaps between
+// sequences INT64_MIN + 1, 0 and INT64_MAX summed past 2^63 and
+// status_t.sequence_gaps read -4. Saturated.
+TEST_F(GuardOnMemq, SequenceGapsSaturateInsteadOfWrapping) {
+  NodeConfig c = default_config();
+  c.max_sequence_jump = std::numeric_limits<std::uint64_t>::max();
+  make_node(c);
+  for (std::int64_t s : {std::numeric_limits<std::int64_t>::min() + 1, std::int64_t{0},
+                         std::numeric_limits<std::int64_t>::max()}) {
+    keepless::keyframe_t m = kt::make_keyframe(0, 7 + (s > 0) + (s == 0) * 2, kt::id_range(0, 20));
+    m.sequence = s;
+    send(m);
+    ASSERT_EQ(decisions_.back().status, decision_t::STATUS_OPTIMAL) << s;
+  }
+  EXPECT_EQ(status().sequence_gaps, std::numeric_limits<std::int64_t>::max());
+}
+
 // Defect 2(c): 1, 2, then 3 with a NaN centre: the third was rejected, yet
 // the window went 4 -> 0 and the order 20 -> 3. A real restart (1, 2, then
 // a valid 4; its clock from the start again, after the old order's second
