@@ -430,7 +430,9 @@ std::string window_file_problem(const WindowFile& file) {
   std::vector<PointId> points;
   for (std::size_t k = 0; k < file.keyframes.size(); ++k) {
     const Keyframe& kf = file.keyframes[k];
-    const auto at = [&](const char* reason) { return "keyframe " + std::to_string(k) + " (id " + std::to_string(kf.id) + "): " + reason; };
+    const auto at = [&](const char* reason) {
+      return "keyframe " + std::to_string(k) + " (id " + std::to_string(kf.id) + "): " + reason;
+    };
     if (!ids.insert(kf.id).second) return at("duplicate keyframe id");
     double norm2 = 0;
     for (double q : kf.orientation) norm2 += q * q;

@@ -574,12 +574,6 @@ bool write_outputs(const EvalSummary& s, const std::string& out_dir, std::string
     if (!out) *error = out_dir + "/" + name + ": write failed";
     return static_cast<bool>(out);
   };
-  for (const Comparison& c : s.comparisons)
-    for (const std::string* t : {&c.info.input, &c.info.name, &c.info.group})
-      if (t->find_first_of(",\n") != std::string::npos) {
-        *error = "'" + *t + "': a comma or line break in an input's path or name cannot be written to runs.csv";
-        return false;
-      }
   std::ostringstream csv;
   csv << kCsvHeader << "\n";
   for (const Comparison& c : s.comparisons)
