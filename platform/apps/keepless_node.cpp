@@ -16,7 +16,9 @@
 #include "cli/cli.hpp"
 #include "keepless/core/sparsifier.hpp"
 #include "keepless/platform/cpu_pinning.hpp"
+#include "keepless/core/deferred_culls.hpp"
 #include "keepless/platform/node.hpp"
+#include "keepless/platform/recent_ids.hpp"
 #include "keepless/platform/node_config.hpp"
 
 namespace {
@@ -111,6 +113,12 @@ int main(int argc, char** argv) {
                config.decision_channel.c_str(), config.timing_channel.c_str(), config.status_channel.c_str(),
                config.window, config.max_observations, caps.max_points, caps.max_observations, caps.max_pair_arcs,
                static_cast<double>(node.memory_bytes()) / 1e6, need / 1e6, node.max_decision_bytes());
+  // The capacities status_t does not carry, fixed from here on.
+  std::fprintf(stderr,
+               "keepless_node: also fixed: cull memory %u ids, deferred %u points, %u unmapped keypoints/keyframe, "
+               "%u ids per map-event list, LCM queue %u messages per channel\n",
+               node.cull_memory().capacity(), node.deferred_culls().capacity(), config.max_unmapped,
+               config.max_event_ids, config.queue_capacity);
 
   while (!g_stop && !node.finished()) {
     if (node.spin_once(100) < 0) {
