@@ -481,6 +481,15 @@ TEST_F(NodeOnMemq, StopsAfterMaxKeyframes) {
   EXPECT_TRUE(node_->finished());
 }
 
+// Each decision_timing_t's solver work units, appended to `work`.
+void record_solver_work(lcm::LCM& bus, const std::string& channel, std::vector<std::int64_t>* work) {
+  void (*on_timing)(const lcm::ReceiveBuffer*, const std::string&, const keepless::decision_timing_t*,
+                    std::vector<std::int64_t>*) =
+      [](const lcm::ReceiveBuffer*, const std::string&, const keepless::decision_timing_t* t,
+         std::vector<std::int64_t>* w) { w->push_back(t->solver_work_units); };
+  bus.subscribeFunction(channel, on_timing, work);
+}
+
 // A decision whose work budget cannot cover the solve (the certificate of
 // the closed-form start is one pass over the network's arc slots, which
 // never shrink while the network lives) is flagged and culls nothing; the
@@ -500,11 +509,7 @@ TEST_F(NodeOnMemq, AStopForBudgetIsFlaggedAndCullsNothing) {
   // The solver work of each window, unbudgeted (work units are deterministic).
   make_node(c);
   std::vector<std::int64_t> work;
-  void (*on_timing)(const lcm::ReceiveBuffer*, const std::string&, const keepless::decision_timing_t*,
-                    std::vector<std::int64_t>*) =
-      [](const lcm::ReceiveBuffer*, const std::string&, const keepless::decision_timing_t* t,
-         std::vector<std::int64_t>* w) { w->push_back(t->solver_work_units); };
-  bus_->subscribeFunction(c.timing_channel, on_timing, &work);
+  record_solver_work(*bus_, c.timing_channel, &work);
   for (const keepless::keyframe_t& m : stream) send(m);
   ASSERT_EQ(work.size(), stream.size());
   ASSERT_LT(work[1], work[2] * 4 / 5);
@@ -540,11 +545,7 @@ TEST_F(NodeOnMemq, ADeadlineStopReportsNoSolverWork) {
   c.latency_target_ms = NodeConfig{}.latency_target_ms;  // the default target
   make_node(c);
   std::vector<std::int64_t> work;
-  void (*on_timing)(const lcm::ReceiveBuffer*, const std::string&, const keepless::decision_timing_t*,
-                    std::vector<std::int64_t>*) =
-      [](const lcm::ReceiveBuffer*, const std::string&, const keepless::decision_timing_t* t,
-         std::vector<std::int64_t>* w) { w->push_back(t->solver_work_units); };
-  bus_->subscribeFunction(c.timing_channel, on_timing, &work);
+  record_solver_work(*bus_, c.timing_channel, &work);
   for (int i = 1; i <= 3; ++i) send(kt::make_keyframe(i, i, kt::id_range(i * 5, 30)));
   clock_.tick = 100000000ull;  // 100 ms a reading: past the deadline before the update
   send(kt::make_keyframe(4, 4, kt::id_range(20, 30)));
