@@ -12,6 +12,18 @@ namespace keepless::core {
 struct DeferredCulls::Impl {
   Impl(std::uint32_t capacity, std::uint32_t t) : index(capacity), ids(capacity), last(capacity), defer(t) {}
 
+  // A point not held: held from this tick, or refused when the table is full.
+  Status add(PointId point) {
+    if (index.insert(point, size) == nullptr) {
+      ++refused;
+      return Status::kCapacityExceeded;
+    }
+    ids[size] = point;
+    last[size] = clock;
+    ++size;
+    return Status::kOk;
+  }
+
   void remove_at(std::uint32_t i) {
     const std::uint32_t back = size - 1;
     (void)index.erase(ids[i]);
@@ -46,16 +58,7 @@ bool DeferredCulls::observe(PointId point, bool matched) {
 }
 
 Status DeferredCulls::exclude(PointId point) {
-  Impl& d = *impl_;
-  if (d.index.find(point) != nullptr) return Status::kOk;
-  if (d.index.insert(point, d.size) == nullptr) {
-    ++d.refused;
-    return Status::kCapacityExceeded;
-  }
-  d.ids[d.size] = point;
-  d.last[d.size] = d.clock;
-  ++d.size;
-  return Status::kOk;
+  return contains(point) ? Status::kOk : impl_->add(point);
 }
 
 std::uint32_t DeferredCulls::expire(PointId* out) {
@@ -78,7 +81,7 @@ std::uint32_t DeferredCulls::defer(const PointId* culled, std::uint32_t n, Point
   std::uint32_t kept = 0, refused = 0;
   for (std::uint32_t i = 0; i < n; ++i) {
     if (contains(culled[i])) continue;  // held already, or a repeat in `culled`: listed once
-    if (exclude(culled[i]) == Status::kOk) {
+    if (impl_->add(culled[i]) == Status::kOk) {
       excluded[kept++] = culled[i];
     } else {
       deleted[refused++] = culled[i];

@@ -25,7 +25,8 @@ enum class Selector : std::uint8_t { kOriginal, kKeepless, kRandom, kLongestTrac
 // What the ANMS baseline ranks by, to tell its two ingredients apart: kSsc,
 // SSC on the keypoints' responses (strong corners, spread); kSpread, SSC on
 // a seeded random priority (spread alone); kResponse, the strongest
-// responses without suppression (strength alone).
+// responses without suppression (strength alone); kTrack, SSC on the map's
+// track length, ties by that priority (spread with long tracks).
 enum class AnmsVariant : std::uint8_t { kSsc, kSpread, kResponse, kTrack };
 enum class KeyframeCulling : std::uint8_t { kOn, kOff, kCountCulled };
 const char* to_string(Selector s);
