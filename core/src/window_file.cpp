@@ -146,6 +146,14 @@ bool parse_finite_double(const char* text, double* out) {
   return text != nullptr && read_double(text, out) == NumberError::kOk;
 }
 
+bool parse_uint64(const std::string& token, std::uint64_t* out) {
+  return token.find('\0') == std::string::npos && parse_uint64(token.c_str(), out);
+}
+
+bool parse_finite_double(const std::string& token, double* out) {
+  return token.find('\0') == std::string::npos && parse_finite_double(token.c_str(), out);
+}
+
 bool parse_box(const char* text, int* width, int* height) {
   if (text == nullptr) return false;
   const char* x = std::strchr(text, 'x');

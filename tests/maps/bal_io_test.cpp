@@ -82,6 +82,21 @@ TEST(BalErrors, CutAtEveryLineOrSpoiltAtEveryValueFailsOnThatLine) {
   EXPECT_EQ(error.rfind("s:1: truncated: the counts need", 0), 0u) << error;
 }
 
+// A C-string parse stops at a NUL: "1\07" was camera 1 and "5.0e+00\0junk"
+// was 5 (its text, NUL and junk, written back), without a word.
+TEST(BalErrors, ANumberFollowedByANulIsRefused) {
+  io::BalProblem p;
+  std::string error;
+  std::string index = kSmall;
+  index.insert(index.find("1 1 ") + 1, std::string(1, '\0') + "7");  // line 4's camera index "1" -> "1\07"
+  EXPECT_FALSE(io::parse_bal("s", index, &p, &error));
+  EXPECT_EQ(error, "s:4: bad camera index '1\\07' (an integer below 2)");
+  std::string value = kSmall;
+  value.insert(value.find("5.0e+00") + 7, std::string(1, '\0') + "junk");  // line 4's x
+  EXPECT_FALSE(io::parse_bal("s", value, &p, &error));
+  EXPECT_EQ(error, "s:4: bad observation x '5.0e+00\\0junk' (a finite number)");
+}
+
 TEST(BalKeyframes, CentresAreMinusRTransposeT) {
   io::BalProblem p;
   std::string error;
@@ -102,6 +117,20 @@ TEST(BalKeyframes, CentresAreMinusRTransposeT) {
   EXPECT_NEAR(k.file.keyframes[1].centre[1], -2, 1e-12);
   EXPECT_EQ(k.file.observations[1].size(), 2u);
   EXPECT_EQ(k.duplicates, 0u);
+}
+
+// --sim3: a number followed by a NUL byte was read up to the NUL ("4.5\0junk"
+// as the scale 4.5), without a word.
+TEST(Similarity, ANumberFollowedByANulIsRefused) {
+  std::string dir = ::testing::TempDir() + "keepless_sim3_XXXXXX";
+  ASSERT_NE(::mkdtemp(dir.data()), nullptr);
+  const std::string path = dir + "/s.txt";
+  maps_test::write_all(path, std::string("4.5") + std::string(1, '\0') + "junk\n1 0 0\n0 1 0\n0 0 1\n0 0 0\n");
+  io::Similarity s;
+  std::string error;
+  EXPECT_FALSE(io::read_similarity(path, &s, &error));
+  EXPECT_EQ(error, path + ":1: bad number '4.5\\0junk'");
+  std::filesystem::remove_all(dir);
 }
 
 TEST(ColmapKeyframes, DuplicatesMergeIntoTheFirstAndOrderIsByNameOrId) {
@@ -150,6 +179,22 @@ TEST(ColmapKeyframes, DuplicatesMergeIntoTheFirstAndOrderIsByNameOrId) {
       }
     }
   }
+}
+
+// --sim3 is 13 numbers; a huge file (here 13 numbers, then 64 MiB of NULs)
+// was read whole and its tail copied as one "number", beyond any
+// --max-memory-mb, before the error.
+TEST(Similarity, AHugeFileIsRefusedBeforeItIsRead) {
+  std::string dir = ::testing::TempDir() + "keepless_sim3_big_XXXXXX";
+  ASSERT_NE(::mkdtemp(dir.data()), nullptr);
+  const std::string path = dir + "/s.txt";
+  maps_test::write_all(path, "2\n1 0 0\n0 1 0\n0 0 1\n0 0 0\n");
+  std::filesystem::resize_file(path, std::uintmax_t{64} << 20);
+  io::Similarity s;
+  std::string error;
+  EXPECT_FALSE(io::read_similarity(path, &s, &error));
+  EXPECT_EQ(error, path + ":0: 67108864 bytes, more than the 65536 expected");
+  std::filesystem::remove_all(dir);
 }
 
 }  // namespace

@@ -513,6 +513,8 @@ TEST(ColmapText, ModelNamesAndParameterCountsAreChecked) {
   EXPECT_EQ(error_of(f, io::ColmapFormat::kText), "D/cameras.txt:1: PINHOLE takes 4 parameters, got 3");
   f.cameras = "# c\n\n1 PINHOLE_X 640 480 1 2 3 4\n";
   EXPECT_EQ(error_of(f, io::ColmapFormat::kText), "D/cameras.txt:3: unknown camera model 'PINHOLE_X'");
+  f.cameras = std::string("1 PINHOLE") + '\0' + " 640 480 1 2 3 4\n";  // the NUL shown, not written raw
+  EXPECT_EQ(error_of(f, io::ColmapFormat::kText), "D/cameras.txt:1: unknown camera model 'PINHOLE\\0'");
 }
 
 // Fuzzer finding: images.bin ends a name at its NUL, so a text name holding
@@ -543,6 +545,26 @@ TEST(ColmapText, ANumberFollowedByANulIsRefused) {
   f.images.insert(name, 1, '\0');
   EXPECT_EQ(error_of(f, io::ColmapFormat::kText),
             "D/images.txt:" + std::to_string(line) + ": bad CAMERA_ID '2\\0' (field 9, an unsigned integer)");
+}
+
+// Numbers are read as the other readers read them: a subnormal is the double
+// it names (a binary model may hold one, "%.17g" writes it), an underflow to 0
+// is out of range.
+TEST(ColmapText, ASubnormalIsReadAndAnUnderflowIsRefused) {
+  io::ColmapModel model = small_model();
+  model.cameras[0].params[0] = std::numeric_limits<double>::denorm_min();
+  io::ColmapFiles f = io::format_colmap(model, io::ColmapFormat::kText);
+  io::ColmapModel back;
+  std::string error;
+  ASSERT_TRUE(io::parse_colmap("D", f, io::ColmapFormat::kText, &back, &error)) << error;
+  EXPECT_EQ(back.cameras[0].params[0], std::numeric_limits<double>::denorm_min());
+  const std::string subnormal = "4.9406564584124654e-324";
+  const std::size_t at = f.cameras.find(subnormal);
+  ASSERT_NE(at, std::string::npos) << f.cameras;
+  const auto line = std::count(f.cameras.begin(), f.cameras.begin() + static_cast<std::ptrdiff_t>(at), '\n') + 1;
+  f.cameras.replace(at, subnormal.size(), "1e-400");
+  EXPECT_EQ(error_of(f, io::ColmapFormat::kText),
+            "D/cameras.txt:" + std::to_string(line) + ": bad camera parameter '1e-400' (field 5, a finite number)");
 }
 
 // COLMAP's text reader ends a name at its first space: refused in text (read

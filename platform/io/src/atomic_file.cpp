@@ -11,10 +11,12 @@
 
 namespace keepless::io {
 
-bool read_file(const std::string& path, std::string* out, std::string* error) {
+bool read_file(const std::string& path, std::string* out, std::string* error, std::uint64_t max_bytes) {
   platform::RegularFile f;
   std::string problem;
-  if (platform::open_regular_file(path, &f, &problem)) {
+  if (platform::open_regular_file(path, &f, &problem) && f.size > max_bytes) {
+    problem = std::to_string(f.size) + " bytes, more than the " + std::to_string(max_bytes) + " expected";
+  } else if (problem.empty()) {
     out->clear();
     out->reserve(static_cast<std::size_t>(f.size));
     char buffer[1 << 16];
@@ -23,6 +25,10 @@ bool read_file(const std::string& path, std::string* out, std::string* error) {
       if (n < 0 && errno == EINTR) continue;
       if (n < 0) problem = std::string("cannot read: ") + std::strerror(errno);
       if (n <= 0) break;
+      if (out->size() + static_cast<std::size_t>(n) > max_bytes) {  // it grew since
+        problem = "more than the " + std::to_string(max_bytes) + " bytes expected";
+        break;
+      }
       out->append(buffer, static_cast<std::size_t>(n));
     }
   }

@@ -9,6 +9,7 @@
 #include "keepless/core/window_file.hpp"
 #include "keepless/io/atomic_file.hpp"
 #include "rotation.hpp"
+#include "token_text.hpp"
 
 namespace keepless::io {
 
@@ -58,8 +59,8 @@ bool parse_bal(const std::string& name, const std::string& text, BalProblem* out
   const auto index = [&](const char* what, std::uint64_t limit, std::uint32_t* v) {
     std::uint64_t x = 0;
     if (!take(what)) return false;
-    if (!core::parse_uint64(word.c_str(), &x) || x >= limit) {
-      return fail(at_line, std::string("bad ") + what + " '" + word.substr(0, 40) + "' (an integer below " +
+    if (!core::parse_uint64(word, &x) || x >= limit) {
+      return fail(at_line, std::string("bad ") + what + " '" + detail::shown_token(word) + "' (an integer below " +
                                std::to_string(limit) + ")");
     }
     *v = static_cast<std::uint32_t>(x);
@@ -67,8 +68,8 @@ bool parse_bal(const std::string& name, const std::string& text, BalProblem* out
   };
   const auto number = [&](const char* what, double* v, std::string* keep) {
     if (!take(what)) return false;
-    if (!core::parse_finite_double(word.c_str(), v)) {
-      return fail(at_line, std::string("bad ") + what + " '" + word.substr(0, 40) + "' (a finite number)");
+    if (!core::parse_finite_double(word, v)) {
+      return fail(at_line, std::string("bad ") + what + " '" + detail::shown_token(word) + "' (a finite number)");
     }
     *keep = word;
     return true;

@@ -16,25 +16,12 @@
 #include <string_view>
 
 #include "colmap_parse.hpp"
+#include "token_text.hpp"
 #include "keepless/core/window_file.hpp"
 
 namespace keepless::io::detail {
 
 namespace {
-
-// A finite decimal number, the whole token. Unlike core::parse_finite_double
-// this takes subnormals (strtod flags their underflow with ERANGE), which a
-// binary model may hold and "%.17g" writes exactly.
-bool parse_number(const std::string& token, double* out) {
-  for (const char c : token) {
-    if (!(c >= '0' && c <= '9') && c != '+' && c != '-' && c != '.' && c != 'e' && c != 'E') return false;
-  }
-  char* end = nullptr;
-  const double v = std::strtod(token.c_str(), &end);
-  if (token.empty() || end != token.c_str() + token.size() || !std::isfinite(v)) return false;
-  *out = v;
-  return true;
-}
 
 bool is_blank(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f'; }
 
@@ -98,9 +85,7 @@ class Fields {
   }
   bool u64(std::size_t i, const char* what, std::uint64_t* out) {
     const std::string& t = field(i);
-    // parse_uint64 reads a C string: a NUL inside the token would end it early.
-    return (t.find('\0') == std::string::npos && core::parse_uint64(t.c_str(), out)) ||
-           bad(i, what, "an unsigned integer");
+    return core::parse_uint64(t, out) || bad(i, what, "an unsigned integer");
   }
   template <typename T>
   bool uint(std::size_t i, const char* what, T max, T* out) {
@@ -114,7 +99,7 @@ class Fields {
     return uint<std::uint32_t>(i, what, UINT32_MAX, out);
   }
   bool f64(std::size_t i, const char* what, double* out) {
-    return parse_number(field(i), out) || bad(i, what, "a finite number");
+    return core::parse_finite_double(field(i), out) || bad(i, what, "a finite number");
   }
   // Fields first .. first + n - 1 into out[0 .. n - 1].
   bool f64s(std::size_t first, std::size_t n, const char* what, double* out) {
@@ -151,9 +136,7 @@ class Fields {
     return buffer_;
   }
   bool bad(std::size_t i, const char* what, const std::string& expected) {
-    std::string t;
-    for (const char c : token(i).substr(0, 40)) t += c == '\0' ? std::string("\\0") : std::string(1, c);
-    return fail(std::string("bad ") + what + " '" + t + "' (field " + std::to_string(i + 1) + ", " +
+    return fail(std::string("bad ") + what + " '" + shown_token(token(i)) + "' (field " + std::to_string(i + 1) + ", " +
                 expected + ")");
   }
   const std::string& name_;
@@ -203,7 +186,7 @@ bool parse_cameras_text(const std::string& name, const std::string& text, Colmap
     if (!f.at_least(4, "CAMERA_ID MODEL WIDTH HEIGHT PARAMS[]")) return false;
     ColmapCamera c;
     const CameraModelInfo* info = camera_model_by_name(f.token(1));
-    if (info == nullptr) return f.fail("unknown camera model '" + f.token(1).substr(0, 40) + "'");
+    if (info == nullptr) return f.fail("unknown camera model '" + shown_token(f.token(1)) + "'");
     if (f.size() != 4 + static_cast<std::size_t>(info->num_params)) {
       return f.fail(std::string(info->name) + " takes " + std::to_string(info->num_params) +
                     " parameters, got " + std::to_string(f.size() - 4));

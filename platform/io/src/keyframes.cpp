@@ -9,6 +9,7 @@
 
 #include "keepless/io/atomic_file.hpp"
 #include "rotation.hpp"
+#include "token_text.hpp"
 
 namespace keepless::io {
 
@@ -20,8 +21,11 @@ void to_metric(const Similarity& s, const double c[3], double out[3]) {
 }
 
 bool read_similarity(const std::string& path, Similarity* out, std::string* error) {
+  // 13 numbers: a far larger file is no similarity, and reading it whole
+  // would hold it outside --max-memory-mb.
+  constexpr std::uint64_t kMaxBytes = 65536;
   std::string text;
-  if (!read_file(path, &text, error)) return false;
+  if (!read_file(path, &text, error, kMaxBytes)) return false;
   double v[13];
   std::size_t n = 0, at = 0, line = 1;
   while (at < text.size()) {
@@ -36,8 +40,8 @@ bool read_similarity(const std::string& path, Similarity* out, std::string* erro
       *error = path + ":" + std::to_string(line) + ": more than 13 numbers (s, R row-major, t)";
       return false;
     }
-    if (!core::parse_finite_double(word.c_str(), &v[n])) {
-      *error = path + ":" + std::to_string(line) + ": bad number '" + word.substr(0, 40) + "'";
+    if (!core::parse_finite_double(word, &v[n])) {
+      *error = path + ":" + std::to_string(line) + ": bad number '" + detail::shown_token(word) + "'";
       return false;
     }
     ++n;

@@ -131,6 +131,10 @@ void append_window_keyframe(std::string* out, const Keyframe& keyframe, const st
 [[nodiscard]] bool parse_uint64(const char* text, std::uint64_t* out);
 // A finite double consumed entirely by strtod; no hex, nan, inf or overflow.
 [[nodiscard]] bool parse_finite_double(const char* text, double* out);
+// The same for a token cut from a file, which may hold any byte: a NUL inside
+// it is malformed (read as a C string, "1<NUL>junk" would be 1).
+[[nodiscard]] bool parse_uint64(const std::string& token, std::uint64_t* out);
+[[nodiscard]] bool parse_finite_double(const std::string& token, double* out);
 // "WxH", e.g. "64x48": two unsigned decimals that fit in int32.
 [[nodiscard]] bool parse_box(const char* text, int* width, int* height);
 
