@@ -311,8 +311,9 @@ int parse_args(int argc, char** argv, Options* opt, bool* help, bool* version) {
     return usage_error("--floor-over-longest needs --mode whole and --keep-points or --keep-fraction");
   }
   if (over_longest < 0) {
-    const bool use_sets = use == core::Use::kOffline && whole && opt->model.floor < 0 &&
-                          opt->model.input != keepless::sparsify::Input::kWindow;
+    // Only with a count, as when given: without one (--track-share 0) R is off and reported 0.
+    const bool use_sets = use == core::Use::kOffline && whole && core::keeps_a_count(opt->params.budget.kind) &&
+                          opt->model.floor < 0 && opt->model.input != keepless::sparsify::Input::kWindow;
     over_longest = use_sets ? keepless::sparsify::kOfflineFloorOverLongest : 0;
   }
   if (core::Sparsifier::validate(opt->params) != core::Status::kOk) {

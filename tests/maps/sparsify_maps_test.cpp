@@ -236,6 +236,23 @@ TEST_F(SparsifyMaps, AWholeCountKeepsItsFloorWithinTheCount) {
   EXPECT_NE(tight.err.find("alone needs more than the count of 60 points"), std::string::npos) << tight.err;
 }
 
+// The floor's warning names the count asked for: points never judged (seen
+// by one keyframe) are kept on top of it, as by the count.
+TEST_F(SparsifyMaps, TheFloorsWarningNamesTheCountWithoutTheSkippedPoints) {
+  // Point 7 in all three keyframes, 8 and 9 in two, 10..13 in keyframe 1 only (skipped).
+  maps_test::write_all(path("w.txt"), "kf 1 0 0 0\nkf 2 1 0 0\nkf 3 2 0 0\n"
+                                      "obs 1 7 10 10\nobs 2 7 12 10\nobs 3 7 14 10\nobs 1 8 100 100\nobs 2 8 100 100\n"
+                                      "obs 2 9 300 200\nobs 3 9 300 200\nobs 1 10 1 1\nobs 1 11 2 2\nobs 1 12 3 3\n"
+                                      "obs 1 13 4 4\n");
+  const maps_test::Result r = sparsify({"--window", path("w.txt"), "--keep-points", "1", "--min-obs-per-image", "3"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  const std::string json = last_line(r.out);
+  EXPECT_EQ(json_number(json, "skipped"), 4);
+  EXPECT_EQ(json_number(json, "floor_restored"), 3);
+  EXPECT_EQ(json_number(json, "points_kept"), 7);
+  EXPECT_NE(r.err.find("alone needs more than the count of 1 points: 3 kept for it"), std::string::npos) << r.err;
+}
+
 // --use offline is --mode whole --track-share 1 --floor-over-longest 1.1:
 // the same decisions and model; its share needs a count, and the other flags
 // refine it.
@@ -265,6 +282,12 @@ TEST_F(SparsifyMaps, UseOfflineIsTheWholeModeByTrackLength) {
   EXPECT_EQ(json_number(last_line(replay.out), "floor_over_longest"), 0);
   EXPECT_NE(last_line(replay.out).find("\"budget\":\"fraction\",\"budget_value\":0.1}"), std::string::npos)
       << last_line(replay.out);
+  // Without a count (its share set to 0) R does not apply, and the JSON says 0.
+  const maps_test::Result m_budget =
+      sparsify({"--colmap", fixture("sparse"), "--use", "offline", "--track-share", "0", "--M", "200"});
+  ASSERT_EQ(m_budget.status, 0) << m_budget.err;
+  EXPECT_EQ(json_number(last_line(m_budget.out), "floor_over_longest"), 0) << last_line(m_budget.out);
+  EXPECT_EQ(json_number(last_line(m_budget.out), "obs_floor"), 30);
   const maps_test::Result no_count = sparsify({"--colmap", fixture("sparse"), "--use", "offline"});
   EXPECT_EQ(no_count.status, 2);
   EXPECT_NE(no_count.err.find("--use offline sets it to 1"), std::string::npos) << no_count.err;
@@ -477,6 +500,30 @@ TEST_F(SparsifyMaps, SizesOneKeptFigureAndCompact) {
   EXPECT_EQ(r.status, 2);
 }
 
+// A model that cannot be written after the checks (here a file name the
+// file system refuses) exits 2 and leaves an earlier decisions file as it
+// was, with no temporary beside it: the decisions are renamed into place
+// only once the model is written.
+TEST_F(SparsifyMaps, AModelWriteThatFailsLeavesTheDecisionsFileAsItWas) {
+  maps_test::write_all(path("w.txt"), "kf 1 0 0 0\nkf 2 1 0 0\nkf 3 2 0 0\nobs 1 7 10 10\nobs 2 7 12 10\n"
+                                      "obs 3 7 14 10\nobs 1 8 100 100\nobs 2 8 100 100\n");
+  maps_test::write_all(path("d.txt"), "earlier\n");
+  const std::string too_long = path(std::string(300, 'a') + ".txt");  // NAME_MAX is 255
+  const maps_test::Result r =
+      sparsify({"--window", path("w.txt"), "--mode", "replay", "--out", too_long, "--decisions", path("d.txt")});
+  EXPECT_EQ(r.status, 2) << r.out;
+  EXPECT_NE(r.err.find("cannot write"), std::string::npos) << r.err;
+  EXPECT_EQ(maps_test::read_all(path("d.txt")), "earlier\n");
+  for (const auto& e : fs::directory_iterator(path(""))) {
+    EXPECT_EQ(e.path().filename().string().find(".tmp-"), std::string::npos) << e.path();
+  }
+  // And it is written when the model is.
+  const maps_test::Result ok =
+      sparsify({"--window", path("w.txt"), "--mode", "replay", "--out", path("o.txt"), "--decisions", path("d.txt")});
+  ASSERT_EQ(ok.status, 0) << ok.err;
+  EXPECT_NE(maps_test::read_all(path("d.txt")), "earlier\n");
+}
+
 TEST_F(SparsifyMaps, ImagesLeftBelowTheFloorAreWarnedAbout) {
   const maps_test::Result r =
       sparsify({"--colmap", fixture("sparse"), "--M", "1", "--mode", "whole", "--min-obs-per-image", "0"});
@@ -484,6 +531,34 @@ TEST_F(SparsifyMaps, ImagesLeftBelowTheFloorAreWarnedAbout) {
   EXPECT_LT(json_number(last_line(r.out), "min_obs_per_image"), 30);
   EXPECT_NE(r.err.find("images keep fewer than 30 observations (fewest: "), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("warning: M = 1 is below 200"), std::string::npos) << r.err;
+}
+
+// A map flag that would change nothing is refused (exit 2, one line, nothing
+// read or written), not ignored.
+TEST_F(SparsifyMaps, FlagsThatWouldChangeNothingAreRefused) {
+  maps_test::write_all(path("w.txt"), "kf 1 0 0 0\nkf 2 1 0 0\nobs 1 7 10 10\nobs 2 7 12 10\n");
+  maps_test::write_all(path("s.txt"), "2  1 0 0  0 1 0  0 0 1  0 0 0\n");
+  const std::vector<std::pair<std::vector<std::string>, std::string>> cases = {
+      {{"--colmap", fixture("sparse"), "--out-format", "txt", "--decisions", path("d1")}, "--out-format needs --out"},
+      {{"--window", path("w.txt"), "--scale", "3", "--sim3", path("s.txt"), "--decisions", path("d2")},
+       "give --scale or --sim3, not both"},
+      {{"--colmap", fixture("sparse"), "--mode", "whole", "--K", "5", "--decisions", path("d3")},
+       "--K applies to --mode replay"},
+      {{"--window", path("w.txt"), "--K", "5", "--decisions", path("d4")}, "--K applies to --mode replay"},
+      {{"--colmap", fixture("sparse"), "--use", "offline", "--keep-points", "10", "--K", "5", "--decisions", path("d5")},
+       "--K applies to --mode replay"},
+  };
+  for (const auto& [args, reason] : cases) {
+    const maps_test::Result r = sparsify(args);
+    EXPECT_EQ(r.status, 2) << reason;
+    EXPECT_NE(r.err.find(reason), std::string::npos) << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  }
+  for (const char* d : {"d1", "d2", "d3", "d4", "d5"}) EXPECT_FALSE(fs::exists(path(d))) << d;
+  // Each alone, or with what it needs, runs.
+  EXPECT_EQ(sparsify({"--window", path("w.txt"), "--mode", "replay", "--K", "5"}).status, 0);
+  EXPECT_EQ(sparsify({"--window", path("w.txt"), "--scale", "3"}).status, 0);
+  EXPECT_EQ(sparsify({"--window", path("w.txt"), "--sim3", path("s.txt")}).status, 0);
 }
 
 // --out may not be the input folder, contain it or lie inside it, however

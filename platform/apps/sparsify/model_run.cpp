@@ -6,7 +6,9 @@
 #include <cinttypes>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
+#include <memory>
 #include <new>
 #include <numeric>
 #include <string>
@@ -18,6 +20,7 @@
 #include "keepless/io/atomic_file.hpp"
 #include "keepless/io/bal_problem.hpp"
 #include "keepless/io/colmap_model.hpp"
+#include "keepless/platform/atomic_file_writer.hpp"
 #include "keepless/platform/window_file_io.hpp"
 #include "keepless/platform/memory_estimate.hpp"
 #include "keepless/platform/monotonic_clock.hpp"
@@ -409,11 +412,13 @@ bool parse_map_flag(const std::string& flag, const char* value, ModelOptions* op
       *error = bad + (k ? " (an integer >= 1)" : " (an integer >= 0)");
     } else if (k) {
       opt->K = static_cast<std::uint32_t>(n);
+      opt->K_given = true;
     } else {
       opt->floor = static_cast<std::int64_t>(n);
     }
   } else if (flag == "--scale") {
     if (!core::parse_finite_double(value, &opt->scale) || !(opt->scale > 0)) *error = bad + " (a number > 0)";
+    opt->scale_given = true;
   } else if (flag == "--floor-over-longest") {
     double& r = opt->floor_over_longest;
     if (!core::parse_finite_double(value, &r) || !(r == 0 || (r >= 1 && r <= 100))) {
@@ -496,6 +501,19 @@ int run_model(const ModelOptions& opt) {
   }
   if (!opt.out_format.empty() && opt.input != Input::kColmap) {
     std::fprintf(stderr, "keepless_sparsify: --out-format applies to --colmap only\n");
+    return kExitInput;
+  }
+  // Flags that would change nothing are refused, not ignored.
+  if (!opt.out_format.empty() && opt.out.empty()) {
+    std::fprintf(stderr, "keepless_sparsify: --out-format needs --out (it is the written model's format)\n");
+    return kExitInput;
+  }
+  if (opt.scale_given && !opt.sim3.empty()) {
+    std::fprintf(stderr, "keepless_sparsify: give --scale or --sim3, not both (the similarity holds its own scale)\n");
+    return kExitInput;
+  }
+  if (opt.K_given && mode_of(opt) == Mode::kWhole) {
+    std::fprintf(stderr, "keepless_sparsify: --K applies to --mode replay (whole mode decides all images in one window)\n");
     return kExitInput;
   }
   if (opt.compact && (opt.input != Input::kColmap || opt.out.empty())) {
@@ -626,14 +644,28 @@ int run_model(const ModelOptions& opt) {
     std::fprintf(stderr, "%s\n", error.c_str());
     return kExitInput;
   }
-  if (!opt.decisions.empty() &&
-      !io::write_file_atomically(opt.decisions, format_decisions(r.decisions.data(), r.decisions.size()), &error)) {
-    std::fprintf(stderr, "%s\n", error.c_str());
-    return kExitInput;
+  // The decisions are staged (written whole under a temporary name) before
+  // the model is written and renamed into place only after it: a model that
+  // cannot be written (a folder without write access, a name too long)
+  // leaves an earlier decisions file as it was.
+  std::unique_ptr<platform::AtomicFileWriter> staged;
+  if (!opt.decisions.empty()) {
+    staged = std::make_unique<platform::AtomicFileWriter>(opt.decisions);
+    if (!staged->write(format_decisions(r.decisions.data(), r.decisions.size()))) {
+      const int err = staged->commit();  // reports the open's or write's failure, PATH unchanged
+      std::fprintf(stderr, "%s:0: cannot write: %s\n", opt.decisions.c_str(), std::strerror(err));
+      return kExitInput;
+    }
   }
   if (!opt.out.empty() && !write_model(opt, &m, r.decisions, &error)) {
     std::fprintf(stderr, "%s\n", error.c_str());
-    return kExitInput;
+    return kExitInput;  // the staged decisions are removed unwritten
+  }
+  if (staged != nullptr) {
+    if (const int err = staged->commit(); err != 0) {
+      std::fprintf(stderr, "%s:0: cannot write: %s\n", opt.decisions.c_str(), std::strerror(err));
+      return kExitInput;
+    }
   }
   // Warnings once all is written (an error stays the only stderr line).
   warn_thin_images(m, r.decisions);
@@ -641,7 +673,7 @@ int run_model(const ModelOptions& opt) {
     std::fprintf(stderr,
                  "keepless_sparsify: warning: the floor of %u observations per image alone needs more than the count of "
                  "%" PRIu64 " points: %u kept for it, none by the order\n",
-                 floor, count, restored);
+                 floor, count - r.totals.skipped, restored);  // the count asked for: the skipped stay on top
   }
   // A keep budget sets the count directly: M does not apply.
   if (opt.input == Input::kColmap && params.budget.kind == core::BudgetKind::kNone && params.pair_capacity < kEvidenceM) {

@@ -27,10 +27,12 @@ struct ModelOptions {
   Mode mode = Mode::kReplay;
   bool mode_given = false;  // default: replay for COLMAP/BAL, whole for a window file
   std::uint32_t K = 20;
+  bool K_given = false;      // --K: replay only
   io::KeyframeOrder order = io::KeyframeOrder::kName;
   bool order_given = false;  // default: name for COLMAP, file order otherwise
-  std::string sim3;          // --sim3 FILE (wins over scale)
+  std::string sim3;          // --sim3 FILE
   double scale = 1;          // --scale S
+  bool scale_given = false;  // --scale and --sim3 exclude each other
   std::int64_t floor = -1;   // --min-obs-per-image; -1: 30 for COLMAP/BAL, 0 for a window file
   // --floor-over-longest R (whole mode with a count): the floor is at least
   // ceil(R x longest_tracks_poorest); 0: off, -1: not given (--use offline: 1.1).
