@@ -37,7 +37,10 @@ function(run_latency last_var)
               reference_e2e_p99_ms reference_allocations_after_warmup reference_decisions_digest
               p50_ratio_to_paper p99_ratio_to_paper profile profile_fits node_memory_predicted_bytes
               node_memory_bytes peak_rss_bytes aa_e2e_p50_ms aa_e2e_p99_ms aa_p50_ratio aa_p99_ratio
-              aa_allocations_after_warmup aa_decisions_digest)
+              aa_allocations_after_warmup aa_decisions_digest aa_cpu_p99_ratio e2e_cpu_p50_ms e2e_cpu_p99_ms
+              reference_e2e_cpu_p50_ms reference_e2e_cpu_p99_ms cpu_p50_ratio_to_paper cpu_p99_ratio_to_paper
+              keep_budget keep_budget_value keep_budget_share_p50 keep_budget_share_p99 node_rss_growth_bytes
+              lcm_lost)
     string(JSON value ERROR_VARIABLE missing GET "${last}" ${key})
     if(missing)
       message(FATAL_ERROR "key ${key} missing from: ${last}")
@@ -76,6 +79,14 @@ function(run_latency last_var)
 endfunction()
 
 run_latency(paper_json)
+# A count beyond the tool's range is refused (usage error), not replaced by another.
+if(NOT DEFINED KEEP AND NOT DEFINED COST AND NOT LCM)
+  execute_process(COMMAND ${BIN} --workload small --keyframes 4294967296 --compare 0
+                  OUTPUT_VARIABLE out ERROR_VARIABLE err RESULT_VARIABLE rc)
+  if(NOT rc EQUAL 2)
+    message(FATAL_ERROR "--keyframes 4294967296 exited with ${rc} (expected 2, a usage error)\n${err}")
+  endif()
+endif()
 string(JSON reference GET "${paper_json}" reference)
 string(JSON paper_digest GET "${paper_json}" decisions_digest)
 string(JSON paper_model GET "${paper_json}" cost_model)

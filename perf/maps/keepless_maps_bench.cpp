@@ -233,10 +233,12 @@ std::string join(const std::vector<double>& v) {
   return out;
 }
 
-// Comma-separated integers, each whole (a stray character, e.g. "30x", makes
-// the list empty: the caller reports the bad value).
+// Comma-separated integers, each whole (a stray character, e.g. "30x", an
+// empty list or an empty item, e.g. "30,", makes the list empty: the caller
+// reports the bad value).
 std::vector<std::int64_t> parse_list(const char* s) {
   std::vector<std::int64_t> v;
+  if (*s == '\0' || s[std::strlen(s) - 1] == ',') return {};
   std::stringstream in(s);
   std::string item;
   while (std::getline(in, item, ',')) {
@@ -448,6 +450,9 @@ int main(int argc, char** argv) {
     } else if (f == "--keep-fraction" || f == "--track-share") {
       std::vector<double>& list = f == "--keep-fraction" ? opt.fractions : opt.track_shares;
       list.clear();
+      if (*value == '\0' || value[std::strlen(value) - 1] == ',') {  // getline drops a last empty item
+        return cli::usage_error(kTool, "bad value for " + f + ": '" + value + "' (numbers in [0, 1])");
+      }
       std::stringstream in(value);
       for (std::string t; std::getline(in, t, ',');) {
         char* end = nullptr;

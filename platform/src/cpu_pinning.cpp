@@ -64,8 +64,13 @@ PinResult pin_to_cpus(const std::string& cpu_list) {
   for (int c = 0; c < kMaxCpu && c < CPU_SETSIZE; ++c) {
     if (mask[c / 64] & (1ull << (c % 64))) CPU_SET(c, &set);
   }
+  cpu_set_t got;
+  CPU_ZERO(&got);
   if (sched_setaffinity(0, sizeof(set), &set) != 0) {
     r.error = std::strerror(errno);
+  } else if (sched_getaffinity(0, sizeof(got), &got) == 0 && !CPU_EQUAL(&got, &set)) {
+    // The kernel takes a list holding one usable CPU and drops the rest.
+    r.error = "only some of them exist or are allowed";
   } else {
     r.ok = true;
   }

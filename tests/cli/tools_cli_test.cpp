@@ -178,4 +178,27 @@ TEST(ToolNumbers, AMalformedNumberIsRefusedWithExit2) {
   EXPECT_GE(checked, 1);
 }
 
+#if KEEPLESS_WITH_PERF
+// An empty list, or one with an empty last item, is refused too: "" would
+// otherwise run keepless_maps_bench's default --M sweep instead of the fractions.
+TEST(ToolNumbers, AnEmptyListIsRefusedWithExit2) {
+  std::string dir = ::testing::TempDir() + "keepless_tools_lists_XXXXXX";
+  ASSERT_NE(::mkdtemp(dir.data()), nullptr);
+  int checked = 0;
+  for (const Tool& tool : tools()) {
+    if (tool.name != "keepless_maps_bench") continue;
+    for (const std::vector<std::string>& args :
+         {std::vector<std::string>{"--keep-fraction", ""}, {"--keep-fraction", "0.1,"}, {"--track-share", ""},
+          {"--track-share", "0.5,"}, {"--M", ""}, {"--M", "30,"}}) {
+      const auto r = keepless::test::run_child(tool.path, args, dir + "/out.txt", dir + "/err.txt");
+      EXPECT_EQ(r.status, 2) << args[0] << " '" << args[1] << "': " << r.err;
+      EXPECT_NE(r.err.find("bad value for " + args[0]), std::string::npos) << r.err;
+    }
+    ++checked;
+  }
+  fs::remove_all(dir);
+  EXPECT_EQ(checked, 1);
+}
+#endif  // KEEPLESS_WITH_PERF: the bench is built with perf/ only
+
 }  // namespace

@@ -15,6 +15,8 @@ struct PinResult {
 
 // Parses "0,1" or "0-3"; false on malformed text or CPU >= 1024.
 [[nodiscard]] bool parse_cpu_list(const std::string& text, std::uint64_t mask_out[16]);
+// ok only when the process now runs on exactly those CPUs (a list the kernel
+// grants in part is an error, with `granted` saying what it kept).
 [[nodiscard]] PinResult pin_to_cpus(const std::string& cpu_list);
 std::string current_cpus();
 
