@@ -63,7 +63,8 @@ for ((first = 0; first < ${#harnesses[@]}; first += parallel_harnesses)); do
     h=${batch[$i]}
     if ! wait "${pids[$i]}"; then
       status=1
-      echo "fuzz: $h FOUND something, see $build/findings/$h/" >&2
+      echo "fuzz: $h FOUND something, see $build/findings/$h/; the end of its log:" >&2
+      tail -n 40 "$build/findings/$h/log.txt" | sed "s/^/fuzz: $h: /" >&2  # the oracle's message, the stack
     fi
     grep -E "^stat::(number_of_executed_units|peak_rss_mb|new_units_added)|^#[0-9]+ *DONE" "$build/findings/$h/log.txt" \
       | sed "s/^/fuzz: $h: /" || true

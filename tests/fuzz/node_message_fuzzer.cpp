@@ -201,44 +201,31 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     const std::uint64_t rejected = node.counters().messages_rejected;
     const std::uint64_t restarts = node.order().restarts(), takeovers = node.order().takeovers();
     const std::size_t decisions = heard.decisions.size(), acks = heard.acks.size();
-    const std::uint8_t op = r.u8() % fz::kOpCount;
-    if (op == fz::kAdvanceClock) {  // the owner falls silent: another id may take over
-      clock.now += static_cast<std::uint64_t>(c.owner_timeout_s * 1e9) * (1 + r.u8() % 2);
+    const fz::Message m = fz::next_message(r, stream);
+    if (m.op == fz::kAdvanceClock) {  // the owner falls silent: another id may take over
+      clock.now += static_cast<std::uint64_t>(c.owner_timeout_s * 1e9) * static_cast<std::uint64_t>(m.timeouts);
       continue;
     }
-    bool keyframe = false, decodable = true;
+    const bool keyframe = m.is_keyframe();
+    bool decodable = true;
     std::int64_t event_publisher = 0;
-    keepless::keyframe_t kf{};
-    if (op == fz::kKeyframe || op == fz::kFlippedKeyframe || op == fz::kRawKeyframe) {
-      keyframe = true;
-      std::vector<std::uint8_t> bytes;
-      if (op == fz::kRawKeyframe) {
-        std::size_t n = 0;
-        const std::uint8_t* raw = r.rest(&n);
-        bytes.assign(raw, raw + n);
-      } else {
-        kf = fz::build_keyframe(r, stream);
-        bytes = keepless::testing::encode(kf);
-        if (op == fz::kFlippedKeyframe && !bytes.empty()) bytes[r.u8() % bytes.size()] ^= static_cast<std::uint8_t>(1u << (r.u8() % 8));
-      }
+    keepless::keyframe_t kf = m.keyframe;
+    if (keyframe) {
       keepless::keyframe_t probe{};
       // The node decodes only what passes the byte checks (a declared count
       // is bounded before decode() can allocate for it).
-      decodable = keepless::platform::check_keyframe_bytes(bytes.data(), bytes.size(), limits) ==
+      decodable = keepless::platform::check_keyframe_bytes(m.bytes.data(), m.bytes.size(), limits) ==
                       keepless::platform::RejectReason::kNone &&
-                  probe.decode(bytes.data(), 0, static_cast<int>(bytes.size())) == static_cast<int>(bytes.size());
+                  probe.decode(m.bytes.data(), 0, static_cast<int>(m.bytes.size())) == static_cast<int>(m.bytes.size());
       if (decodable) kf = probe;
-      node.handle_keyframe(bytes.data(), static_cast<std::uint32_t>(bytes.size()));
+      node.handle_keyframe(m.bytes.data(), static_cast<std::uint32_t>(m.bytes.size()));
     } else {
-      keepless::map_event_t e = fz::build_map_event(r, stream);
-      std::vector<std::uint8_t> bytes = keepless::testing::encode(e);
-      if (op == fz::kFlippedMapEvent && !bytes.empty()) bytes[r.u8() % bytes.size()] ^= static_cast<std::uint8_t>(1u << (r.u8() % 8));
       keepless::map_event_t probe{};
-      decodable = keepless::platform::check_map_event_bytes(bytes.data(), bytes.size(), limits) ==
+      decodable = keepless::platform::check_map_event_bytes(m.bytes.data(), m.bytes.size(), limits) ==
                       keepless::platform::RejectReason::kNone &&
-                  probe.decode(bytes.data(), 0, static_cast<int>(bytes.size())) == static_cast<int>(bytes.size());
+                  probe.decode(m.bytes.data(), 0, static_cast<int>(m.bytes.size())) == static_cast<int>(m.bytes.size());
       event_publisher = probe.publisher_id;
-      node.handle_map_event(bytes.data(), static_cast<std::uint32_t>(bytes.size()));
+      node.handle_map_event(m.bytes.data(), static_cast<std::uint32_t>(m.bytes.size()));
     }
     pump();
     const bool cleared = node.order().restarts() != restarts || node.order().takeovers() != takeovers;

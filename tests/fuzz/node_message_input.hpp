@@ -12,6 +12,7 @@
 
 #include "keepless/keyframe_t.hpp"
 #include "keepless/map_event_t.hpp"
+#include "message_builders.hpp"
 
 namespace keepless::fuzz {
 
@@ -106,6 +107,42 @@ inline keepless::map_event_t build_map_event(Reader& r, Stream& s) {
   e.num_merged_points = nm;
   e.num_removed_keyframes = nr;
   return e;
+}
+
+// One op read as what it sends: a clock advance (in owner timeouts), or a
+// keyframe's or map event's bytes, with the message as built before a flip
+// (raw bytes build none).
+struct Message {
+  std::uint8_t op = kAdvanceClock;
+  int timeouts = 0;  // kAdvanceClock: 1 or 2
+  std::vector<std::uint8_t> bytes;
+  keepless::keyframe_t keyframe{};
+  keepless::map_event_t event{};
+  bool is_keyframe() const { return op == kKeyframe || op == kFlippedKeyframe || op == kRawKeyframe; }
+};
+
+inline Message next_message(Reader& r, Stream& s) {
+  Message m;
+  m.op = r.u8() % kOpCount;
+  const auto flip = [&](bool flipped) {
+    if (flipped && !m.bytes.empty()) m.bytes[r.u8() % m.bytes.size()] ^= static_cast<std::uint8_t>(1u << (r.u8() % 8));
+  };
+  if (m.op == kAdvanceClock) {
+    m.timeouts = 1 + r.u8() % 2;
+  } else if (m.op == kRawKeyframe) {
+    std::size_t n = 0;
+    const std::uint8_t* raw = r.rest(&n);
+    m.bytes.assign(raw, raw + n);
+  } else if (m.is_keyframe()) {
+    m.keyframe = build_keyframe(r, s);
+    m.bytes = keepless::testing::encode(m.keyframe);
+    flip(m.op == kFlippedKeyframe);
+  } else {
+    m.event = build_map_event(r, s);
+    m.bytes = keepless::testing::encode(m.event);
+    flip(m.op == kFlippedMapEvent);
+  }
+  return m;
 }
 
 }  // namespace keepless::fuzz

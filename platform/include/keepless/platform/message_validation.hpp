@@ -21,8 +21,8 @@ enum class [[nodiscard]] RejectReason : std::uint8_t {
   kOversizeCount = 0,     // a declared count above the configured limit
   kTruncated,             // byte length differs from what the counts need
   kFingerprint,           // not this message type
-  kNonFinite,             // NaN/inf in a pose or keypoint
-  kInvalidField,          // negative count, bad image size, non-unit quaternion, bad merge list
+  kNonFinite,             // NaN/inf in any number
+  kInvalidField,          // negative count, bad image size, non-unit quaternion, bad optional count
   kUnknownKeyframe,       // names a keyframe not in the window
   kDuplicateKeyframe,     // keyframe id already in the window
   kDuplicateObservation,  // one point twice in one keyframe
