@@ -233,18 +233,32 @@ std::string join(const std::vector<double>& v) {
   return out;
 }
 
-// Comma-separated integers, each whole (a stray character, e.g. "30x", an
-// empty list or an empty item, e.g. "30,", makes the list empty: the caller
-// reports the bad value).
-std::vector<std::int64_t> parse_list(const char* s) {
-  std::vector<std::int64_t> v;
-  if (*s == '\0' || s[std::strlen(s) - 1] == ',') return {};
-  std::stringstream in(s);
+// Comma-separated items, none empty ("", "30," and "1,,2" are refused).
+bool split_list(const char* s, std::vector<std::string>* items) {
+  items->clear();
   std::string item;
-  while (std::getline(in, item, ',')) {
+  for (const char* c = s;; ++c) {
+    if (*c != ',' && *c != '\0') {
+      item += *c;
+      continue;
+    }
+    if (item.empty()) return false;
+    items->push_back(item);
+    item.clear();
+    if (*c == '\0') return true;
+  }
+}
+
+// Comma-separated integers, each whole (a stray character, e.g. "30x", or an
+// empty item makes the list empty: the caller reports the bad value).
+std::vector<std::int64_t> parse_list(const char* s) {
+  std::vector<std::string> items;
+  if (!split_list(s, &items)) return {};
+  std::vector<std::int64_t> v;
+  for (const std::string& item : items) {
     std::int64_t n = 0;
     const auto [end, ec] = std::from_chars(item.data(), item.data() + item.size(), n);
-    if (ec != std::errc() || end != item.data() + item.size()) return {};  // "" is invalid_argument too
+    if (ec != std::errc() || end != item.data() + item.size()) return {};
     v.push_back(n);
   }
   return v;
@@ -450,17 +464,15 @@ int main(int argc, char** argv) {
     } else if (f == "--keep-fraction" || f == "--track-share") {
       std::vector<double>& list = f == "--keep-fraction" ? opt.fractions : opt.track_shares;
       list.clear();
-      if (*value == '\0' || value[std::strlen(value) - 1] == ',') {  // getline drops a last empty item
-        return cli::usage_error(kTool, "bad value for " + f + ": '" + value + "' (numbers in [0, 1])");
-      }
-      std::stringstream in(value);
-      for (std::string t; std::getline(in, t, ',');) {
-        char* end = nullptr;
-        const double x = std::strtod(t.c_str(), &end);
-        if (t.empty() || *end != '\0' || !(x >= 0 && x <= 1)) {
-          return cli::usage_error(kTool, "bad value for " + f + ": '" + value + "' (numbers in [0, 1])");
-        }
+      std::vector<std::string> items;
+      bool ok = split_list(value, &items);
+      for (const std::string& t : items) {
+        double x = 0;
+        ok = ok && core::parse_finite_double(t, &x) && x >= 0 && x <= 1;
         list.push_back(x);
+      }
+      if (!ok) {
+        return cli::usage_error(kTool, "bad value for " + f + ": '" + value + "' (numbers in [0, 1])");
       }
     } else if (f == "--K") opt.K = static_cast<std::uint32_t>(count(1, 100000));
     else if (f == "--seeds") opt.seeds = static_cast<int>(count(1, 1000));

@@ -9,15 +9,13 @@
 
 #include <algorithm>
 #include <cinttypes>
-#include <cmath>
-#include <cstdlib>
 #include <cstdio>
 #include <string>
 #include <string_view>
 
 #include "colmap_parse.hpp"
-#include "token_text.hpp"
 #include "keepless/core/window_file.hpp"
+#include "token_text.hpp"
 
 namespace keepless::io::detail {
 
