@@ -427,21 +427,31 @@ void take_longest_tracks(std::uint32_t* ranked, std::uint32_t candidates, std::u
   std::uint32_t cut = max_views, above = 0;
   while (cut > 0 && above + histogram[cut] < by_track) above += histogram[cut--];
   std::uint32_t at_cut = by_track - above;
-  std::uint32_t kept = first, rest = 0;
-  for (std::uint32_t j = first; j < candidates; ++j) {  // a stable partition; kept <= j
-    const std::uint32_t i = ranked[j];
+  // The longest tracks go first, most views first (ties in the network's
+  // order), so a prefix of them (what Params::tracked_first leaves of the
+  // count) is still the longest: histogram becomes each view count's first
+  // position among them.
+  std::uint32_t position = 0;
+  for (std::uint32_t n = max_views + 1; n-- > cut;) {
+    const std::uint32_t here = n == cut ? at_cut : histogram[n];
+    histogram[n] = position;
+    position += here;
+  }
+  std::copy(ranked + first, ranked + candidates, scratch);
+  std::uint32_t rest = first + by_track;
+  for (std::uint32_t j = 0; j < candidates - first; ++j) {  // stable within each part
+    const std::uint32_t i = scratch[j];
     bool longest = v(i) > cut;
     if (v(i) == cut && at_cut > 0) {
       longest = true;
       --at_cut;
     }
     if (longest) {
-      ranked[kept++] = i;
+      ranked[first + histogram[v(i)]++] = i;
     } else {
-      scratch[rest++] = i;
+      ranked[rest++] = i;
     }
   }
-  std::copy(scratch, scratch + rest, ranked + kept);
 }
 
 }  // namespace keepless::core

@@ -723,6 +723,76 @@ TEST(KeepBudgets, TrackShareTakesTheLongestTracksAfterTheOrder) {
   EXPECT_GT(differs, test::cases(50));  // the share changes what is kept, not only in theory
 }
 
+// Params::tracked_first with a track share: the tracked go ahead of the
+// share's picks, and what is left of the count still goes to the longest
+// tracks. S = 1 is longest-track-first: a point seen by every keyframe is
+// kept before a two-view one the network's order puts ahead of it.
+TEST(KeepBudgets, TrackedFirstWithAShareKeepsTheLongestTracks) {
+  Window window(kCaps);
+  // No costs: each pair orders its points by id. Point 1 (two views) and
+  // point 5 (five) both have M* = 1, point 3 (two views, tracked) M* = 2.
+  const std::uint8_t tracked[] = {1, 0, 0};
+  for (KeyframeId id = 1; id <= 5; ++id) {
+    std::vector<Observation> obs{{5, 10.0 * id, 10.0, 0.0}};
+    if (id >= 4) {
+      obs.push_back({1, 100.0, 100.0, 0.0});
+      obs.push_back({3, 200.0, 200.0, 0.0});
+    }
+    Keyframe kf;
+    kf.id = id;
+    kf.centre[0] = static_cast<double>(id);
+    if (id == 5) {  // the newest flags point 3 (listed first)
+      std::swap(obs[0], obs[2]);
+      kf.tracked = tracked;
+    }
+    ASSERT_EQ(window.add_keyframe(kf, obs.data(), static_cast<std::uint32_t>(obs.size())), Status::kOk);
+  }
+  Params p;
+  p.cost_terms = 0;
+  p.tracked_first = true;
+  p.budget = KeepBudget{BudgetKind::kPoints, 2, 0.0, 1.0};
+  Sparsifier s(kCaps, p);
+  ASSERT_EQ(s.run(window), Status::kOk);
+  ASSERT_EQ(s.summary().tracked, 1u);
+  EXPECT_EQ(kept_of(s), (std::set<PointId>{3, 5}));  // the tracked, then the longest track
+
+  // On random windows: with S = 1 every untracked candidate kept has at
+  // least the views of every untracked candidate culled.
+  std::uint32_t checked = 0;
+  for (std::uint64_t seed = 1; seed <= 40 && !HasFailure(); ++seed) {
+    test::RandomCase c = test::random_case(9500 + seed, 12, 120);
+    test::random_policies(c, 9500 + seed);
+    test::random_guard(c, 9500 + seed);
+    c.params.coverage_floor = 0;
+    c.params.tracked_first = true;
+    ASSERT_TRUE(test::load(window, c.frames));
+    const auto views = views_of(window);
+    std::set<PointId> flagged;
+    const std::uint32_t newest = window.keyframe_count() - 1;
+    if (window.keyframe(newest).tracked != nullptr) {
+      for (std::uint32_t i = 0; i < window.observation_count(newest); ++i) {
+        if (window.keyframe(newest).tracked[i] != 0) flagged.insert(window.observations(newest)[i].point);
+      }
+    }
+    for (std::uint64_t k = 1; k <= 40; k += 3) {
+      Params q = c.params;
+      q.budget = KeepBudget{BudgetKind::kPoints, k, 0.0, 1.0};
+      Sparsifier t(kCaps, q);
+      ASSERT_EQ(t.run(window), Status::kOk);
+      std::uint32_t fewest_kept = ~0u, most_culled = 0;
+      for (std::uint32_t i = 0; i < t.decision_count(); ++i) {
+        const PointDecision& d = t.decisions()[i];
+        if (d.verdict == Verdict::kSkip || flagged.count(d.point) > 0) continue;
+        if (d.verdict == Verdict::kKeep) fewest_kept = std::min(fewest_kept, views.at(d.point));
+        if (d.verdict == Verdict::kCull) most_culled = std::max(most_culled, views.at(d.point));
+      }
+      ASSERT_TRUE(fewest_kept == ~0u || fewest_kept >= most_culled) << "seed " << seed << " K " << k;
+      ++checked;
+    }
+  }
+  EXPECT_GT(checked, 400u);
+}
+
 // Without a budget the option changes nothing: the tracked are skipped.
 TEST(KeepBudgets, TrackedFirstWithoutABudgetSkipsAsBefore) {
   Window window(kCaps);

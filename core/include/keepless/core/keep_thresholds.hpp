@@ -119,8 +119,9 @@ class FractionBudget {
 // of them; of those, floor(share x take + 0.5) are taken by track length:
 // the first take minus that many stay, then come the other candidates with
 // the most views (views[i]: candidate i's window observations n, counted up
-// to max_views), ties in the network's order, then the rest in that order.
-// So ranked[0, take) is what the budget keeps. `histogram` holds
+// to max_views), most first, ties in the network's order, then the rest in
+// that order. So ranked[0, take) is what the budget keeps, and any prefix of
+// it (Params::tracked_first moves the tracked ahead) keeps the longest. `histogram` holds
 // max_views + 1 entries and `scratch` `candidates`; no allocation.
 std::uint32_t track_share_count(double share, std::uint32_t take);
 // The share a decision keeping `take` of `candidates` applies: the budget's
