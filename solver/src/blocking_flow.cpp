@@ -193,10 +193,10 @@ Status MinCostFlow::Impl::solve_scratch(NodeId s, NodeId t, const Budget& budget
     return stop_before_start(s, t);
   }
   clear_recosted();
-  const std::uint64_t base = set_label_base();
   stats = {};
   overflow = false;
   const Cost max_cost = count_degrees();
+  const std::uint64_t base = set_label_base();
   set_terminals(s, t);
   // Distances stay below nodes * max cost, and labels must hold them: a
   // network too large for its costs is beyond a capacity, not bad input.

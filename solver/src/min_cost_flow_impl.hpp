@@ -96,6 +96,7 @@ struct MinCostFlow::Impl {
   std::int32_t tie_count = 0;
   std::vector<ArcId> layout_order;       // active arcs, tie order first then ids (count_degrees)
   std::int32_t layout_count = 0;
+  std::int32_t label_nodes = 0;          // nodes with arcs at the last count_degrees, + 2 (terminals)
   std::vector<std::int32_t> recosted;    // arcs whose cost set_arc changed since the last layout
   std::vector<std::uint8_t> is_recosted;
   std::int32_t recosted_count = 0;

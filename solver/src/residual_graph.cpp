@@ -104,6 +104,10 @@ Cost MinCostFlow::Impl::count_degrees() {
       touched[placed++] = v;
     }
   }
+  // Labels count hops over nodes with arcs only (and the terminals, which
+  // may have none): a network held in a larger solver (recycled ids) is
+  // bounded by what it uses, not by its capacity.
+  label_nodes = placed + 2;
   // Internal numbers in block order; nodes without arcs after the others.
   for (NodeId v = 0; v < nodes; ++v) {
     if (visit[v] != visit_epoch) touched[placed++] = v;

@@ -281,11 +281,12 @@ void MinCostFlow::Impl::clear_labels() {
   touched_count = 0;
 }
 
-// Labels are distance << shift | hops, hops <= nodes; a power of two
-// keeps division out of the search.
+// Labels are distance << shift | hops, hops < label_nodes (the nodes with
+// arcs and the terminals, see count_degrees); a power of two keeps division
+// out of the search.
 std::uint64_t MinCostFlow::Impl::set_label_base() {
   shift = 1;
-  while ((std::uint64_t{1} << shift) < static_cast<std::uint64_t>(nodes) + 2) ++shift;
+  while ((std::uint64_t{1} << shift) < static_cast<std::uint64_t>(label_nodes) + 2) ++shift;
   const std::uint64_t base = std::uint64_t{1} << shift;
   hop_mask = base - 1;
   rc_limit = kLabelLimit / base;

@@ -127,9 +127,9 @@ Status MinCostFlow::Impl::solve_warm(NodeId s, NodeId t, const Budget& budget) {
   if (!have_state || s != src_ext || t != snk_ext || overflow) return solve_scratch(s, t, budget);
   stats = {};
   stats.warm = true;
-  const std::uint64_t base = set_label_base();
   if (!laid_out) {
     const Cost max_cost = count_degrees();
+    const std::uint64_t base = set_label_base();
     set_terminals(s, t);
     estimate_potentials();
     shift_recosted_potentials();
@@ -147,6 +147,8 @@ Status MinCostFlow::Impl::solve_warm(NodeId s, NodeId t, const Budget& budget) {
       return solve_scratch(s, t, budget);
     }
     lay_out(true);
+  } else {
+    set_label_base();  // as at the layout (label_nodes is the layout's)
   }
   Meter meter(budget, stats);
   // Once per layout: a resumed call goes on with the searches.

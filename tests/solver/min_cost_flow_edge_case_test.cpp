@@ -431,6 +431,31 @@ TEST(MinCostFlowEdgeCase, ExactNodeCapacityWithWidelySpreadSourceCosts) {
   EXPECT_EQ(solver.total_cost(), 5);
 }
 
+// The label bound counts the nodes a network uses, not the node ids it was
+// reset to: core::IncrementalNetwork resets its solver to the capacity's
+// node count, so a window that run() (sized to the window) solves from zero
+// flow was refused by update() with kZeroFlow (kCapacityExceeded).
+TEST(MinCostFlowEdgeCase, LabelBoundCountsTheNodesInUse) {
+  MinCostFlow solver(Capacity{40000, 4});
+  ASSERT_EQ(solver.reset(40000), Status::kOptimal);
+  ASSERT_EQ(solver.add_arc(0, 2, 2, Cost{1} << 30), Status::kOptimal);
+  ASSERT_EQ(solver.add_arc(2, 1, 1, 0), Status::kOptimal);
+  ASSERT_EQ(solver.solve(0, 1), Status::kOptimal);
+  EXPECT_EQ(solver.flow_value(), 1);
+  EXPECT_EQ(solver.total_cost(), Cost{1} << 30);
+  ASSERT_EQ(solver.set_arc(1, 2, 0), Status::kOptimal);
+  ASSERT_EQ(solver.solve_warm(0, 1), Status::kOptimal);
+  EXPECT_EQ(solver.flow_value(), 2);
+  EXPECT_EQ(solver.total_cost(), Cost{2} << 30);
+  // The same network in a solver reset to its size: the same answer.
+  MinCostFlow small(Capacity{3, 4});
+  ASSERT_EQ(small.reset(3), Status::kOptimal);
+  ASSERT_EQ(small.add_arc(0, 2, 2, Cost{1} << 30), Status::kOptimal);
+  ASSERT_EQ(small.add_arc(2, 1, 2, 0), Status::kOptimal);
+  ASSERT_EQ(small.solve(0, 1), Status::kOptimal);
+  EXPECT_EQ(small.total_cost(), solver.total_cost());
+}
+
 TEST(MinCostFlowEdgeCase, EveryStatusHasADistinctName) {
   const Status all[] = {Status::kOptimal, Status::kBudgetExhausted, Status::kInvalidInput,
                         Status::kCapacityExceeded};
