@@ -65,7 +65,12 @@ set +e
 "$SIM" --url "$URL" --scene "$SCENE" --keyframes "$KEYFRAMES" --report "$REPORT"
 SIM_RC=$?
 set -e
-wait "$NODE_PID" || true
+# The node exits after its last decision; a simulator that failed (or a lost
+# keyframe) leaves it waiting for more: stop it then instead of waiting forever.
+if [ "$SIM_RC" = 0 ]; then
+  for _ in $(seq 50); do kill -0 "$NODE_PID" 2>/dev/null || break; sleep 0.1; done
+fi
+stop "$NODE_PID"
 sed -n '$p' "$REPORT/node.log"
 if [ "$have_logger" = 1 ]; then
   sleep 0.3

@@ -67,19 +67,20 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "keepless_node: cannot open LCM URL '%s'\n", config.url.c_str());
     return 1;
   }
-  // The fixed memory is checked against the limit before it is allocated.
+  // The fixed memory is checked against the limit before it is allocated, in
+  // the MB (10^6 bytes) the start line and the docs print it in.
   const double need = platform::estimate_node_bytes(config);
-  if (need > static_cast<double>(config.max_memory_mb) * 1048576.0) {
+  if (need > static_cast<double>(config.max_memory_mb) * 1e6) {
     std::fprintf(stderr,
-                 "keepless_node: these flags need about %.0f MB of fixed memory, above --max-memory-mb %llu "
+                 "keepless_node: these flags need about %.1f MB of fixed memory, above --max-memory-mb %llu "
                  "(lower --window, --max-observations, --max-points, --max-window-observations or --max-pair-arcs, "
                  "or use --profile small)\n",
-                 need / 1048576.0, static_cast<unsigned long long>(config.max_memory_mb));
+                 need / 1e6, static_cast<unsigned long long>(config.max_memory_mb));
     return 2;
   }
   const auto cannot_allocate = [need] {
-    std::fprintf(stderr, "keepless_node: cannot allocate the fixed memory (about %.0f MB) for these flags\n",
-                 need / 1048576.0);
+    std::fprintf(stderr, "keepless_node: cannot allocate the fixed memory (about %.1f MB) for these flags\n",
+                 need / 1e6);
     return 2;
   };
   std::unique_ptr<platform::Node> owned;

@@ -64,12 +64,13 @@ const std::vector<keepless::cli::Flag> kFlags = {
     {"--decision-channel", "NAME", "decision_t input (default KEEPLESS_DECISION)"},
     {"--timing-channel", "NAME", "decision_timing_t input (default KEEPLESS_DECISION_TIMING)"},
     {"--status-channel", "NAME", "status_t input (default KEEPLESS_STATUS)"},
-    {"--scene", "street|room", "built-in scene (default street)"},
+    {"--scene", "street|room", "built-in scene (default street; not with --trajectory)"},
     {"--trajectory", "FILE", "follow a real trajectory instead (KITTI: street; TUM/EuRoC: indoor scene)"},
     {"--format", "tum|euroc|euroc-cam|kitti", "the trajectory's format (euroc: IMU body ground truth, cam0\n"
                                               "mounting applied; euroc-cam: ORB-SLAM3 EuRoC_left_cam files)"},
-    {"--kf-distance", "M", "new keyframe after moving M metres (default: kitti 1.0, indoor 0.1)"},
-    {"--kf-angle", "DEG", "... or turning DEG degrees (default 15)"},
+    {"--kf-distance", "M", "with --trajectory: new keyframe after moving M metres (default: kitti\n"
+                            "1.0, indoor 0.1)"},
+    {"--kf-angle", "DEG", "with --trajectory: ... or turning DEG degrees (default 15)"},
     {"--keyframes", "N", "keyframes to publish (default 300)"},
     {"--seed", "S", "scene and noise seed (default 1)"},
     {"--max-keypoints", "N", "detector budget per keyframe (default 1000)"},
@@ -88,6 +89,8 @@ const std::vector<keepless::cli::Flag> kFlags = {
 std::string usage() { return keepless::cli::usage("usage: keepless_vo_sim [options]", kFlags); }
 
 bool parse_args(int argc, char** argv, SimConfig& c, std::string& error, bool& help, bool& version) {
+  bool scene_given = false;
+  const char* trajectory_only = nullptr;  // the first of --format, --kf-distance, --kf-angle
   for (int i = 1; i < argc; ++i) {
     const keepless::cli::Flag* entry = nullptr;
     const char* arg = nullptr;
@@ -103,10 +106,15 @@ bool parse_args(int argc, char** argv, SimConfig& c, std::string& error, bool& h
       continue;
     }
     const std::string value = arg;
+    scene_given = scene_given || flag == "--scene";
+    if (trajectory_only == nullptr && (flag == "--format" || flag == "--kf-distance" || flag == "--kf-angle")) {
+      trajectory_only = entry->name;
+    }
     char* end = nullptr;
     errno = 0;
     auto as_u64 = [&](std::uint64_t lo, std::uint64_t hi, std::uint64_t& out) {
-      if (value.empty() || value[0] == '-') return false;
+      // Digits only: strtoull skips leading blanks and negates a '-' after them (" -1" is 2^64 - 1).
+      if (value.empty() || value[0] < '0' || value[0] > '9') return false;
       const unsigned long long v = std::strtoull(value.c_str(), &end, 10);
       if (errno != 0 || *end != '\0' || v < lo || v > hi) return false;
       out = v;
@@ -155,6 +163,15 @@ bool parse_args(int argc, char** argv, SimConfig& c, std::string& error, bool& h
   }
   if (!c.trajectory.empty() && c.format.empty()) {
     error = "--trajectory needs --format tum|euroc|euroc-cam|kitti";
+    return false;
+  }
+  // A flag of the other source would be ignored: refused instead.
+  if (c.trajectory.empty() && trajectory_only != nullptr) {
+    error = std::string(trajectory_only) + " needs --trajectory (the built-in scenes have their own path)";
+    return false;
+  }
+  if (!c.trajectory.empty() && scene_given) {
+    error = "--scene and --trajectory exclude each other (a trajectory's scene follows its --format)";
     return false;
   }
   return true;

@@ -8,6 +8,7 @@
 #include <utility>
 
 #include "keepless/core/use.hpp"
+#include "keepless/platform/cpu_pinning.hpp"
 #include "keepless/platform/memory_estimate.hpp"
 
 namespace keepless::platform {
@@ -15,7 +16,8 @@ namespace keepless::platform {
 namespace {
 
 bool parse_u64(const std::string& text, std::uint64_t min, std::uint64_t max, std::uint64_t& out) {
-  if (text.empty() || text[0] == '-' || text[0] == '+') return false;
+  // Digits only: strtoull skips leading blanks and negates a '-' after them (" -1" is 2^64 - 1).
+  if (text.empty() || text[0] < '0' || text[0] > '9') return false;
   errno = 0;
   char* end = nullptr;
   const unsigned long long v = std::strtoull(text.c_str(), &end, 10);
@@ -393,7 +395,9 @@ ParseResult parse_node_arguments(int argc, const char* const* argv, NodeConfig& 
       if (!parse_double(value, t) || t < 0 || t > 60000) return bad("expected milliseconds in [0, 60000]");
       config.latency_target_ms = t;
     } else if (flag == "--cpus") {
-      if (value.empty()) return bad("empty CPU list");
+      // A malformed list is the user's, refused here; only what the OS refuses is reported at start.
+      std::uint64_t mask[16];
+      if (!parse_cpu_list(value, mask)) return bad("expected a CPU list, e.g. 0,1 or 2-3 (CPUs 0..1023)");
       config.cpus = value;
     } else if (flag == "--queue") {
       if (!parse_u64(value, 1, 1u << 20, n)) return bad("expected an integer in 1..1048576");

@@ -8,8 +8,10 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <cstdint>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <ostream>
 #include <sstream>
 #include <string>
@@ -156,8 +158,48 @@ TEST_P(ToolCli, UnknownOptionIsNamedOnStderrWithExit2) {
   }
 }
 
+// keepless_vo_sim refuses a flag its source would ignore: --format,
+// --kf-distance and --kf-angle without --trajectory, --scene with one.
+TEST(VoSimFlags, AFlagOfTheOtherSourceIsRefusedWithExit2) {
+  std::string sim;
+  for (const Tool& t : tools()) {
+    if (t.name == "keepless_vo_sim") sim = t.path;
+  }
+  if (sim.empty()) GTEST_SKIP() << "keepless_vo_sim is not built (no LCM)";
+  std::string dir = ::testing::TempDir() + "keepless_vo_sim_flags_XXXXXX";
+  ASSERT_NE(::mkdtemp(dir.data()), nullptr);
+  const std::string trajectory = dir + "/t.txt";
+  for (const std::vector<std::string>& args :
+       {std::vector<std::string>{"--format", "kitti"}, {"--kf-distance", "2"}, {"--kf-angle", "5"},
+        {"--scene", "room", "--trajectory", trajectory, "--format", "kitti"}}) {
+    std::vector<std::string> all = {"--url", "memq://", "--wait-node-ms", "1", "--keyframes", "1"};
+    all.insert(all.end(), args.begin(), args.end());
+    const auto r = keepless::test::run_child(sim, all, dir + "/out.txt", dir + "/err.txt");
+    EXPECT_EQ(r.status, 2) << args[0] << ": " << r.err;
+    EXPECT_NE(r.err.find(args[0]), std::string::npos) << r.err;
+  }
+  fs::remove_all(dir);
+}
+
 INSTANTIATE_TEST_SUITE_P(Tools, ToolCli, ::testing::ValuesIn(tools()),
                          [](const ::testing::TestParamInfo<Tool>& info) { return info.param.name; });
+
+// keepless_vo_sim's integers are digits only: " -1" was --seed 2^64 - 1.
+TEST(VoSimFlags, ANegativeIntegerBehindABlankIsRefused) {
+  std::string sim;
+  for (const Tool& t : tools()) {
+    if (t.name == "keepless_vo_sim") sim = t.path;
+  }
+  if (sim.empty()) GTEST_SKIP() << "keepless_vo_sim is not built (no LCM)";
+  std::string dir = ::testing::TempDir() + "keepless_vo_sim_numbers_XXXXXX";
+  ASSERT_NE(::mkdtemp(dir.data()), nullptr);
+  for (const char* flag : {"--seed", "--keyframes", "--event-every"}) {
+    const auto r = keepless::test::run_child(sim, {"--url", "memq://", "--wait-node-ms", "1", flag, " -1"},
+                                             dir + "/out.txt", dir + "/err.txt");
+    EXPECT_EQ(r.status, 2) << flag << ": " << r.out << r.err;
+  }
+  fs::remove_all(dir);
+}
 
 // A malformed number is refused whole, never read as its prefix ("30x" as 30),
 // by each tool that takes --M.
@@ -200,5 +242,60 @@ TEST(ToolNumbers, AnEmptyListIsRefusedWithExit2) {
   EXPECT_EQ(checked, 1);
 }
 #endif  // KEEPLESS_WITH_PERF: the bench is built with perf/ only
+
+// keepless_log_compare's verdicts on hand-made LCM logs: order, one byte and
+// count differ (1); a file that is not an LCM log, or is cut or corrupt
+// within an event, is unreadable (2), never compared as its readable prefix.
+std::string lcm_event(std::int64_t n, const std::string& channel, const std::string& data) {
+  std::string e;
+  const auto be = [&e](std::uint64_t v, int bytes) {
+    for (int i = bytes - 1; i >= 0; --i) e += static_cast<char>((v >> (8 * i)) & 0xff);
+  };
+  be(0xEDA1DA01u, 4);
+  be(static_cast<std::uint64_t>(n), 8);
+  be(1000 + static_cast<std::uint64_t>(n), 8);
+  be(channel.size(), 4);
+  be(data.size(), 4);
+  return e + channel + data;
+}
+
+TEST(LogCompare, VerdictsOnOrderBytesCountAndDamagedLogs) {
+  std::string compare;
+  for (const Tool& t : tools()) {
+    if (t.name == "keepless_log_compare") compare = t.path;
+  }
+  if (compare.empty()) GTEST_SKIP() << "keepless_log_compare is not built (no LCM)";
+  std::string dir = ::testing::TempDir() + "keepless_log_compare_XXXXXX";
+  ASSERT_NE(::mkdtemp(dir.data()), nullptr);
+  const auto write = [&dir](const std::string& name, const std::string& bytes) {
+    std::ofstream(dir + "/" + name, std::ios::binary) << bytes;
+    return dir + "/" + name;
+  };
+  const std::string full = lcm_event(0, "D", "abc") + lcm_event(1, "X", "zz") + lcm_event(2, "D", "def");
+  const std::string a = write("a.lcmlog", full);
+  std::string corrupt = full;
+  corrupt[lcm_event(0, "D", "abc").size() + 20] = 0x10;  // the second event's channel length
+  const struct {
+    std::string log;
+    int status;
+  } cases[] = {
+      {write("same.lcmlog", full), 0},
+      {write("order.lcmlog", lcm_event(0, "D", "def") + lcm_event(1, "D", "abc")), 1},
+      {write("byte.lcmlog", lcm_event(0, "D", "abc") + lcm_event(1, "D", "dEf")), 1},
+      {write("count.lcmlog", full + lcm_event(3, "D", "ghi")), 1},
+      {write("cut.lcmlog", full.substr(0, full.size() - 2)), 2},
+      {write("junk_after.lcmlog", full + "junk"), 2},
+      {write("text.lcmlog", "not an LCM log\n"), 2},
+      {write("corrupt.lcmlog", corrupt), 2},
+  };
+  for (const auto& c : cases) {
+    const auto r = keepless::test::run_child(compare, {a, "D", c.log, "D"}, dir + "/out.txt", dir + "/err.txt");
+    EXPECT_EQ(r.status, c.status) << c.log << ": " << r.out << r.err;
+  }
+  // A corrupt log against itself: not "identical" over the prefix before the damage.
+  const std::string bad = dir + "/corrupt.lcmlog";
+  EXPECT_EQ(keepless::test::run_child(compare, {bad, "D", bad, "D"}, dir + "/out.txt", dir + "/err.txt").status, 2);
+  fs::remove_all(dir);
+}
 
 }  // namespace

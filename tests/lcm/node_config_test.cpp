@@ -459,6 +459,19 @@ TEST(NodeConfig, ASwitchRefusesAValue) {
   }
 }
 
+// strtoull skips leading blanks and negates a '-' after them: " -1" was
+// accepted as 2^64 - 1 where a bound did not catch it (--max-keyframes,
+// --budget-work), " 5" as 5.
+TEST(NodeConfig, AnIntegerWithBlanksOrASignIsRefused) {
+  std::string error;
+  for (const char* flag : {"--max-keyframes", "--budget-work", "--window", "--max-sequence-jump"}) {
+    for (const char* bad : {" -1", " 5", "\t5", "+5", "-1"}) {
+      NodeConfig c;
+      EXPECT_EQ(parse({flag, bad}, c, error), ParseResult::kError) << flag << " '" << bad << "'";
+    }
+  }
+}
+
 TEST(NodeConfig, ParsesDeferredCulling) {
   NodeConfig c;
   std::string error;
@@ -473,6 +486,19 @@ TEST(NodeConfig, ParsesDeferredCulling) {
     EXPECT_EQ(parse({"--defer", bad}, d, error), ParseResult::kError) << bad;
     EXPECT_EQ(parse({"--defer-memory", bad}, d, error), ParseResult::kError) << bad;
   }
+}
+
+// A malformed --cpus list exits 2 at parse; it was taken, reported at start
+// ("could not pin ... malformed CPU list") and the node ran unpinned.
+TEST(NodeConfig, AMalformedCpuListIsRefused) {
+  std::string error;
+  for (const char* bad : {"", "abc", "-5", "0,", "3-1", "0.1", "1024"}) {
+    NodeConfig c;
+    EXPECT_EQ(parse({"--cpus", bad}, c, error), ParseResult::kError) << "'" << bad << "'";
+  }
+  NodeConfig c;
+  ASSERT_EQ(parse({"--cpus", "0-1,3"}, c, error), ParseResult::kOk) << error;
+  EXPECT_EQ(c.cpus, "0-1,3");
 }
 
 TEST(NodeConfig, ParsesTheReliabilityFlags) {

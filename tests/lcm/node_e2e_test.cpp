@@ -384,4 +384,20 @@ TEST(NodeEndToEnd, FlagsBeyondTheMemoryLimitExitTwoBeforeAllocating) {
   EXPECT_NE(node.log().find("--max-memory-mb"), std::string::npos) << node.log();
 }
 
+// --max-memory-mb is in the MB the node prints (10^6 bytes): at the defaults
+// it predicts 15.6 MB, so a limit of 15 refuses to start, and the refusal
+// names the figure of the start line. It was compared in MiB (15.6e6 bytes is
+// 14.9 MiB): the node started under "--max-memory-mb 15" and printed 15.6 MB.
+TEST(NodeEndToEnd, TheMemoryLimitIsInTheMegabytesTheNodePrints) {
+  TempDir tmp;
+  kt::ChildProcess node(target_argv({KEEPLESS_NODE_BIN, "--url", "memq://", "--max-memory-mb", "15"}),
+                        tmp.file("node.log"));
+  ASSERT_TRUE(node.started());
+  const bool exited = node.wait(60000);
+  node.stop();
+  ASSERT_TRUE(exited) << "started above the limit: " << node.log();
+  EXPECT_EQ(node.exit_code(), 2) << node.log();
+  EXPECT_NE(node.log().find("about 15.6 MB"), std::string::npos) << node.log();
+}
+
 }  // namespace
