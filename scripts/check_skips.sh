@@ -6,6 +6,8 @@
 set -euo pipefail
 log=$1
 shift
+# The list below is read in a process substitution, whose failure set -e does not see.
+[ -f "$log" ] && [ -r "$log" ] || { echo "check_skips: $log: no such log (did ctest run?)" >&2; exit 1; }
 allowed=" $* "
 bad=()
 while read -r name; do

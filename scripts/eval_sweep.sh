@@ -36,18 +36,20 @@
 #                         [--eval-flags "FLAGS"] [--resume]
 #
 # --resume keeps OUT's finished jobs (a run directory with its runs.csv, the
-# COLMAP rows with their JSON line) and runs the rest.
+# COLMAP rows with their JSON line, each run with the same flags: its .job file)
+# and runs the rest.
 set -euo pipefail
-cd "$(dirname "$0")/.."
+# The defaults are the repository's; paths given on the command line are the caller's.
+root=$(cd "$(dirname "$0")/.." && pwd)
 
-data=../shared/data
+data=$root/../shared/data
 fractions=0.1,0.2,0.3,0.4,0.6
 synthetic_fractions=0.2,0.4
 seeds=5
 jobs=2
-out=sweep_out
+out=$root/sweep_out
 only=7scenes,kitti00,kitti06,colmap
-bin=build/bin
+bin=$root/build/bin
 variants=paper
 extra=
 resume=0
@@ -64,8 +66,20 @@ while (($#)); do
     --variants) variants=$2; shift 2 ;;
     --eval-flags) extra=$2; shift 2 ;;
     --resume) resume=1; shift ;;
-    -h|--help) sed -n 2,39p "$0"; exit 0 ;;
+    -h|--help) sed -n 2,40p "$0"; exit 0 ;;
     *) echo "eval_sweep: unknown option $1" >&2; exit 2 ;;
+  esac
+done
+for n in "--seeds $seeds" "-j $jobs"; do
+  [[ ${n#* } =~ ^[1-9][0-9]*$ ]] || { echo "eval_sweep: ${n%% *}: expected a positive integer, got '${n#* }'" >&2; exit 2; }
+done
+IFS=, read -r -a only_list <<< "$only"
+for o in "${only_list[@]}"; do
+  case "$o" in
+    7scenes|kitti00|kitti06|synthetic|synthetic_tum|synthetic_euroc|synthetic_kitti|colmap) ;;
+    *) echo "eval_sweep: --only: unknown input '$o' (7scenes, kitti00, kitti06, synthetic, synthetic_tum," \
+            "synthetic_euroc, synthetic_kitti, colmap)" >&2
+       exit 2 ;;
   esac
 done
 for b in keepless_eval keepless_maps_bench; do
@@ -75,6 +89,7 @@ data=$(cd "$data" && pwd)
 mkdir -p "$out"
 out=$(cd "$out" && pwd)
 bin=$(cd "$bin" && pwd)
+cd "$root"
 
 # name|keepless_eval input flags. The synthetic groups are --data-root's
 # trajectories given one by one: --data-root would add its image tracks, named
@@ -83,13 +98,15 @@ synthetic() {  # FORMAT FILE...: the synthetic back end on each trajectory, no a
   local format=$1
   shift
   printf -- '--no-ablation'
-  for t; do printf -- ' --trajectory %s --format %s' "$t" "$format"; done
+  for t; do printf -- ' --trajectory %q --format %s' "$t" "$format"; done
 }
 euroc=$data/orbslam3_euroc_left_cam_gt
+# The flags are shell words (run_job splits them with eval): a data root with blanks stays one word.
+q=$(printf '%q' "$data")
 inputs=(
-  "7scenes|--rgbd $data/7scenes_redkitchen_first600"
-  "kitti00|--images $data/kitti00_first200_vamr/image_0 --calib $data/kitti00_first200_vamr/K.txt --poses $data/kitti00_first200_vamr/poses.txt"
-  "kitti06|--images $data/kitti06_first51_niconielsen/image_l --calib $data/kitti06_first51_niconielsen/calib.txt --poses $data/kitti06_first51_niconielsen/poses.txt"
+  "7scenes|--rgbd $q/7scenes_redkitchen_first600"
+  "kitti00|--images $q/kitti00_first200_vamr/image_0 --calib $q/kitti00_first200_vamr/K.txt --poses $q/kitti00_first200_vamr/poses.txt"
+  "kitti06|--images $q/kitti06_first51_niconielsen/image_l --calib $q/kitti06_first51_niconielsen/calib.txt --poses $q/kitti06_first51_niconielsen/poses.txt"
   "synthetic_tum|$(synthetic tum "$data/evo/freiburg1_xyz-groundtruth.txt")"
   "synthetic_euroc|$(synthetic euroc "$euroc/MH01_GT.txt" "$euroc/MH03_GT.txt" "$euroc/V102_GT.txt" "$euroc/V201_GT.txt")"
   "synthetic_kitti|$(synthetic kitti "$data/evo/KITTI_00_gt.txt" "$data/kitti_odom_eval/gt_poses/06.txt" "$data/kitti_odom_eval/gt_poses/09.txt")"
@@ -143,6 +160,8 @@ for variant in "${variant_list[@]}"; do
   if selected colmap && [ "$maps_flags" != - ]; then echo "$variant|$vdir|colmap|all|$fractions|$maps_flags" >> "$joblist"; fi
 done
 
+[ -s "$joblist" ] || { echo "eval_sweep: no job: --only $only selects no input the variants $variants run" >&2; exit 2; }
+
 # Each job's wall and CPU seconds (its processes' user + system) go to jobs.tsv.
 run_job() {
   IFS='|' read -r variant vdir name seed fractions flags <<< "$1"
@@ -150,19 +169,26 @@ run_job() {
   start=$(date +%s)
   if [ "$name" = colmap ]; then
     dir="$vdir/colmap"
-    if [ "$resume" = 1 ] && tail -n 1 "$dir/stdout.txt" 2>/dev/null | grep -q '^{'; then return 0; fi
+    if [ "$resume" = 1 ] && tail -n 1 "$dir/stdout.txt" 2>/dev/null | grep -q '^{' && [ "$(cat "$dir.job" 2>/dev/null)" = "$1" ]; then
+      return 0
+    fi
+    rm -f "$dir.job" "$dir/stdout.txt"  # an earlier run's rows must not outlive a run that fails or is killed
     mkdir -p "$dir/work"
     # shellcheck disable=SC2086  # flags are words
     "$bin/keepless_maps_bench" --data "$data" --keep-fraction "$fractions" --seeds "$seeds" --work "$dir/work" \
       $flags > "$dir/stdout.txt" 2> "$dir/stderr.txt" || rc=$?
   else
     dir="$vdir/runs/${name}_seed$seed"
-    if [ "$resume" = 1 ] && [ -f "$dir/runs.csv" ]; then return 0; fi
-    # shellcheck disable=SC2086  # flags are words
-    "$bin/keepless_eval" $flags --kept-fraction "$fractions" --seed "$seed" --seeds 1 --out "$dir" \
+    # The job's line (input, seed, fractions, flags) in DIR.job: --resume trusts a run of this job only.
+    if [ "$resume" = 1 ] && [ -f "$dir/runs.csv" ] && [ "$(cat "$dir.job" 2>/dev/null)" = "$1" ]; then return 0; fi
+    rm -rf "$dir" "$dir.job"  # an earlier run's runs.csv must not outlive a run that fails or is killed
+    local args
+    eval "args=($flags)"  # shell words: the inputs' paths are quoted
+    "$bin/keepless_eval" "${args[@]}" --kept-fraction "$fractions" --seed "$seed" --seeds 1 --out "$dir" \
       > "$dir.stdout" 2> "$dir.stderr" || rc=$?
   fi
   end=$(date +%s)
+  [ "$rc" != 0 ] || printf '%s\n' "$1" > "$dir.job"
   # `times`' second line: this shell's children, user then system ("1m2.5s");
   # it runs in this shell, not a pipeline's subshell, which has no children.
   times > "$dir.times"
@@ -183,7 +209,11 @@ failed=0
 for variant in "${variant_list[@]}"; do
   vdir=$(variant_dir "$variant")
   reports=()
-  for d in "$vdir"/runs/*/; do [ -f "$d/runs.csv" ] && reports+=(--report "$d"); done
+  # This sweep's jobs only: OUT may hold runs of an earlier sweep (other seeds, inputs or flags).
+  while IFS='|' read -r v _ name seed _; do
+    d="$vdir/runs/${name}_seed$seed"
+    if [ "$v" = "$variant" ] && [ "$name" != colmap ] && [ -f "$d/runs.csv" ]; then reports+=(--report "$d"); fi
+  done < "$joblist"
   if ((${#reports[@]})); then
     "$bin/keepless_eval" "${reports[@]}" --out "$vdir" > "$vdir/report.stdout" || failed=1
   fi

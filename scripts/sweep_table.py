@@ -24,6 +24,7 @@ one cell per method (ATE over the original's, failed seeds, local-BA share) per
 variant and F: a table per real sequence, and the synthetic back end's
 trajectories together in one.
 """
+import argparse
 import csv
 import math
 import os
@@ -35,7 +36,13 @@ METHODS = [("ours", "keepless"), ("random", "random"), ("longest_track", "longes
 
 
 def default_variants(out):
+    if not os.path.isdir(out):
+        sys.exit(f"sweep_table: {out} is not a directory")
+    if os.path.exists(os.path.join(out, "flags.txt")):
+        return ["."]  # one variant: eval_sweep.sh writes it into OUT itself
     found = sorted(d for d in os.listdir(out) if os.path.exists(os.path.join(out, d, "flags.txt")))
+    if not found:
+        sys.exit(f"sweep_table: {out} holds no variant (no flags.txt in it or its folders; scripts/eval_sweep.sh writes it)")
     return sorted(found, key=lambda v: v != "paper")
 
 
@@ -209,11 +216,15 @@ CELL = ("Each cell: ATE over the original's (failed seeds), local-BA observation
 def condensed_table(name, cells, originals, variants, flags):
     orig = seed_originals(originals)
     tracked = [r for r in orig if not failed(r)]
-    ate0, obs0 = stat(tracked, "ate_m")[0], stat(tracked, "observations")[0]
     lost = len(orig) - len(tracked)
+    if tracked:
+        ate0, obs0 = stat(tracked, "ate_m")[0], stat(tracked, "observations")[0]
+        summary = (f"Original: ATE {ate0:.3g} m, {obs0:,.0f} local-BA observations, {len(tracked)} seeds"
+                   f"{f' ({lost} more failed: left out of the ratios)' if lost else ''}.")
+    else:  # no ratio can be formed: the cells show nan
+        summary = f"Original: failed on all {lost} seeds, so there is no ratio."
     lines = [f"#### {name}", "",
-             f"Original: ATE {ate0:.3g} m, {obs0:,.0f} local-BA observations, {len(tracked)} seeds"
-             f"{f' ({lost} more failed: left out of the ratios)' if lost else ''}. {CELL}",
+             f"{summary} {CELL}",
              "", "| culling | F | " + " | ".join(m for _, m in METHODS) + " |", "|---|---:|" + "---|" * len(METHODS)]
     lines += [f"| {row} |" for row in condensed_rows(cells, originals, variants, flags)]
     lines.append("")
@@ -235,13 +246,15 @@ def synthetic_table(names, table, originals, titles, variants, flags):
 
 
 def main(argv):
-    if len(argv) < 2 or argv[1] in ("-h", "--help"):
-        print(__doc__)
-        return 0 if len(argv) >= 2 else 2
-    out = argv[1]
-    variants = default_variants(out)
-    if "--variants" in argv:
-        variants = argv[argv.index("--variants") + 1].split(",")
+    parser = argparse.ArgumentParser(prog="sweep_table.py", description=__doc__,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("out", metavar="OUT")
+    parser.add_argument("--variants")
+    parser.add_argument("--condensed", action="store_true")
+    args = parser.parse_args(argv[1:])
+    out = args.out
+    variants = args.variants.split(",") if args.variants else default_variants(out)
+    argv = ["--condensed"] if args.condensed else []
     flags = {variant: variant_flags(out, variant) for variant in variants}
     table, originals, titles, order = load(out, variants, flags)
     synthetic = [name for name in sorted(table) if "(synthetic" in titles[name]]
