@@ -60,6 +60,12 @@ struct Message {
 
 struct Recorder {
   std::vector<Message> messages;
+  // Subscribes to `channels` keeping every message: under load the test
+  // process may not run for a while, and LCM drops what a subscription's
+  // queue (30 messages by default) cannot hold (one keyframe of 60 was lost).
+  void listen(lcm::LCM& bus, const std::string& channels) {
+    bus.subscribeFunction(channels, &Recorder::on_message, this)->setQueueCapacity(1 << 16);
+  }
   std::size_t statuses = 0;
   // A plain function (subscribeFunction): GCC's UBSan misreports LCM's
   // pointer-to-member call behind the member-function subscribe.
@@ -120,7 +126,7 @@ TEST(NodeEndToEnd, EveryKeyframeGetsOneDecisionEqualToTheLibrary) {
   lcm::LCM bus(url);
   ASSERT_TRUE(bus.good());
   Recorder rec;
-  bus.subscribeFunction(".*", &Recorder::on_message, &rec);
+  rec.listen(bus, ".*");
 
   kt::ChildProcess node(target_argv({KEEPLESS_NODE_BIN, "--latency-target-ms", "0", "--url", url, "--max-keyframes", std::to_string(kKeyframes),
                          "--status-period-ms", "100"}),
@@ -181,7 +187,7 @@ TEST(NodeEndToEnd, TheDefaultConfigurationSkipsNoKeyframe) {
   lcm::LCM bus(url);
   ASSERT_TRUE(bus.good());
   Recorder rec;
-  bus.subscribeFunction("KEEPLESS_(DECISION|MAP_EVENT_ACK|STATUS)", &Recorder::on_message, &rec);
+  rec.listen(bus, "KEEPLESS_(DECISION|MAP_EVENT_ACK|STATUS)");
   constexpr int kPairs = 50;
   kt::ChildProcess node(target_argv({KEEPLESS_NODE_BIN, "--url", url, "--status-period-ms", "100"}),
                         tmp.file("node.log"));
@@ -244,7 +250,7 @@ TEST(NodeEndToEnd, TheMonocularUsesKeepTheirRulesUnderTheDefaultConfiguration) {
     lcm::LCM bus(url);
     ASSERT_TRUE(bus.good());
     Recorder rec;
-    bus.subscribeFunction("KEEPLESS_(DECISION|STATUS)", &Recorder::on_message, &rec);
+    rec.listen(bus, "KEEPLESS_(DECISION|STATUS)");
     kt::ChildProcess node(target_argv({KEEPLESS_NODE_BIN, "--url", url, "--use", use, "--keep-fraction", fraction,
                                        "--status-period-ms", "100"}),
                           tmp.file("node.log"));
@@ -343,7 +349,7 @@ TEST(NodeEndToEnd, RecordedBusReplaysToIdenticalDecisions) {
   lcm::LCM bus(replay_url);
   ASSERT_TRUE(bus.good());
   Recorder replayed;
-  bus.subscribeFunction("KEEPLESS_(DECISION|STATUS)", &Recorder::on_message, &replayed);
+  replayed.listen(bus, "KEEPLESS_(DECISION|STATUS)");
   // The player does not wait for decisions: give the fresh node room to queue.
   kt::ChildProcess node(target_argv({KEEPLESS_NODE_BIN, "--latency-target-ms", "0", "--url", replay_url + "&recv_buf_size=4194304", "--queue", "4096",
                          "--max-keyframes", std::to_string(n), "--status-period-ms", "100"}),
