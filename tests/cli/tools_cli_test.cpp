@@ -40,6 +40,14 @@ std::vector<Tool> tools() {
   return out;
 }
 
+// A built tool's path (the test is compiled only where the build has it).
+std::string tool_path(const std::string& name) {
+  for (const Tool& t : tools()) {
+    if (t.name == name) return t.path;
+  }
+  return "";
+}
+
 std::vector<std::string> lines_of(const std::string& text) {
   std::vector<std::string> lines;
   std::stringstream s(text);
@@ -158,14 +166,15 @@ TEST_P(ToolCli, UnknownOptionIsNamedOnStderrWithExit2) {
   }
 }
 
+INSTANTIATE_TEST_SUITE_P(Tools, ToolCli, ::testing::ValuesIn(tools()),
+                         [](const ::testing::TestParamInfo<Tool>& info) { return info.param.name; });
+
+#if KEEPLESS_WITH_LCM
 // keepless_vo_sim refuses a flag its source would ignore: --format,
 // --kf-distance and --kf-angle without --trajectory, --scene with one.
 TEST(VoSimFlags, AFlagOfTheOtherSourceIsRefusedWithExit2) {
-  std::string sim;
-  for (const Tool& t : tools()) {
-    if (t.name == "keepless_vo_sim") sim = t.path;
-  }
-  if (sim.empty()) GTEST_SKIP() << "keepless_vo_sim is not built (no LCM)";
+  const std::string sim = tool_path("keepless_vo_sim");
+  ASSERT_FALSE(sim.empty());
   std::string dir = ::testing::TempDir() + "keepless_vo_sim_flags_XXXXXX";
   ASSERT_NE(::mkdtemp(dir.data()), nullptr);
   const std::string trajectory = dir + "/t.txt";
@@ -181,16 +190,10 @@ TEST(VoSimFlags, AFlagOfTheOtherSourceIsRefusedWithExit2) {
   fs::remove_all(dir);
 }
 
-INSTANTIATE_TEST_SUITE_P(Tools, ToolCli, ::testing::ValuesIn(tools()),
-                         [](const ::testing::TestParamInfo<Tool>& info) { return info.param.name; });
-
 // keepless_vo_sim's integers are digits only: " -1" was --seed 2^64 - 1.
 TEST(VoSimFlags, ANegativeIntegerBehindABlankIsRefused) {
-  std::string sim;
-  for (const Tool& t : tools()) {
-    if (t.name == "keepless_vo_sim") sim = t.path;
-  }
-  if (sim.empty()) GTEST_SKIP() << "keepless_vo_sim is not built (no LCM)";
+  const std::string sim = tool_path("keepless_vo_sim");
+  ASSERT_FALSE(sim.empty());
   std::string dir = ::testing::TempDir() + "keepless_vo_sim_numbers_XXXXXX";
   ASSERT_NE(::mkdtemp(dir.data()), nullptr);
   for (const char* flag : {"--seed", "--keyframes", "--event-every"}) {
@@ -200,6 +203,7 @@ TEST(VoSimFlags, ANegativeIntegerBehindABlankIsRefused) {
   }
   fs::remove_all(dir);
 }
+#endif  // KEEPLESS_WITH_LCM: the simulator is built with LCM only
 
 // A malformed number is refused whole, never read as its prefix ("30x" as 30),
 // by each tool that takes --M.
@@ -224,25 +228,22 @@ TEST(ToolNumbers, AMalformedNumberIsRefusedWithExit2) {
 // An empty list, or one with an empty last item, is refused too: "" would
 // otherwise run keepless_maps_bench's default --M sweep instead of the fractions.
 TEST(ToolNumbers, AnEmptyListIsRefusedWithExit2) {
+  const std::string bench = tool_path("keepless_maps_bench");
+  ASSERT_FALSE(bench.empty());
   std::string dir = ::testing::TempDir() + "keepless_tools_lists_XXXXXX";
   ASSERT_NE(::mkdtemp(dir.data()), nullptr);
-  int checked = 0;
-  for (const Tool& tool : tools()) {
-    if (tool.name != "keepless_maps_bench") continue;
-    for (const std::vector<std::string>& args :
-         {std::vector<std::string>{"--keep-fraction", ""}, {"--keep-fraction", "0.1,"}, {"--track-share", ""},
-          {"--track-share", "0.5,"}, {"--M", ""}, {"--M", "30,"}}) {
-      const auto r = keepless::test::run_child(tool.path, args, dir + "/out.txt", dir + "/err.txt");
-      EXPECT_EQ(r.status, 2) << args[0] << " '" << args[1] << "': " << r.err;
-      EXPECT_NE(r.err.find("bad value for " + args[0]), std::string::npos) << r.err;
-    }
-    ++checked;
+  for (const std::vector<std::string>& args :
+       {std::vector<std::string>{"--keep-fraction", ""}, {"--keep-fraction", "0.1,"}, {"--track-share", ""},
+        {"--track-share", "0.5,"}, {"--M", ""}, {"--M", "30,"}}) {
+    const auto r = keepless::test::run_child(bench, args, dir + "/out.txt", dir + "/err.txt");
+    EXPECT_EQ(r.status, 2) << args[0] << " '" << args[1] << "': " << r.err;
+    EXPECT_NE(r.err.find("bad value for " + args[0]), std::string::npos) << r.err;
   }
   fs::remove_all(dir);
-  EXPECT_EQ(checked, 1);
 }
 #endif  // KEEPLESS_WITH_PERF: the bench is built with perf/ only
 
+#if KEEPLESS_WITH_LCM
 // keepless_log_compare's verdicts on hand-made LCM logs: order, one byte and
 // count differ (1); a file that is not an LCM log, or is cut or corrupt
 // within an event, is unreadable (2), never compared as its readable prefix.
@@ -260,11 +261,8 @@ std::string lcm_event(std::int64_t n, const std::string& channel, const std::str
 }
 
 TEST(LogCompare, VerdictsOnOrderBytesCountAndDamagedLogs) {
-  std::string compare;
-  for (const Tool& t : tools()) {
-    if (t.name == "keepless_log_compare") compare = t.path;
-  }
-  if (compare.empty()) GTEST_SKIP() << "keepless_log_compare is not built (no LCM)";
+  const std::string compare = tool_path("keepless_log_compare");
+  ASSERT_FALSE(compare.empty());
   std::string dir = ::testing::TempDir() + "keepless_log_compare_XXXXXX";
   ASSERT_NE(::mkdtemp(dir.data()), nullptr);
   const auto write = [&dir](const std::string& name, const std::string& bytes) {
@@ -297,5 +295,6 @@ TEST(LogCompare, VerdictsOnOrderBytesCountAndDamagedLogs) {
   EXPECT_EQ(keepless::test::run_child(compare, {bad, "D", bad, "D"}, dir + "/out.txt", dir + "/err.txt").status, 2);
   fs::remove_all(dir);
 }
+#endif  // KEEPLESS_WITH_LCM
 
 }  // namespace
