@@ -99,8 +99,9 @@ std::string node_usage() {
          "                            (decision_t.excluded_point_id) and deleted once T keyframes in a row\n"
          "                            have not matched it (deleted_point_id); default 0: off, the culls are\n"
          "                            culled_point_id as before\n"
-         "  --defer-memory N          excluded points held until deleted (default 0: the window's point\n"
-         "                            capacity); one that does not fit is deleted at once and counted\n"
+         "  --defer-memory N          with --defer: excluded points held until deleted (default 0: the\n"
+         "                            window's point capacity); one that does not fit is deleted at once\n"
+         "                            and counted\n"
          "  --M N                     pair -> sink capacity (default 100)\n"
          "  --keep-points K           keep budget instead of --M: the K evaluated points with the smallest\n"
          "                            keep threshold per window (ties to the smaller point id)\n"
@@ -117,8 +118,8 @@ std::string node_usage() {
          "  --floor L                 every keyframe keeps >= L of its evaluated points (default 0: off)\n"
          "  --cost paper|authors|information|track\n"
          "                            point -> pair costs (default paper; docs/design/policies.md)\n"
-         "  --track-terms LIST        what --cost track sums of keyframe_t's point quality, comma-separated\n"
-         "                            from length, age, error, angle (default all four)\n"
+         "  --track-terms LIST        with --cost track: what it sums of keyframe_t's point quality,\n"
+         "                            comma-separated from length, age, error, angle (default all four)\n"
          "  --cost-terms LIST         the costs summed, comma-separated from c_c, c_s, c_b (default all three,\n"
          "                            the paper's; without c_c a pair prefers spatial diversity over views)\n"
          "  --image WxH               the image the authors' 64x48 grid covers (default 640x480)\n"
@@ -222,6 +223,7 @@ ParseResult parse_node_arguments(int argc, const char* const* argv, NodeConfig& 
                                  std::string& error) {
   if (ParseResult r = parse_early_flags(argc, argv, config, error); r != ParseResult::kOk) return r;
   bool m_given = false;  // --M and a keep budget exclude each other
+  bool track_terms_given = false;  // --track-terms: with --cost track only
   // Set on the budget once it is known, whatever the flags' order (the use's unless given;
   // a given share applies at every budget).
   double track_share = config.params.budget.track_share;
@@ -375,6 +377,7 @@ ParseResult parse_node_arguments(int argc, const char* const* argv, NodeConfig& 
       if (!core::parse_track_terms(value.c_str(), &config.params.track_terms)) {
         return bad("expected a comma-separated list of length, age, error, angle");
       }
+      track_terms_given = true;
     } else if (flag == "--cost-terms") {
       if (!core::parse_cost_terms(value.c_str(), &config.params.cost_terms)) {
         return bad("expected a comma-separated list of c_c, c_s, c_b");
@@ -430,6 +433,15 @@ ParseResult parse_node_arguments(int argc, const char* const* argv, NodeConfig& 
   if (track_share > 0 && track_share_from == 0 && !core::keeps_a_count(config.params.budget.kind)) {
     error = "--track-share needs --keep-points or --keep-fraction: it is a share of their count";
     if (share_from_use) error += " (--use offline sets it to 1)";
+    return ParseResult::kError;
+  }
+  // Flags that would change nothing are refused, as the budget's are.
+  if (track_terms_given && config.params.cost_model != core::CostModel::kTrack) {
+    error = "--track-terms needs --cost track: they are what its cost sums";
+    return ParseResult::kError;
+  }
+  if (config.defer_memory > 0 && config.params.defer_keyframes == 0) {
+    error = "--defer-memory needs --defer (or --use monocular-deferred): it holds the excluded points";
     return ParseResult::kError;
   }
   if (config.params.tracked_first && config.params.budget.kind == core::BudgetKind::kNone) {

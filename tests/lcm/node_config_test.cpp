@@ -488,6 +488,21 @@ TEST(NodeConfig, ParsesDeferredCulling) {
   }
 }
 
+// A flag that would change nothing is refused: --defer-memory without
+// deferred culling, --track-terms without the track cost (both were taken
+// and ignored).
+TEST(NodeConfig, FlagsThatWouldChangeNothingAreRefused) {
+  std::string error;
+  NodeConfig c;
+  EXPECT_EQ(parse({"--defer-memory", "900"}, c, error), ParseResult::kError);
+  EXPECT_NE(error.find("--defer-memory needs --defer"), std::string::npos) << error;
+  EXPECT_EQ(parse({"--track-terms", "length"}, c, error), ParseResult::kError);
+  EXPECT_NE(error.find("--track-terms needs --cost track"), std::string::npos) << error;
+  NodeConfig d;
+  EXPECT_EQ(parse({"--use", "monocular-deferred", "--defer-memory", "900"}, d, error), ParseResult::kOk) << error;
+  EXPECT_EQ(parse({"--defer-memory", "0"}, d, error), ParseResult::kOk) << error;
+}
+
 // A malformed --cpus list exits 2 at parse; it was taken, reported at start
 // ("could not pin ... malformed CPU list") and the node ran unpinned.
 TEST(NodeConfig, AMalformedCpuListIsRefused) {
