@@ -19,6 +19,7 @@
 
 #include "cli/cli.hpp"
 #include "keepless/decision_t.hpp"
+#include "keepless/core/window_file.hpp"
 #include "keepless/decision_timing_t.hpp"
 #include "keepless/keyframe_t.hpp"
 #include "keepless/map_event_t.hpp"
@@ -113,10 +114,8 @@ bool parse_args(int argc, char** argv, SimConfig& c, std::string& error, bool& h
     char* end = nullptr;
     errno = 0;
     auto as_u64 = [&](std::uint64_t lo, std::uint64_t hi, std::uint64_t& out) {
-      // Digits only: strtoull skips leading blanks and negates a '-' after them (" -1" is 2^64 - 1).
-      if (value.empty() || value[0] < '0' || value[0] > '9') return false;
-      const unsigned long long v = std::strtoull(value.c_str(), &end, 10);
-      if (errno != 0 || *end != '\0' || v < lo || v > hi) return false;
+      std::uint64_t v = 0;  // digits only (strtoull alone reads " -1" as 2^64 - 1)
+      if (!keepless::core::parse_uint64(value, &v) || v < lo || v > hi) return false;
       out = v;
       return true;
     };

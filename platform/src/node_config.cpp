@@ -8,6 +8,7 @@
 #include <utility>
 
 #include "keepless/core/use.hpp"
+#include "keepless/core/window_file.hpp"
 #include "keepless/platform/cpu_pinning.hpp"
 #include "keepless/platform/memory_estimate.hpp"
 
@@ -15,13 +16,10 @@ namespace keepless::platform {
 
 namespace {
 
+// Digits only (core's parser: strtoull alone skips blanks and negates a '-', " -1" being 2^64 - 1).
 bool parse_u64(const std::string& text, std::uint64_t min, std::uint64_t max, std::uint64_t& out) {
-  // Digits only: strtoull skips leading blanks and negates a '-' after them (" -1" is 2^64 - 1).
-  if (text.empty() || text[0] < '0' || text[0] > '9') return false;
-  errno = 0;
-  char* end = nullptr;
-  const unsigned long long v = std::strtoull(text.c_str(), &end, 10);
-  if (errno != 0 || end == text.c_str() || *end != '\0' || v < min || v > max) return false;
+  std::uint64_t v = 0;
+  if (!core::parse_uint64(text, &v) || v < min || v > max) return false;
   out = v;
   return true;
 }
