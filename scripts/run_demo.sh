@@ -37,11 +37,13 @@ cleanup() {
 }
 trap cleanup EXIT
 
-# stop PID: SIGINT, then wait up to 5 s.
+# stop PID: SIGINT if it still runs, up to 5 s to finish; returns its exit status.
 stop() {
-  kill -INT "$1" 2>/dev/null || return 0
+  kill -INT "$1" 2>/dev/null || true
   for _ in $(seq 50); do kill -0 "$1" 2>/dev/null || break; sleep 0.1; done
-  wait "$1" 2>/dev/null || true
+  local rc=0
+  wait "$1" 2>/dev/null || rc=$?
+  return "$rc"
 }
 
 have_logger=0
@@ -70,15 +72,20 @@ set -e
 if [ "$SIM_RC" = 0 ]; then
   for _ in $(seq 50); do kill -0 "$NODE_PID" 2>/dev/null || break; sleep 0.1; done
 fi
-stop "$NODE_PID"
+NODE_RC=0
+stop "$NODE_PID" || NODE_RC=$?
 sed -n '$p' "$REPORT/node.log"
 if [ "$have_logger" = 1 ]; then
   sleep 0.3
-  stop "$LOGGER"
+  stop "$LOGGER" || true
 fi
 if [ "$SIM_RC" != 0 ]; then
   echo "run_demo: keepless_vo_sim failed ($SIM_RC); node log: $REPORT/node.log" >&2
   exit "$SIM_RC"
+fi
+if [ "$NODE_RC" != 0 ]; then  # e.g. a failure at exit: the demo does not pass over it
+  echo "run_demo: keepless_node exited with $NODE_RC; its log: $REPORT/node.log" >&2
+  exit 1
 fi
 
 if [ "$REPLAY" = 1 ] && [ "$have_logger" = 1 ]; then
@@ -95,9 +102,14 @@ if [ "$REPLAY" = 1 ] && [ "$have_logger" = 1 ]; then
   sleep 0.2  # the logger, too
   lcm-logplayer --lcm-url="$REPLAY_URL" --regexp="^KEEPLESS_(KEYFRAME|MAP_EVENT)$" "$REPORT/bus.lcmlog" >/dev/null
   for _ in $(seq 600); do kill -0 "$RNODE" 2>/dev/null || break; sleep 0.1; done
-  stop "$RNODE"
+  RNODE_RC=0
+  stop "$RNODE" || RNODE_RC=$?
   sleep 0.3
-  stop "$RLOGGER"
+  stop "$RLOGGER" || true
+  if [ "$RNODE_RC" != 0 ]; then
+    echo "run_demo: the replaying keepless_node exited with $RNODE_RC; its log: $REPORT/replay_node.log" >&2
+    exit 1
+  fi
   echo -n "replay: KEEPLESS_DECISION, recorded vs replayed: "
   "$COMPARE" "$REPORT/bus.lcmlog" KEEPLESS_DECISION "$REPORT/replay.lcmlog" KEEPLESS_DECISION
 fi
