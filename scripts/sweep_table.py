@@ -247,23 +247,22 @@ def synthetic_table(names, table, originals, titles, variants, flags):
 
 def main(argv):
     parser = argparse.ArgumentParser(prog="sweep_table.py", description=__doc__,
-                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+                                     formatter_class=argparse.RawDescriptionHelpFormatter, allow_abbrev=False)
     parser.add_argument("out", metavar="OUT")
     parser.add_argument("--variants")
     parser.add_argument("--condensed", action="store_true")
     args = parser.parse_args(argv[1:])
     out = args.out
     variants = args.variants.split(",") if args.variants else default_variants(out)
-    argv = ["--condensed"] if args.condensed else []
     flags = {variant: variant_flags(out, variant) for variant in variants}
     table, originals, titles, order = load(out, variants, flags)
     synthetic = [name for name in sorted(table) if "(synthetic" in titles[name]]
     for name in sorted(table):
-        if "--condensed" not in argv:
+        if not args.condensed:
             print(sequence_table(titles[name], table[name], originals[name], order))
         elif name not in synthetic:
             print(condensed_table(titles[name], table[name], originals[name], variants, flags))
-    if "--condensed" in argv and synthetic:
+    if args.condensed and synthetic:
         print(synthetic_table(synthetic, table, originals, titles, variants, flags))
     return 0
 
