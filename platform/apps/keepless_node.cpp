@@ -112,7 +112,8 @@ int main(int argc, char** argv) {
                "%zu bytes\n",
                config.url.c_str(), config.keyframe_channel.c_str(), config.event_channel.c_str(),
                config.decision_channel.c_str(), config.event_ack_channel.c_str(), config.timing_channel.c_str(),
-               config.status_channel.c_str(), config.window, config.max_observations, caps.max_points, caps.max_observations, caps.max_pair_arcs,
+               config.status_channel.c_str(), config.window, config.max_observations, caps.max_points,
+               caps.max_observations, caps.max_pair_arcs,
                static_cast<double>(node.memory_bytes()) / 1e6, need / 1e6, node.max_decision_bytes());
   // The capacities status_t does not carry, fixed from here on.
   std::fprintf(stderr,

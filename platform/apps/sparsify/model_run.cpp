@@ -8,9 +8,9 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
-#include <memory>
 #include <new>
 #include <numeric>
+#include <optional>
 #include <string>
 #include <utility>
 
@@ -648,24 +648,24 @@ int run_model(const ModelOptions& opt) {
   // the model is written and renamed into place only after it: a model that
   // cannot be written (a folder without write access, a name too long)
   // leaves an earlier decisions file as it was.
-  std::unique_ptr<platform::AtomicFileWriter> staged;
+  std::optional<platform::AtomicFileWriter> staged;
+  const auto decisions_failed = [&opt](int err) {
+    std::fprintf(stderr, "%s:0: cannot write: %s\n", opt.decisions.c_str(), std::strerror(err));
+    return kExitInput;
+  };
   if (!opt.decisions.empty()) {
-    staged = std::make_unique<platform::AtomicFileWriter>(opt.decisions);
+    staged.emplace(opt.decisions);
+    // commit() reports the open's or write's failure, PATH unchanged.
     if (!staged->write(format_decisions(r.decisions.data(), r.decisions.size()))) {
-      const int err = staged->commit();  // reports the open's or write's failure, PATH unchanged
-      std::fprintf(stderr, "%s:0: cannot write: %s\n", opt.decisions.c_str(), std::strerror(err));
-      return kExitInput;
+      return decisions_failed(staged->commit());
     }
   }
   if (!opt.out.empty() && !write_model(opt, &m, r.decisions, &error)) {
     std::fprintf(stderr, "%s\n", error.c_str());
     return kExitInput;  // the staged decisions are removed unwritten
   }
-  if (staged != nullptr) {
-    if (const int err = staged->commit(); err != 0) {
-      std::fprintf(stderr, "%s:0: cannot write: %s\n", opt.decisions.c_str(), std::strerror(err));
-      return kExitInput;
-    }
+  if (staged) {
+    if (const int err = staged->commit(); err != 0) return decisions_failed(err);
   }
   // Warnings once all is written (an error stays the only stderr line).
   warn_thin_images(m, r.decisions);
