@@ -120,8 +120,8 @@ bool parse_args(int argc, char** argv, SimConfig& c, std::string& error, bool& h
       return true;
     };
     auto as_double = [&](double lo, double hi, double& out) {
-      const double v = std::strtod(value.c_str(), &end);
-      if (errno != 0 || end == value.c_str() || *end != '\0' || !std::isfinite(v) || v < lo || v > hi) return false;
+      double v = 0;  // plain decimal (strtod alone takes leading blanks and hex floats)
+      if (!keepless::core::parse_finite_double(value, &v) || v < lo || v > hi) return false;
       out = v;
       return true;
     };

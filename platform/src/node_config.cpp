@@ -1,9 +1,6 @@
 #include "keepless/platform/node_config.hpp"
 
 #include <algorithm>
-#include <cerrno>
-#include <cmath>
-#include <cstdlib>
 #include <cstring>
 #include <utility>
 
@@ -24,15 +21,8 @@ bool parse_u64(const std::string& text, std::uint64_t min, std::uint64_t max, st
   return true;
 }
 
-bool parse_double(const std::string& text, double& out) {
-  if (text.empty()) return false;
-  errno = 0;
-  char* end = nullptr;
-  const double v = std::strtod(text.c_str(), &end);
-  if (errno != 0 || end == text.c_str() || *end != '\0' || !std::isfinite(v)) return false;
-  out = v;
-  return true;
-}
+// Plain decimal only (core's parser: strtod alone takes leading blanks and hex floats).
+bool parse_double(const std::string& text, double& out) { return core::parse_finite_double(text, &out); }
 
 // "64x48"
 bool parse_box(const std::string& text, std::int32_t& w, std::int32_t& h) {

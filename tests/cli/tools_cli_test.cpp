@@ -203,6 +203,20 @@ TEST(VoSimFlags, ANegativeIntegerBehindABlankIsRefused) {
   }
   fs::remove_all(dir);
 }
+
+// Its decimals too: strtod read "0x1p3" as 8 and " 2" as 2.
+TEST(VoSimFlags, AHexOrBlankDecimalIsRefused) {
+  const std::string sim = tool_path("keepless_vo_sim");
+  ASSERT_FALSE(sim.empty());
+  std::string dir = ::testing::TempDir() + "keepless_vo_sim_decimals_XXXXXX";
+  ASSERT_NE(::mkdtemp(dir.data()), nullptr);
+  for (const char* bad : {"0x1p3", " 2"}) {
+    const auto r = keepless::test::run_child(sim, {"--url", "memq://", "--wait-node-ms", "1", "--pixel-noise", bad},
+                                             dir + "/out.txt", dir + "/err.txt");
+    EXPECT_EQ(r.status, 2) << bad << ": " << r.out << r.err;
+  }
+  fs::remove_all(dir);
+}
 #endif  // KEEPLESS_WITH_LCM: the simulator is built with LCM only
 
 // A malformed number is refused whole, never read as its prefix ("30x" as 30),

@@ -472,6 +472,19 @@ TEST(NodeConfig, AnIntegerWithBlanksOrASignIsRefused) {
   }
 }
 
+// strtod takes leading blanks and hex floats: "0x1p-2" was --theta 0.25.
+TEST(NodeConfig, ANumberIsPlainDecimal) {
+  std::string error;
+  for (const char* flag : {"--theta", "--keep-fraction", "--latency-target-ms"}) {
+    NodeConfig ok;
+    EXPECT_EQ(parse({flag, "0.25"}, ok, error), ParseResult::kOk) << flag << ": " << error;
+    for (const char* bad : {"0x1p-2", " 0.25", "\t0.25", "0.25 ", "nan"}) {
+      NodeConfig c;
+      EXPECT_EQ(parse({flag, bad}, c, error), ParseResult::kError) << flag << " '" << bad << "'";
+    }
+  }
+}
+
 TEST(NodeConfig, ParsesDeferredCulling) {
   NodeConfig c;
   std::string error;

@@ -5,6 +5,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "keepless/core/window_file.hpp"
 #include "splitmix64.hpp"
 
 namespace keepless::vo_sim {
@@ -20,10 +21,8 @@ bool numbers(const std::string& line, std::vector<double>& out, std::vector<std:
   std::string tok;
   auto flush = [&]() -> bool {
     if (tok.empty()) return true;
-    errno = 0;
-    char* end = nullptr;
-    const double v = std::strtod(tok.c_str(), &end);
-    if (errno != 0 || *end != '\0' || !std::isfinite(v)) return false;
+    double v = 0;  // plain decimal, as every model reader takes it
+    if (!keepless::core::parse_finite_double(tok, &v)) return false;
     out.push_back(v);
     tokens.push_back(tok);
     tok.clear();

@@ -40,6 +40,7 @@ bool read_file(const std::string& path, std::string* out, std::string* error, st
 int write_whole_file(const std::string& path, const std::string& contents) {
   std::FILE* f = std::fopen(path.c_str(), "wb");
   if (f == nullptr) return errno;
+  errno = 0;  // so a short write without an errno reads EIO, not an earlier call's error
   int err = std::fwrite(contents.data(), 1, contents.size(), f) == contents.size() ? 0 : (errno ? errno : EIO);
   if (std::fclose(f) != 0 && err == 0) err = errno ? errno : EIO;
   return err;

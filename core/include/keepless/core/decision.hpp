@@ -45,7 +45,8 @@ struct Summary {
   std::uint32_t floor_promoted = 0;
   std::uint32_t floor_short = 0;
   // Params::budget: the largest keep threshold M* among the points the
-  // budget kept (the M it corresponds to; 0: none kept), and the window
+  // budget kept (the M it corresponds to; 0: none kept; Capacities::max_points
+  // + 1 when it kept a point no M keeps, KeepThresholds::kNever), and the window
   // observations of the points it kept (before the floor's promotions).
   std::int64_t budget_m = 0;
   std::uint64_t budget_observations = 0;
