@@ -203,7 +203,7 @@ bool WindowFileParser::within_memory() {
   const double need = bytes() + limits_.solve_bytes(needs);
   if (need <= static_cast<double>(limits_.max_bytes)) return true;
   char text[160];
-  std::snprintf(text, sizeof text, "memory limit exceeded: the window needs about %.0f MB, above the limit of %.0f MB",
+  std::snprintf(text, sizeof text, "memory limit exceeded: the window needs about %.0f MiB, above the limit of %.0f MiB",
                 need / 1048576.0, static_cast<double>(limits_.max_bytes) / 1048576.0);
   return fail(text);
 }

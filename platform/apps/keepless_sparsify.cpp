@@ -112,7 +112,7 @@ const std::vector<keepless::cli::Flag> kFlags = {
     {"--max-points", "N", "refuse an input with more points (default 2000000)"},
     {"--max-observations", "N", "refuse an input with more observations (default 10000000)"},
     {"--max-pair-arcs", "N", "refuse a window with more pair arcs (default 50000000)"},
-    {"--max-memory-mb", "N", "refuse an input whose decision would need more memory (default 2048)"},
+    {"--max-memory-mb", "N", "refuse an input whose decision would need more than N MiB (2^20 bytes; default 2048)"},
 };
 
 std::string usage() {
@@ -384,7 +384,7 @@ int decide_window(const Options& opt, const core::WindowFile& file, const core::
     return decide_window_unguarded(opt, file, caps, parse_ms, t_build);
   } catch (const std::bad_alloc&) {
     std::fprintf(stderr,
-                 "%s: out of memory while deciding it (about %.0f MB needed; --max-memory-mb %llu allowed it, but the "
+                 "%s: out of memory while deciding it (about %.0f MiB needed; --max-memory-mb %llu allowed it, but the "
                  "process got less: check `ulimit -v` and free memory)\n",
                  opt.window.c_str(), need / 1048576.0, static_cast<unsigned long long>(opt.max_memory_mb));
     return kExitInput;

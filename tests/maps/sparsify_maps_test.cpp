@@ -800,12 +800,12 @@ TEST_F(SparsifyMaps, MaxMemoryIsHonouredOnEveryInputPath) {
       {{"--colmap", fixture("sparse"), "--mode", "whole", "--max-memory-mb", "50"},
        fixture("sparse") + ": deciding needs about "},
       {{"--bal", bal, "--max-memory-mb", "1"}, bal + ": reading this model needs about "},
-      // 1 MB of one-digit values: 12 MB by its bytes, about 51 MB by its tokens.
+      // 1 MB of one-digit values: 6 MB by its bytes, 51 MB (49 MiB) with 90 bytes a token.
       {{"--bal", path("short_values.txt"), "--max-memory-mb", "20"},
-       path("short_values.txt") + ": reading this model needs about 49 MB (its 1,000,006 bytes of files, 500,003 numbers and names on 500,001 lines)"},
+       path("short_values.txt") + ": reading this model needs about 49 MiB (its 1,000,006 bytes of files, 500,003 numbers and names on 500,001 lines)"},
       // A window file's reader checks record by record (with the whole-mode
       // decision's memory); replay's windows are checked once it is read.
-      // (Both fit in 100 MB: replay needs about 98 MB.)
+      // (Both fit in 100 MiB: replay needs about 98 MiB.)
       {{"--window", path("w.txt"), "--mode", "whole", "--max-memory-mb", "60"}, path("w.txt") + ":"},
       {{"--window", path("w.txt"), "--mode", "replay", "--K", "60", "--max-memory-mb", "60"},
        path("w.txt") + ": deciding needs about "},
@@ -816,7 +816,7 @@ TEST_F(SparsifyMaps, MaxMemoryIsHonouredOnEveryInputPath) {
     const maps_test::Result r = sparsify(c.args);
     EXPECT_EQ(r.status, 2);
     EXPECT_EQ(r.err.rfind(c.start, 0), 0u) << r.err;
-    EXPECT_NE(r.err.find(" MB"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find(" MiB"), std::string::npos) << r.err;
     const bool window_reader = r.err.find("memory limit exceeded") != std::string::npos;
     EXPECT_TRUE(window_reader || r.err.find("--max-memory-mb") != std::string::npos) << r.err;
     EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
@@ -835,7 +835,7 @@ TEST_F(SparsifyMaps, AnAllocationFailureNamesTheFileAndTheLimit) {
       false);
   EXPECT_EQ(r.status, 2) << r.err;
   EXPECT_EQ(r.err.rfind(fixture("sparse") + ": out of memory while ", 0), 0u) << r.err;
-  EXPECT_NE(r.err.find("MB needed"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("MiB needed"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("ulimit -v"), std::string::npos) << r.err;
 #endif
 }

@@ -331,7 +331,7 @@ namespace {
 std::string out_of_memory(const std::string& path, const char* stage, double need_bytes, std::uint64_t limit_mb) {
   char b[512];
   std::snprintf(b, sizeof b,
-                "%s: out of memory while %s (about %.0f MB needed; --max-memory-mb %llu allowed it, but the process "
+                "%s: out of memory while %s (about %.0f MiB needed; --max-memory-mb %llu allowed it, but the process "
                 "got less: check `ulimit -v` and free memory, or lower the need with --mode replay or a smaller --K)",
                 path.c_str(), stage, need_bytes / 1048576.0, static_cast<unsigned long long>(limit_mb));
   return b;
@@ -375,9 +375,9 @@ void warn_low_m(std::int64_t M) {
                static_cast<long long>(M), static_cast<long long>(kEvidenceM));
 }
 
-std::string megabytes(double bytes) {
+std::string mebibytes(double bytes) {
   char b[32];
-  std::snprintf(b, sizeof b, "%.0f MB", bytes / 1048576.0);
+  std::snprintf(b, sizeof b, "%.0f MiB", bytes / 1048576.0);
   return b;
 }
 
@@ -550,7 +550,7 @@ int run_model(const ModelOptions& opt) {
     const std::string words =
         text ? ", " + grouped(counts.tokens) + " numbers and names on " + grouped(counts.lines) + " lines" : "";
     std::fprintf(stderr, "%s: reading this model needs about %s (its %s bytes of files%s), above --max-memory-mb %llu\n",
-                 opt.path.c_str(), megabytes(read_need).c_str(), grouped(input_bytes).c_str(), words.c_str(),
+                 opt.path.c_str(), mebibytes(read_need).c_str(), grouped(input_bytes).c_str(), words.c_str(),
                  static_cast<unsigned long long>(opt.max_memory_mb));
     return kExitInput;
   }
@@ -594,7 +594,7 @@ int run_model(const ModelOptions& opt) {
                                       " images in one whole-mode window; --mode replay needs far less"
                                 : "replay windows of " + std::to_string(opt.K) + " images; a smaller --K needs less";
     std::fprintf(stderr, "%s: deciding needs about %s (%s), above --max-memory-mb %llu\n", opt.path.c_str(),
-                 megabytes(decide_need).c_str(), why.c_str(), static_cast<unsigned long long>(opt.max_memory_mb));
+                 mebibytes(decide_need).c_str(), why.c_str(), static_cast<unsigned long long>(opt.max_memory_mb));
     return kExitInput;
   }
   const std::uint64_t t_solve = platform::monotonic_ns();
