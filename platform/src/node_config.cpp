@@ -216,7 +216,7 @@ ParseResult parse_node_arguments(int argc, const char* const* argv, NodeConfig& 
   // a given share applies at every budget).
   double track_share = config.params.budget.track_share;
   double track_share_from = config.params.budget.track_share_from;
-  const bool share_from_use = track_share > 0;
+  bool share_given = false;  // --track-share: the error's note on offline's share is then beside the point
   for (int i = 1; i < argc; ++i) {
     std::string flag = argv[i];
     if (const char* early = early_flag(flag)) {  // applied above
@@ -344,6 +344,7 @@ ParseResult parse_node_arguments(int argc, const char* const* argv, NodeConfig& 
         return bad("expected a number in [0, 1]");
       }
       track_share_from = 0;
+      share_given = true;
     } else if (flag == "--theta") {
       double t = 0;
       if (!parse_double(value, t) || t < 0 || t > 1) return bad("expected a number in [0, 1]");
@@ -420,7 +421,7 @@ ParseResult parse_node_arguments(int argc, const char* const* argv, NodeConfig& 
   }
   if (track_share > 0 && track_share_from == 0 && !core::keeps_a_count(config.params.budget.kind)) {
     error = "--track-share needs --keep-points or --keep-fraction: it is a share of their count";
-    if (share_from_use) error += " (--use offline sets it to 1)";
+    if (!share_given) error += " (--use offline sets it to 1)";  // only offline's share applies at every budget
     return ParseResult::kError;
   }
   // Flags that would change nothing are refused, as the budget's are.

@@ -10,6 +10,7 @@
 
 #include "flow_certificate.hpp"
 #include "keepless/core/closed_form.hpp"
+#include "keepless/core/costs.hpp"
 #include "keepless/core/sparsifier.hpp"
 #include "random_window.hpp"
 
@@ -301,6 +302,44 @@ TEST(Sparsifier, ZeroFlowBeyondItsLabelsIsACapacityNotBadInput) {
   ASSERT_EQ(closed.run(w), Status::kOk);
   EXPECT_GT(closed.summary().kept, 0u);
   EXPECT_EQ(zero.run(w), Status::kCapacityExceeded);
+}
+
+// From zero flow the labels need B^2 x (largest arc cost + 1) <= 2^62, B the
+// smallest power of two >= nodes + 6 (nodes: the window's points and pairs).
+// 723 keyframes that all see one point (c_c(2) = 38.4e6; 261,726 nodes:
+// B = 2^18) are decided; 724 (262,450 nodes: B = 2^19) are refused, though
+// (nodes + 2)^2 x (c_c(2) + 1) < 2^62 there too.
+TEST(Sparsifier, ZeroFlowLabelBoundIsAPowerOfTwo) {
+  for (const std::uint32_t k : {723u, 724u}) {
+    Capacities caps;
+    caps.max_keyframes = k;
+    caps.max_points = 2 * k;
+    caps.max_observations = 4 * k;
+    caps.max_pair_arcs = k * (k - 1) / 2 + 2 * k;
+    Window w(caps);
+    for (std::uint32_t i = 0; i < k; ++i) {
+      Keyframe kf;
+      kf.id = 1000 + i;
+      kf.centre[0] = i;
+      std::vector<Observation> obs{{1, 10, 10}, {100 + i, 300, 300}};
+      if (i > 0) obs.push_back({100 + i - 1, 500, 400});
+      ASSERT_EQ(w.add_keyframe(kf, obs.data(), static_cast<std::uint32_t>(obs.size())), Status::kOk);
+    }
+    Sparsifier closed(caps, Params{}, SolveMode::kFromScratch, Start::kClosedForm);
+    ASSERT_EQ(closed.run(w), Status::kOk);
+    const std::uint64_t nodes = closed.network().evaluated_count() + closed.network().pair_count();
+    std::vector<std::int64_t> table(k + 1);
+    connectivity_costs(k, table.data());
+    const long double stated = static_cast<long double>(nodes + 2) * (nodes + 2) * (table[2] + 1);
+    EXPECT_LT(stated, static_cast<long double>(std::uint64_t{1} << 62)) << k;
+    std::uint64_t base = 1;
+    while (base < nodes + 6) base <<= 1;
+    const bool fits = static_cast<long double>(base) * base * (table[2] + 1) <=
+                      static_cast<long double>(std::uint64_t{1} << 62);
+    EXPECT_EQ(fits, k == 723u) << k;
+    Sparsifier zero(caps, Params{}, SolveMode::kFromScratch, Start::kZeroFlow);
+    EXPECT_EQ(zero.run(w), fits ? Status::kOk : Status::kCapacityExceeded) << k << " keyframes, " << nodes << " nodes";
+  }
 }
 
 TEST(Sparsifier, KeyframeObservationCapacityIsChecked) {

@@ -415,6 +415,14 @@ TEST(NodeConfig, ParsesTheUses) {
   NodeConfig no_count;
   ASSERT_EQ(parse({"--use", "offline"}, no_count, error), ParseResult::kError);
   EXPECT_NE(error.find("--use offline sets it to 1"), std::string::npos) << error;
+  // A share given without a count is refused for itself, whatever the use: the
+  // note on offline's share would point at a use not given.
+  for (const char* use : {"monocular", "rgbd", "paper"}) {
+    NodeConfig given;
+    ASSERT_EQ(parse({"--use", use, "--track-share", "0.5"}, given, error), ParseResult::kError) << use;
+    EXPECT_NE(error.find("--track-share needs --keep-points or --keep-fraction"), std::string::npos) << error;
+    EXPECT_EQ(error.find("offline"), std::string::npos) << use << ": " << error;
+  }
   for (const std::vector<std::string>& bad :
        {std::vector<std::string>{"--use", "mono"}, {"--use"}, {"--use="}, {"--use", ""}}) {
     NodeConfig d;

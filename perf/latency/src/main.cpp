@@ -109,7 +109,7 @@ const std::vector<cli::Flag> kFlags = {
                       "monocular-deferred is the node's, measured with --lcm"},
     {"--scope", "window|newest", "decision scope (keepless_node's flag; default window)"},
     {"--floor", "L", "coverage floor (keepless_node's flag; default 0)"},
-    {"--cost", "paper|authors|information", "cost model (keepless_node's flag; default paper)"},
+    {"--cost", "paper|authors|information|track", "cost model (keepless_node's flag; default paper)"},
     {"--unmapped", "N", "unmapped keypoints per keyframe (default: half the workload's\n"
                         "observations per keyframe with --cost authors, else 0)"},
     {"--keep-points", "K", "a keep budget instead of M (keepless_node's flag): K points"},
@@ -173,7 +173,7 @@ int parse(int argc, char** argv, Options* o) {
     } else if (a == "--scope") {
       if (!core::parse_scope(v, &o->params.scope)) return bad("window or newest");
     } else if (a == "--cost") {
-      if (!core::parse_cost_model(v, &o->params.cost_model)) return bad("paper, authors or information");
+      if (!core::parse_cost_model(v, &o->params.cost_model)) return bad("paper, authors, information or track");
     } else if (a == "--keep-fraction") {
       const double x = std::strtod(v, &end);
       if (end == v || *end != '\0' || !(x >= 0 && x <= 1) || o->params.budget.kind != core::BudgetKind::kNone) {
@@ -212,6 +212,15 @@ int parse(int argc, char** argv, Options* o) {
         t = static_cast<std::uint32_t>(x);
       }
     }
+  }
+  // The policy as keepless_node checks it: refused here, not by every decision of the replay.
+  if (core::Sparsifier::validate(o->params) != core::Status::kOk) {
+    const core::KeepBudget& b = o->params.budget;
+    if (b.track_share > 0 && b.track_share_from == 0 && !core::keeps_a_count(b.kind)) {
+      return cli::usage_error(kTool, "--use " + o->use +
+                                         " takes a share of a count: give --keep-points or --keep-fraction");
+    }
+    return cli::usage_error(kTool, "invalid policy parameters");
   }
   return -1;
 }

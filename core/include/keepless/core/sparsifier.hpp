@@ -67,10 +67,11 @@ enum class SolveMode : std::uint8_t {
 // arcs (MinCostFlow::solve_from); a start that failed the certificate would
 // be re-optimised, then put in the canonical tie-break. kZeroFlow: successive
 // shortest paths from the zero flow, as a general network would need. Both
-// give the same flows, but kZeroFlow's labels bound the network: (nodes +
-// 2)^2 x (largest arc cost + 1) <= 2^62, beyond it kCapacityExceeded (c_c
-// grows as m^3 / 10: e.g. 730 keyframes that all see one point, which the
-// closed form decides).
+// give the same flows, but kZeroFlow's labels bound the network: B^2 x
+// (largest arc cost + 1) <= 2^62, B the smallest power of two >= nodes + 6
+// (the window's points and pairs), beyond it kCapacityExceeded (c_c grows
+// as m^3 / 10: e.g. 724 keyframes that all see one point, which the closed
+// form decides).
 enum class Start : std::uint8_t { kClosedForm, kZeroFlow };
 
 // Where a run() or update() spent its time, when a clock is set.
