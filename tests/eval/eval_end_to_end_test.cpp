@@ -385,6 +385,7 @@ TEST(KeeplessEval, RejectsBadFlagsWithStatus2) {
       {"--theta 1.5", "--theta"},
       {"--track-share 1.5 --kept-fraction 0.3", "--track-share"},
       {"--track-share 0.5 --M 100", "--track-share needs --kept-fraction"},
+      {"--use offline --M 100", "--use offline takes a share of a count: give --kept-fraction"},
       {"--tracked-first --M 100", "--tracked-first needs --kept-fraction"},
       {"--decide oldest", "--decide"},
       {"--keyframe-culling sometimes", "--keyframe-culling"},

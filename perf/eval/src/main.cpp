@@ -409,7 +409,11 @@ Args parse(int argc, char** argv) {
   }
   if (by_M && by_fraction) fail("--M and --kept-fraction exclude each other");
   if (by_M && a.policy.tracked_first) fail("--tracked-first needs --kept-fraction: under --M there is no budget to keep the tracked first within (--tracked-flags skips them)");
-  if (a.policy.budget.track_share > 0 && a.policy.budget.track_share_from == 0 && !by_fraction) fail("--track-share needs --kept-fraction: it is a share of its count");
+  if (a.policy.budget.track_share > 0 && a.policy.budget.track_share_from == 0 && !by_fraction) {
+    fail(cli::last_value(argc, argv, "--track-share") != nullptr
+             ? "--track-share needs --kept-fraction: it is a share of its count"
+             : "--use offline takes a share of a count: give --kept-fraction");
+  }
   if (!a.images.empty() && (a.calib.empty() || a.poses.empty())) fail("--image-tracks needs --calib and --poses");
   for (const auto& v : a.vo)
     if (!v.rgbd && (v.calib.empty() || v.poses.empty())) fail("--images " + v.dir + " needs --calib and --poses");
