@@ -4,7 +4,8 @@
 //
 //   lcm_cpp [URL]     (default udpm://239.255.76.67:7667?ttl=0, keepless_node's)
 //
-// Start the node first, e.g. `keepless_node --url URL --latency-target-ms 0`.
+// Start the node first, e.g. `keepless_node --url URL` (its 5 ms latency target
+// may answer a keyframe budget_exhausted on a loaded machine; 0 turns it off).
 
 #include <cstdint>
 #include <cstdio>
@@ -24,7 +25,10 @@ constexpr int kStep = 60;
 
 struct Inbox {
   bool node_up = false;
+  std::int64_t publisher_id = 0;  // ours: decisions for other publishers are not ours to count
+  std::int64_t sequence = -1;     // the keyframe_t just published
   int decisions = 0;
+  int refused = 0;  // STATUS_REJECTED_INPUT, STATUS_CAPACITY_EXCEEDED: the node did not take the keyframe
   int culled = 0;
   // Plain functions with a context (subscribeFunction): GCC's UBSan misreports
   // LCM's pointer-to-member call in the member-function subscribe.
@@ -33,10 +37,18 @@ struct Inbox {
   }
   static void on_decision(const lcm::ReceiveBuffer*, const std::string&, const keepless::decision_t* d,
                           Inbox* in) {
+    // Every VO on the bus gets its decisions on this channel: answer only ours.
+    if (d->publisher_id != in->publisher_id || d->sequence != in->sequence) return;
     std::printf("decision for keyframe %lld: status %d, %d points, kept %d, culled %d\n",
                 static_cast<long long>(d->keyframe_id), d->status, d->points, d->kept, d->culled);
     ++in->decisions;
-    in->culled += d->num_culled;
+    if (d->status == keepless::decision_t::STATUS_REJECTED_INPUT ||
+        d->status == keepless::decision_t::STATUS_CAPACITY_EXCEEDED) {
+      std::fprintf(stderr, "lcm_cpp: keyframe %lld refused: status %d, reject_reason %d (status_t.REJECT_*)\n",
+                   static_cast<long long>(d->keyframe_id), d->status, d->reject_reason);
+      ++in->refused;
+    }
+    in->culled += d->num_culled;  // culled_point_id[0, num_culled): delete these map points
   }
 };
 
@@ -80,10 +92,12 @@ int main(int argc, char** argv) {
     kf.publisher_id = 42;  // any identity of this process
     bus.publish("KEEPLESS_KEYFRAME", &kf);
     // snippet-end: publish
+    inbox.publisher_id = kf.publisher_id;
+    inbox.sequence = kf.sequence;
     const int before = inbox.decisions;
     for (int i = 0; i < 50 && inbox.decisions == before; ++i) wait(bus, 100);  // decision_t
   }
-  std::printf("lcm_cpp: %d decisions for %d keyframes, %d points culled\n", inbox.decisions, kKeyframes,
-              inbox.culled);
-  return inbox.decisions == kKeyframes && inbox.culled > 0 ? 0 : 1;
+  std::printf("lcm_cpp: %d decisions for %d keyframes, %d refused, %d points culled\n", inbox.decisions,
+              kKeyframes, inbox.refused, inbox.culled);
+  return inbox.decisions == kKeyframes && inbox.refused == 0 && inbox.culled > 0 ? 0 : 1;
 }

@@ -8,8 +8,14 @@ TYPES_DIR holds the `keepless` package that `lcm-gen -p lcm_types/*.lcm` writes
 module (`import lcm`) where it is installed, else lcm_ctypes.py beside this
 script, which calls the C library (Debian packages no Python module).
 """
+import os
 import sys
 import time
+
+if len(sys.argv) < 2 or not os.path.isfile(os.path.join(sys.argv[1], "keepless", "decision_t.py")):
+    sys.exit("usage: publish_keyframes.py TYPES_DIR [URL]\n"
+             "TYPES_DIR: the folder `lcm-gen -p --ppath TYPES_DIR lcm_types/*.lcm` wrote keepless/ into"
+             + (f" (no keepless/decision_t.py in {sys.argv[1]!r})" if len(sys.argv) > 1 else ""))
 
 try:
     import lcm
@@ -23,7 +29,8 @@ URL = sys.argv[2] if len(sys.argv) > 2 else "udpm://239.255.76.67:7667?ttl=0"
 KEYFRAMES, POINTS, STEP = 6, 300, 60
 
 bus = lcm.LCM(URL)
-state = {"up": False, "decisions": 0, "culled": 0}
+state = {"up": False, "decisions": 0, "refused": 0, "culled": 0}
+kf = None  # the keyframe_t last published: decisions for any other are not ours
 
 
 def on_status(channel, data):
@@ -33,10 +40,17 @@ def on_status(channel, data):
 
 def on_decision(channel, data):
     d = decision_t.decode(data)
+    # Every VO on the bus gets its decisions on this channel: answer only ours.
+    if kf is None or d.publisher_id != kf.publisher_id or d.sequence != kf.sequence:
+        return
     print(f"decision for keyframe {d.keyframe_id}: status {d.status}, {d.points} points, "
           f"kept {d.kept}, culled {d.culled}")
     state["decisions"] += 1
-    state["culled"] += d.num_culled
+    if d.status in (decision_t.STATUS_REJECTED_INPUT, decision_t.STATUS_CAPACITY_EXCEEDED):
+        print(f"lcm_python: keyframe {d.keyframe_id} refused: status {d.status}, "
+              f"reject_reason {d.reject_reason} (status_t.REJECT_*)", file=sys.stderr)
+        state["refused"] += 1
+    state["culled"] += d.num_culled  # culled_point_id: delete these map points
 
 
 bus.subscribe("KEEPLESS_STATUS", on_status)
@@ -68,5 +82,6 @@ for k in range(KEYFRAMES):
         bus.handle_timeout(100)  # one decision_t per keyframe_t
 # snippet-end: publish
 
-print(f"lcm_python: {state['decisions']} decisions for {KEYFRAMES} keyframes, {state['culled']} points culled")
-sys.exit(0 if state["decisions"] == KEYFRAMES and state["culled"] > 0 else 1)
+print(f"lcm_python: {state['decisions']} decisions for {KEYFRAMES} keyframes, {state['refused']} refused, "
+      f"{state['culled']} points culled")
+sys.exit(0 if state["decisions"] == KEYFRAMES and state["refused"] == 0 and state["culled"] > 0 else 1)
