@@ -4,7 +4,7 @@
 //
 // A PINHOLE camera (KITTI's intrinsics) drives straight down +z, 1 m per
 // image; each point is seen by a run of consecutive images (track length
-// 2 + a geometric draw, mean ~6, as on the KITTI fixture), lies ahead of
+// 2 + a geometric draw of mean 3: mean ~5, the KITTI fixture's is ~6), lies ahead of
 // the last of them, and is projected exactly into each. Deterministic for a
 // seed (std::mt19937_64).
 
@@ -34,7 +34,7 @@ int main(int argc, char** argv) {
   std::uint64_t seed = 1;
   const std::string help = cli::usage("usage: keepless_make_colmap --out DIR [options]", flags,
                                       "Writes a synthetic COLMAP binary model: a PINHOLE camera driving straight\n"
-                                      "ahead, 1 m per image, tracks of mean length ~6. Deterministic for a seed.");
+                                      "ahead, 1 m per image, tracks of mean length ~5. Deterministic for a seed.");
   for (int i = 1; i < argc; ++i) {
     const cli::Flag* flag = nullptr;
     const char* value = nullptr;
