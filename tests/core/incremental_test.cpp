@@ -523,6 +523,30 @@ TEST(Incremental, ASlowSpellDoesNotDeferForever) {
   EXPECT_LT(deferred, 40);
 }
 
+// A budget that stays below what a call takes (every stage 100 ns, 150 ns
+// given): the decayed estimate brings a retry now and then, never every
+// other keyframe (each late retry doubles the deferrals before the next
+// decay), and never stops: once the budget is ample the path decides again.
+TEST(Incremental, ABudgetAlwaysTooSmallRetriesRarely) {
+  SlidingWindow w(31, 40);
+  const Window& window = w.window;
+  Sparsifier s(w.caps, Params{}, SolveMode::kIncremental);
+  SteppingClock clock(100);
+  const auto budget = [&clock](std::uint64_t left) { return budget_after(clock, left); };
+  int tried = 0;
+  for (int i = 0; i < 400; ++i) {
+    ASSERT_NO_FATAL_FAILURE(w.slide());
+    EXPECT_EQ(s.update(window, budget(150)), Status::kBudgetExhausted);
+    if (!s.deferred()) ++tried;
+  }
+  // Back-off up to 32 deferrals: about 400 / 33 + log2(32) retries, not 200.
+  EXPECT_GE(tried, 5);
+  EXPECT_LE(tried, 30);
+  ASSERT_NO_FATAL_FAILURE(w.slide());
+  ASSERT_EQ(s.update(window, budget(10'000'000)), Status::kOk);
+  EXPECT_TRUE(same_result(s, w.ref));
+}
+
 TEST(Incremental, FromScratchModeFallsBackToRun) {
   const Capacities caps{10, 600, 1500, 8000};
   Stream stream(3, 40);
