@@ -4,6 +4,13 @@
 # without exceptions or RTTI: the decision path reports errors as status enums
 # and never needs either. Tests and tools keep the default flags; they link
 # the embedded libraries, so the suite exercises exactly what a board runs.
+# -funwind-tables: an allocation that fails while a Window or Sparsifier is
+# built throws std::bad_alloc (std::length_error on 32-bit) from the C++
+# runtime, which keepless_node and keepless_sparsify catch ("cannot
+# allocate ...", exit 2). Without exceptions GCC gives 32-bit ARM code no
+# unwind tables, and the unwinder calls std::terminate at the library's
+# first frame (core_allocation_failure_test). aarch64 and x86-64 have the
+# tables by default.
 set(KEEPLESS_EMBEDDED_PROFILE ON)
 
 # The targets do not exist yet here: apply the options once the top-level
@@ -14,8 +21,8 @@ function(keepless_apply_embedded_profile)
     if(NOT TARGET ${target})
       message(FATAL_ERROR "embedded profile: no target ${target}")
     endif()
-    target_compile_options(${target} PRIVATE -Os -fno-exceptions -fno-rtti)
+    target_compile_options(${target} PRIVATE -Os -fno-exceptions -fno-rtti -funwind-tables)
   endforeach()
-  message(STATUS "embedded profile: keepless_solver, keepless_core with -Os -fno-exceptions -fno-rtti")
+  message(STATUS "embedded profile: keepless_solver, keepless_core with -Os -fno-exceptions -fno-rtti -funwind-tables")
 endfunction()
 cmake_language(DEFER DIRECTORY ${CMAKE_SOURCE_DIR} CALL keepless_apply_embedded_profile)

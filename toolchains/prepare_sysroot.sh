@@ -11,7 +11,9 @@
 #
 # Cached: SYSROOT/.keepless-sysroot holds a hash of the package list; a rerun
 # with the same list does nothing (delete the sysroot to pick up package
-# updates). Default SYSROOT:
+# updates). Default SYSROOT, where the toolchain files look for it
+# (toolchains/linux_cross.cmake; -DKEEPLESS_SYSROOT overrides both):
+#   $KEEPLESS_SYSROOT, else
 #   ${KEEPLESS_CACHE_DIR:-${XDG_CACHE_HOME:-$HOME/.cache}/keepless}/sysroot-<arch>
 # Needs no root: apt runs with a private state directory under the cache.
 set -euo pipefail
@@ -23,7 +25,7 @@ case "$arch" in
   *) echo "usage: $0 <aarch64|armhf> [SYSROOT]" >&2; exit 2 ;;
 esac
 cache="${KEEPLESS_CACHE_DIR:-${XDG_CACHE_HOME:-$HOME/.cache}/keepless}"
-sysroot="${2:-$cache/sysroot-$arch}"
+sysroot="${2:-${KEEPLESS_SYSROOT:-$cache/sysroot-$arch}}"
 
 # Target packages, listed explicitly (no dependency resolution against the
 # host's dpkg state). Runtime closure of what the tests and the consumer load:

@@ -77,14 +77,19 @@ TEST(IncrementalZeroAllocation, UpdateAllocatesNothing) {
   newest_params.scope = Scope::kNewest;
   newest_params.maturity_keyframes = 2;
   Sparsifier newest(caps, newest_params, SolveMode::kIncremental);
+  // Room for too few pair arcs: most windows are answered kCapacityExceeded.
+  Capacities tight_caps = caps;
+  tight_caps.max_pair_arcs = 64;
+  Sparsifier tight(tight_caps, Params{}, SolveMode::kIncremental);
   // Warm-up: one stream's first window.
   for (std::size_t i = 0; i < 4; ++i) ASSERT_EQ(add(window, streams[0][i]), Status::kOk);
   ASSERT_EQ(sparsifier.update(window), Status::kOk);
   ASSERT_EQ(newest.update(window), Status::kOk);
   for (auto& b : budgeted) ASSERT_EQ(b->update(window), Status::kOk);
+  (void)tight.update(window);
   window.clear();
 
-  std::uint64_t updates = 0, ok = 0, stopped = 0, budget_ok = 0, caught_up = 0;
+  std::uint64_t updates = 0, ok = 0, stopped = 0, budget_ok = 0, caught_up = 0, beyond = 0, tight_ok = 0;
   PastDeadlineClock clock;
   test::AllocationCounter counter;
   for (const auto& frames : streams) {
@@ -105,6 +110,9 @@ TEST(IncrementalZeroAllocation, UpdateAllocatesNothing) {
         (void)newest.update(window, budget);
         caught_up += newest.summary().caught_up;
       }
+      const Status t = tight.update(window, budget);
+      beyond += t == Status::kCapacityExceeded;
+      tight_ok += t == Status::kOk;
       ok += s == Status::kOk;
       stopped += s == Status::kBudgetExhausted;
       ++updates;
@@ -113,6 +121,7 @@ TEST(IncrementalZeroAllocation, UpdateAllocatesNothing) {
     (void)sparsifier.update(window);
     for (auto& b : budgeted) (void)b->update(window);
     (void)newest.update(window);
+    (void)tight.update(window);
     newest.forget_history();
   }
   EXPECT_EQ(counter.stop(), 0u);
@@ -121,6 +130,8 @@ TEST(IncrementalZeroAllocation, UpdateAllocatesNothing) {
   EXPECT_GT(stopped, 20u);
   EXPECT_GT(budget_ok, 300u);
   EXPECT_GT(caught_up, 20u);
+  EXPECT_GT(beyond, 100u) << "the tight sparsifier should have met its pair-arc capacity";
+  EXPECT_GT(tight_ok, 0u) << "and decided the windows within it";
 }
 
 }  // namespace

@@ -168,3 +168,65 @@ TEST(NodeZeroAllocation, TheDrainAllocatesNothing) {
 }
 
 }  // namespace
+
+namespace {
+
+// A window beyond a capacity is answered STATUS_CAPACITY_EXCEEDED on the same
+// preallocated memory: older keyframes evicted to make room for the window's
+// points and observations (SlidingWindow::push's retries), or a window whose
+// network needs more pair arcs than held, left undecided.
+void beyond_capacity(std::uint32_t max_points, std::uint32_t max_window_observations, std::uint32_t max_pair_arcs,
+                     std::int64_t shift) {
+  keepless::platform::NodeConfig c;
+  c.latency_target_ms = 0;
+  c.url = "memq://";
+  c.window = 5;
+  c.max_observations = 128;
+  c.max_event_ids = 32;
+  c.max_points = max_points;
+  c.max_window_observations = max_window_observations;
+  c.max_pair_arcs = max_pair_arcs;
+  // Every pair carries all its shared points and keeps them (theta 0): nothing
+  // is culled, so the window fills up.
+  c.params.pair_capacity = 100;
+  c.params.theta = 0.0;
+  c.quiet = true;
+  c.status_period_ms = 3600 * 1000;
+  lcm::LCM bus(c.url);
+  ASSERT_TRUE(bus.good());
+  keepless::platform::Node node(bus, c);
+  ASSERT_TRUE(node.start());
+  std::vector<std::vector<std::uint8_t>> keyframes;
+  for (int i = 0; i < 40; ++i) {
+    // Every third keyframe crowded (all new points), the others overlapping the last.
+    const std::int64_t count = i % 3 == 2 ? 128 : 100;
+    keyframes.push_back(kt::encode(kt::make_keyframe(i + 1, i, kt::id_range(i * shift, count))));
+  }
+  auto step = [&](int i) {
+    bus.publish(c.keyframe_channel, keyframes[i].data(), static_cast<unsigned>(keyframes[i].size()));
+    while (bus.handleTimeout(0) > 0) {
+    }
+  };
+  for (int i = 0; i < 10; ++i) step(i);
+  node.publish_status(false);
+  while (bus.handleTimeout(0) > 0) {
+  }
+  const std::uint64_t before = node.counters().capacity_exceeded;
+  ASSERT_GT(before, 0u) << "the warm-up should have met the capacity: decisions "
+                         << node.counters().decisions_published << ", rejected " << node.counters().messages_rejected
+                         << ", culled " << node.counters().points_culled;
+  keepless::test::AllocationCounter counter;
+  for (int i = 10; i < 40; ++i) step(i);
+  node.publish_status(false);
+  while (bus.handleTimeout(0) > 0) {
+  }
+  const std::uint64_t allocations = counter.stop();
+  EXPECT_EQ(allocations, 0u);
+  EXPECT_GT(node.counters().capacity_exceeded, before + 5);
+  EXPECT_EQ(node.counters().decisions_published, 40u);
+}
+
+TEST(NodeZeroAllocation, EvictionsBeyondTheWindowsPointsAllocateNothing) { beyond_capacity(250, 400, 51000, 60); }
+TEST(NodeZeroAllocation, AWindowBeyondItsPairArcsAllocatesNothing) { beyond_capacity(6600, 2000, 400, 10); }
+
+}  // namespace
