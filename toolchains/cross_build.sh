@@ -45,11 +45,12 @@ step() { printf '\n== %s (%ds)\n' "$*" $((SECONDS - start)); }
 
 # --- host tools --------------------------------------------------------------
 # lcm-gen runs on the host during the build (liblcm-bin); everything the
-# target links comes from the sysroot. The full suite also runs host tools:
-# colmap (the map tests' checker) and javac with lcm.jar (the Java check).
+# target links comes from the sysroot. The lcm label (run by --ci too) holds
+# the Java check: javac with lcm.jar. The full suite also runs colmap (the
+# map tests' checker).
 host_packages=(cmake ninja-build pkgconf qemu-user "g++-$triple" "binutils-$triple"
-               liblcm-bin)
-((full)) && host_packages+=(colmap default-jdk-headless liblcm-java)
+               liblcm-bin default-jdk-headless liblcm-java)
+((full)) && host_packages+=(colmap)
 missing=()
 for p in "${host_packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q 'install ok installed' || missing+=("$p")

@@ -16,6 +16,11 @@ if(NOT rc EQUAL 0)
   message(FATAL_ERROR "cmake --install ${KEEPLESS_BUILD_DIR} failed: the package needs the whole tree built")
 endif()
 
+# The installed tool starts from the prefix (shared libraries: found through its RPATH).
+if(NOT TOOLCHAIN)
+  run(${PREFIX}/bin/keepless_sparsify --version)
+endif()
+
 set(args -S ${CONSUMER_SOURCE} -B ${CONSUMER_BUILD} -G ${GENERATOR}
     -DCMAKE_BUILD_TYPE=${BUILD_TYPE} -DCMAKE_PREFIX_PATH=${PREFIX})
 if(TOOLCHAIN)
@@ -63,4 +68,21 @@ if(NOT TOOLCHAIN)
   if(NOT rc EQUAL 0 OR NOT out MATCHES "kept [1-9][0-9]*, culled [1-9][0-9]*" OR out MATCHES "keepless::opencv")
     message(FATAL_ERROR "without OpenCV and Eigen the consumer did not run on keepless::core alone:\n${out}")
   endif()
+endif()
+
+# LCM in a prefix of its own: a copy of this build's LCM headers and library
+# under a scratch prefix, searched first; the package must use that copy.
+if(NOT TOOLCHAIN AND EXISTS ${PREFIX}/include/keepless/decision_t.hpp)
+  set(lcm_prefix ${CONSUMER_BUILD}-lcm-prefix)
+  set(probe ${CONSUMER_BUILD}-lcm-probe)
+  file(REMOVE_RECURSE ${lcm_prefix} ${probe})
+  file(COPY ${LCM_INCLUDE_DIR}/lcm DESTINATION ${lcm_prefix}/include)
+  file(GLOB lcm_libs ${LCM_LIBRARY}*)
+  file(COPY ${lcm_libs} DESTINATION ${lcm_prefix}/lib)
+  file(GLOB_RECURSE keepless_config ${PREFIX}/keeplessConfig.cmake)
+  get_filename_component(keepless_dir "${keepless_config}" DIRECTORY)
+  run(${CMAKE_COMMAND} -S ${CMAKE_CURRENT_LIST_DIR}/lcm_probe -B ${probe} -G ${GENERATOR}
+      -DCMAKE_BUILD_TYPE=${BUILD_TYPE} -DCMAKE_PREFIX_PATH=${lcm_prefix} -Dkeepless_DIR=${keepless_dir} -DCMAKE_CXX_COMPILER=${CXX_COMPILER})
+  run(${CMAKE_COMMAND} --build ${probe})
+  run(${probe}/lcm_probe)
 endif()
