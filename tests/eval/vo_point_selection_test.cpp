@@ -114,7 +114,8 @@ TEST(VoBaselines, EveryBaselineCullsExactlyTheCount) {
   add(&candidates, 1, 9, 100);
   add(&candidates, 2, 9, 200);
   for (const vo::Selector s : {vo::Selector::kRandom, vo::Selector::kLongestTrack, vo::Selector::kAnms}) {
-    for (const vo::AnmsVariant a : {vo::AnmsVariant::kSsc, vo::AnmsVariant::kSpread, vo::AnmsVariant::kResponse}) {
+    for (const vo::AnmsVariant a :
+         {vo::AnmsVariant::kSsc, vo::AnmsVariant::kSpread, vo::AnmsVariant::kResponse, vo::AnmsVariant::kTrack}) {
       for (std::size_t cull : {std::size_t{0}, std::size_t{5}, std::size_t{18}, std::size_t{40}}) {
         std::vector<keepless::core::PointId> culls = vo::baseline_culls(s, candidates, cull, 3, 640, 480, a);
         EXPECT_EQ(culls.size(), std::min<std::size_t>(cull, 18));
