@@ -20,21 +20,19 @@ enum class Use : std::uint8_t {
   // and from F = 0.3 take half the count by track length (track share 0.5
   // from 0.3). The only immediate setting that tracked every seed of both
   // KITTI sequences at F = 0.2; random, ANMS and longest-track-first under
-  // the same guard did not. The share took F = 0.3-0.4 from 1.02-1.18x the
-  // original's ATE to 0.95-1.08x (20 seeds) and lost tracking at F = 0.2.
+  // the same guard did not. The share lowered the ATE at F = 0.3-0.4 and
+  // lost tracking at F = 0.2, hence from 0.3. (The figures: the page above.)
   kMonocular,
   // A monocular VO that implements both verdicts (decision_t's excluded and
   // deleted lists) and keeps excluded points' structure refined: the whole
   // window decided, culls deleted once 2 keyframes in a row miss them. It
-  // tracked every seed down to F = 0.05.
+  // tracked every seed at F = 0.1 and 0.2, where the monocular use did not.
   kMonocularDeferred,
   // RGB-D: the monocular use's scope and guard, for accuracy rather than
   // tracking (depth makes new points usable at once; every selector
-  // tracked down to F = 0.1). On 7-Scenes, 20 seeds, F = 0.2-0.4: 0.98-0.99x
-  // the original's ATE against the paper's settings' 1.03-1.04x, at
-  // 1.4-1.6x their local BA (at F = 0.2 still 0.98x against the paper's
-  // 1.04x at F = 0.4, with about the same local BA). No track share: it
-  // cost 0.9-1.2 mm at F = 0.3-0.4 there.
+  // tracked down to F = 0.1). On 7-Scenes at F = 0.2-0.4 it was below the
+  // paper's settings and level with the simple rules, at a larger local BA.
+  // No track share: it cost accuracy at F = 0.3-0.4 there.
   kRgbd,
   // A finished model, with a point count: the count by track length, the
   // network's order breaking ties. keepless_sparsify, ranking by COLMAP's
