@@ -18,20 +18,27 @@ namespace {
 
 namespace kt = keepless::testing;
 
-// `defer`: deferred culling's T (0: off); `defer_memory`: its capacity (0: the window's points).
-void steady_state(std::uint32_t defer, std::uint32_t defer_memory = 0) {
+// The node every test here runs: small capacities on memq://, quiet, and no
+// status timer (a status is published by hand where a test wants one).
+keepless::platform::NodeConfig small_node(double latency_target_ms) {
   keepless::platform::NodeConfig c;
-  c.params.defer_keyframes = defer;
-  c.defer_memory = defer_memory;
-  c.latency_target_ms = 0;
+  c.latency_target_ms = latency_target_ms;
   c.url = "memq://";
   c.window = 5;
   c.max_observations = 128;
   c.max_event_ids = 32;
-  c.params.pair_capacity = 8;
-  c.max_unmapped = 16;
   c.quiet = true;
   c.status_period_ms = 3600 * 1000;
+  return c;
+}
+
+// `defer`: deferred culling's T (0: off); `defer_memory`: its capacity (0: the window's points).
+void steady_state(std::uint32_t defer, std::uint32_t defer_memory = 0) {
+  keepless::platform::NodeConfig c = small_node(0);
+  c.params.defer_keyframes = defer;
+  c.defer_memory = defer_memory;
+  c.params.pair_capacity = 8;
+  c.max_unmapped = 16;
   lcm::LCM bus(c.url);
   ASSERT_TRUE(bus.good());
   keepless::platform::Node node(bus, c);
@@ -117,23 +124,12 @@ TEST(NodeZeroAllocation, DeferredCullingAllocatesNothing) { steady_state(2); }
 // ... and with a memory so small that excluded points are refused (deleted at once).
 TEST(NodeZeroAllocation, AFullDeferredMemoryAllocatesNothing) { steady_state(6, 4); }
 
-}  // namespace
-
-namespace {
-
 // The drain (a latency target on): queued keyframes, map events and refused
 // messages handled by spin_once, pending keyframes skipped or decided, with
 // no allocation either.
 TEST(NodeZeroAllocation, TheDrainAllocatesNothing) {
-  keepless::platform::NodeConfig c;
-  c.latency_target_ms = 60000;  // drains, never fires
-  c.url = "memq://";
-  c.window = 5;
-  c.max_observations = 128;
-  c.max_event_ids = 32;
+  keepless::platform::NodeConfig c = small_node(60000);  // drains, never fires
   c.params.pair_capacity = 8;
-  c.quiet = true;
-  c.status_period_ms = 3600 * 1000;
   lcm::LCM bus(c.url);
   ASSERT_TRUE(bus.good());
   keepless::platform::Node node(bus, c);
@@ -167,22 +163,13 @@ TEST(NodeZeroAllocation, TheDrainAllocatesNothing) {
   EXPECT_EQ(node.counters().decisions_published, 80u);
 }
 
-}  // namespace
-
-namespace {
-
 // A window beyond a capacity is answered STATUS_CAPACITY_EXCEEDED on the same
 // preallocated memory: older keyframes evicted to make room for the window's
 // points and observations (SlidingWindow::push's retries), or a window whose
 // network needs more pair arcs than held, left undecided.
 void beyond_capacity(std::uint32_t max_points, std::uint32_t max_window_observations, std::uint32_t max_pair_arcs,
                      std::int64_t shift) {
-  keepless::platform::NodeConfig c;
-  c.latency_target_ms = 0;
-  c.url = "memq://";
-  c.window = 5;
-  c.max_observations = 128;
-  c.max_event_ids = 32;
+  keepless::platform::NodeConfig c = small_node(0);
   c.max_points = max_points;
   c.max_window_observations = max_window_observations;
   c.max_pair_arcs = max_pair_arcs;
@@ -190,8 +177,6 @@ void beyond_capacity(std::uint32_t max_points, std::uint32_t max_window_observat
   // is culled, so the window fills up.
   c.params.pair_capacity = 100;
   c.params.theta = 0.0;
-  c.quiet = true;
-  c.status_period_ms = 3600 * 1000;
   lcm::LCM bus(c.url);
   ASSERT_TRUE(bus.good());
   keepless::platform::Node node(bus, c);
