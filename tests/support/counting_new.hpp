@@ -47,8 +47,16 @@ class AllocationCounter {
   // Bytes requested by those allocations (to check a memory_bytes() report).
   std::uint64_t bytes() const { return bytes_.load(std::memory_order_relaxed); }
 
+  // Makes the n-th allocation from now (0: the next) throw std::bad_alloc,
+  // armed or not; -1: none. For the tests that an allocation failure reaches
+  // the caller.
+  static void fail_allocation(std::int64_t n) { fail_in_.store(n, std::memory_order_relaxed); }
+
   // For the replacement operators below only.
   static void note_allocation(std::size_t size) {
+    if (fail_in_.load(std::memory_order_relaxed) >= 0 && fail_in_.fetch_sub(1, std::memory_order_relaxed) == 0) {
+      throw std::bad_alloc();
+    }
     if (armed_.load(std::memory_order_relaxed)) {
       count_.fetch_add(1, std::memory_order_relaxed);
       bytes_.fetch_add(size, std::memory_order_relaxed);
@@ -60,6 +68,7 @@ class AllocationCounter {
   static inline std::atomic<bool> armed_{false};
   static inline std::atomic<std::uint64_t> count_{0};
   static inline std::atomic<std::uint64_t> bytes_{0};
+  static inline std::atomic<std::int64_t> fail_in_{-1};
 };
 
 namespace counting_new_detail {
