@@ -23,7 +23,7 @@ TEST_PACKAGES=(
   libeigen3-dev liblcm-java default-jdk-headless  # lcm.jar and javac: the Java message classes' check
   libopencv-core-dev libopencv-features2d-dev libopencv-imgproc-dev libopencv-imgcodecs-dev
   libopencv-dev  # the only package with OpenCV's CMake config (keepless::opencv, keepless_eval)
-  libgtest-dev libgmock-dev liblemon-dev libceres-dev
+  libgtest-dev liblemon-dev libceres-dev
   colmap  # the map tests' external checker (ctest -L colmap)
   doxygen python3  # scripts/check_docs.sh
 )
@@ -32,7 +32,7 @@ TEST_PACKAGES=(
 UPSTREAM="CMake >= 3.22, a C++17 compiler (GCC >= 9 or Clang >= 10), make or Ninja, pkg-config
 LCM >= 1.3 (library, headers, lcm-gen; lcm-logger/lcm-logplayer for the demo's replay), GLib 2
 for test also: Eigen >= 3.3, OpenCV >= 4 (core, features2d, imgproc, imgcodecs, with its CMake config),
-  GoogleTest and GoogleMock, LEMON >= 1.3, Ceres Solver >= 2.0, COLMAP >= 3.8,
+  GoogleTest, LEMON >= 1.3, Ceres Solver >= 2.0, COLMAP >= 3.8,
   LCM's Java jar (optional), Doxygen, Python 3"
 
 NO_INSTALL=${KEEPLESS_NO_INSTALL:-0}

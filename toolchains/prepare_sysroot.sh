@@ -41,7 +41,7 @@ packages=(
   liblcm1 liblcm-dev
   libglib2.0-0 libglib2.0-dev libpcre2-8-0 libpcre2-dev
   libffi8 libmount1 libblkid1 libselinux1 zlib1g
-  libgtest-dev libgmock-dev
+  libgtest-dev
   liblemon-dev
 )
 arch_all_packages=(libeigen3-dev)
