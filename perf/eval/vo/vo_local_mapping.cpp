@@ -68,7 +68,9 @@ int Vo::insert_keyframe(TrackedFrame& cur) {
   reference_kf_ = id;
   ++result_.keyframes_created;
   local_mapping(id);
-  // The keyframe's points after mapping (fused, culled) are what the next frame tracks.
+  // The keyframe's points after mapping (fused, culled) and its pose after local BA are what the
+  // next frame tracks from: ORB-SLAM2's UpdateLastFrame, since mapping runs in line here and no
+  // other frame's reference keyframe moves before the next frame.
   cur.mp = map_.kfs[static_cast<std::size_t>(id)].mp;
   cur.Tcw = map_.kfs[static_cast<std::size_t>(id)].Tcw;
   return id;
