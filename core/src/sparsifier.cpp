@@ -68,11 +68,11 @@ struct Sparsifier::Impl {
   // against a deadline. A solve counts only when it finished: a stopped one
   // says nothing of what a whole one needs.
   RecentDuration network_time, solve_time, decide_time;
-  // Back-off for a budget that stays below what a call takes: each call
-  // tried on a decayed estimate that then overran its deadline doubles the
-  // deferrals before the next decay (up to kMaxBackoff doublings), so such a
-  // budget costs one late call in 2^k, not every other one; a call on time
-  // resets it. (The decay alone made 40 % of calls late at 20 % of the median.)
+  // Back-off for a budget that stays below what a call takes: each tried
+  // call that overruns its deadline doubles the deferrals before the next
+  // decay (up to kMaxBackoff doublings), so such a budget costs one late
+  // call in 2^k, not every other one; a call on time resets it. (The decay
+  // alone made 40 % of calls late at 20 % of the median.)
   static constexpr std::uint32_t kMaxBackoff = 5;
   std::uint32_t backoff = 0;
   std::uint32_t deferrals = 0;  // since the last decay

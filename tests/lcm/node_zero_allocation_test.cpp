@@ -8,6 +8,7 @@
 
 #include <cmath>
 #include <limits>
+#include <string>
 #include <vector>
 
 #include "counting_new.hpp"  // this binary's only inclusion
@@ -30,6 +31,17 @@ keepless::platform::NodeConfig small_node(double latency_target_ms) {
   c.quiet = true;
   c.status_period_ms = 3600 * 1000;
   return c;
+}
+
+// memq:// delivers in handleTimeout: every queued message is handled (by the node) here.
+void pump(lcm::LCM& bus) {
+  while (bus.handleTimeout(0) > 0) {
+  }
+}
+
+void publish(lcm::LCM& bus, const std::string& channel, const std::vector<std::uint8_t>& bytes) {
+  bus.publish(channel, bytes.data(), static_cast<unsigned>(bytes.size()));
+  pump(bus);
 }
 
 // `defer`: deferred culling's T (0: off); `defer_memory`: its capacity (0: the window's points).
@@ -74,31 +86,21 @@ void steady_state(std::uint32_t defer, std::uint32_t defer_memory = 0) {
   truncated.resize(truncated.size() - 3);
   bad.push_back(truncated);
 
-  const std::string& kf_channel = c.keyframe_channel;
-  const std::string& ev_channel = c.event_channel;
-  auto pump = [&] {
-    while (bus.handleTimeout(0) > 0) {
-    }
-  };
   auto step = [&](int i) {
-    bus.publish(kf_channel, keyframes[i].data(), static_cast<unsigned>(keyframes[i].size()));
-    pump();
-    bus.publish(ev_channel, events[i].data(), static_cast<unsigned>(events[i].size()));
-    pump();
-    const auto& b = bad[static_cast<std::size_t>(i) % bad.size()];
-    bus.publish(kf_channel, b.data(), static_cast<unsigned>(b.size()));
-    pump();
+    publish(bus, c.keyframe_channel, keyframes[i]);
+    publish(bus, c.event_channel, events[i]);
+    publish(bus, c.keyframe_channel, bad[static_cast<std::size_t>(i) % bad.size()]);
   };
   // Warm-up: fill the window, touch every path once.
   for (int i = 0; i < 10; ++i) step(i);
   node.publish_status(false);
-  pump();
+  pump(bus);
   ASSERT_EQ(node.window().keyframe_count(), 5u);
 
   keepless::test::AllocationCounter counter;
   for (int i = 10; i < 40; ++i) step(i);
   node.publish_status(false);
-  pump();
+  pump(bus);
   const std::uint64_t allocations = counter.stop();
 
   EXPECT_EQ(allocations, 0u);
@@ -187,24 +189,17 @@ void beyond_capacity(std::uint32_t max_points, std::uint32_t max_window_observat
     const std::int64_t count = i % 3 == 2 ? 128 : 100;
     keyframes.push_back(kt::encode(kt::make_keyframe(i + 1, i, kt::id_range(i * shift, count))));
   }
-  auto step = [&](int i) {
-    bus.publish(c.keyframe_channel, keyframes[i].data(), static_cast<unsigned>(keyframes[i].size()));
-    while (bus.handleTimeout(0) > 0) {
-    }
-  };
-  for (int i = 0; i < 10; ++i) step(i);
+  for (int i = 0; i < 10; ++i) publish(bus, c.keyframe_channel, keyframes[i]);
   node.publish_status(false);
-  while (bus.handleTimeout(0) > 0) {
-  }
+  pump(bus);
   const std::uint64_t before = node.counters().capacity_exceeded;
   ASSERT_GT(before, 0u) << "the warm-up should have met the capacity: decisions "
                          << node.counters().decisions_published << ", rejected " << node.counters().messages_rejected
                          << ", culled " << node.counters().points_culled;
   keepless::test::AllocationCounter counter;
-  for (int i = 10; i < 40; ++i) step(i);
+  for (int i = 10; i < 40; ++i) publish(bus, c.keyframe_channel, keyframes[i]);
   node.publish_status(false);
-  while (bus.handleTimeout(0) > 0) {
-  }
+  pump(bus);
   const std::uint64_t allocations = counter.stop();
   EXPECT_EQ(allocations, 0u);
   EXPECT_GT(node.counters().capacity_exceeded, before + 5);

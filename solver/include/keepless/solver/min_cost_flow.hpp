@@ -13,9 +13,10 @@
 // Generic: any directed network with integer capacities in [0, 2^31) and
 // costs in [0, 2^30], accepted when B^2 (max cost + 1) <= 2^62, B the
 // smallest power of two >= nodes + 4 (so B < 2 (nodes + 4)), nodes counting
-// those with arcs (and the terminals), not node_count() (labels are 64-bit:
-// distance x B + hops, see Status::kCapacityExceeded) and the minimum cost of the maximum flow fits int64 (a
-// solve whose total cost would not returns kInvalidInput). All storage is
+// those with arcs (and the terminals), not node_count(): labels are 64-bit,
+// distance x B + hops (see Status::kCapacityExceeded). The minimum cost of
+// the maximum flow must fit int64 (a solve whose total cost would not
+// returns kInvalidInput). All storage is
 // sized by the constructor; nothing allocates afterwards. Deterministic: the
 // result is a pure function of the calls made (adjacency is visited in a
 // fixed order; no hashing, no floats).
