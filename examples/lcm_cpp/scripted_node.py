@@ -55,14 +55,21 @@ def on_keyframe(channel, data):
 
 bus.subscribe("KEEPLESS_KEYFRAME", on_keyframe)
 # A background job of a script starts with SIGINT ignored: take it back, as the node does.
-signal.signal(signal.SIGINT, signal.default_int_handler)
-signal.signal(signal.SIGTERM, signal.default_int_handler)
-try:
-    next_status = 0.0
-    while True:
-        if time.time() >= next_status:
-            bus.publish("KEEPLESS_STATUS", status_t().encode())
-            next_status = time.time() + 0.1
-        bus.handle_timeout(20)
-except KeyboardInterrupt:
-    pass
+# The handler only sets a flag: an exception raised in it while a keyframe's callback runs
+# would be swallowed by ctypes (lcm_ctypes calls back from C) and the loop would never end.
+stop = False
+
+
+def on_signal(signum, frame):
+    global stop
+    stop = True
+
+
+signal.signal(signal.SIGINT, on_signal)
+signal.signal(signal.SIGTERM, on_signal)
+next_status = 0.0
+while not stop:
+    if time.time() >= next_status:
+        bus.publish("KEEPLESS_STATUS", status_t().encode())
+        next_status = time.time() + 0.1
+    bus.handle_timeout(20)
