@@ -51,6 +51,8 @@ const std::vector<cli::Flag> kFlags = {
     {"--calib", "FILE", "calibration of the --images or --image-tracks before it"},
     {"--poses", "FILE", "ground-truth poses of the --images or --image-tracks before it"},
     {"--rgbd", "DIR", "the real VO on a 7-Scenes RGB-D sequence (frame-NNNNNN.*)"},
+    {"--rgb", "DIR", "the real VO, monocular, on a 7-Scenes sequence's colour frames alone\n"
+                     "(its depth unread; reported as NAME_mono)"},
     {"--frames", "A:B[:S]", "frames numbered A..B inclusive, wherever the sequence starts, every\n"
                             "S-th of them (a camera S times faster over the same scene; its frame\n"
                             "rate divided by S) (default all; --quick: the first 60 frames)"},
@@ -280,8 +282,8 @@ Args parse(int argc, char** argv) {
       if (!ke::parse_format(v, &tf)) fail("--format: expected tum, euroc or kitti, got '" + v + "'");
       if (a.trajectories.empty() || !a.trajectories.back().format.empty()) fail("--format must follow its --trajectory");
       a.trajectories.back().format = v;
-    } else if (f == "--images" || f == "--rgbd") {
-      a.vo.push_back({f == "--rgbd", val(), "", ""});
+    } else if (f == "--images" || f == "--rgbd" || f == "--rgb") {
+      a.vo.push_back({f != "--images", f == "--rgb", val(), "", ""});
       tracks_last = false;
     } else if (f == "--image-tracks") {
       a.images = val();

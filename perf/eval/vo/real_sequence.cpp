@@ -281,4 +281,12 @@ bool load_rgbd_sequence(const std::string& dir, const FrameSelection& frames, Re
   return true;
 }
 
+void drop_depth(RealSequence* s) {
+  s->rgbd = false;
+  s->name += "_mono";
+  s->depth_files.clear();
+  s->camera.bf = 0;
+  s->camera.close_depth = 0;
+}
+
 }  // namespace keepless::eval::vo

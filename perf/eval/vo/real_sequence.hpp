@@ -53,4 +53,9 @@ bool load_kitti_sequence(const std::string& image_dir, const std::string& calib_
                          std::string* error);
 bool load_rgbd_sequence(const std::string& dir, const FrameSelection& frames, RealSequence* out, std::string* error);
 
+// The same sequence seen by a monocular camera: its depth dropped (a third
+// real monocular scene, hand-held indoors, beside KITTI's driving), named
+// NAME_mono.
+void drop_depth(RealSequence* s);
+
 }  // namespace keepless::eval::vo

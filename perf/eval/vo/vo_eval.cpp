@@ -56,14 +56,19 @@ void log_run(const RealSequence& s, const RunRecord& r, const RealRunResult& x) 
                x.ba_points > 0 ? x.ba_point_angle_sum / double(x.ba_points) : 0.0);
 }
 
+bool load_sequence(const VoInput& in, const FrameSelection& frames, RealSequence* seq, std::string* error) {
+  if (!in.rgbd) return load_kitti_sequence(in.dir, in.calib, in.poses, frames, seq, error);
+  if (!load_rgbd_sequence(in.dir, frames, seq, error)) return false;
+  if (in.colour_only) drop_depth(seq);
+  return true;
+}
+
 }  // namespace
 
 bool evaluate_real_vo(const VoInput& in, const VoEvalOptions& o, std::vector<Comparison>* out, std::string* error) {
   RealSequence seq;
-  const bool loaded = in.rgbd ? load_rgbd_sequence(in.dir, o.frames, &seq, error)
-                              : load_kitti_sequence(in.dir, in.calib, in.poses, o.frames, &seq, error);
-  if (!loaded) return false;
-  std::fprintf(stderr, "keepless_eval: %s %s: %zu frames, path %.2f m, %dx%d, fx %.1f\n", in.rgbd ? "rgbd" : "images",
+  if (!load_sequence(in, o.frames, &seq, error)) return false;
+  std::fprintf(stderr, "keepless_eval: %s %s: %zu frames, path %.2f m, %dx%d, fx %.1f\n", seq.rgbd ? "rgbd" : "images",
                seq.name.c_str(), seq.image_files.size(), seq.path_length(), seq.camera.width, seq.camera.height,
                seq.camera.fx);
   const std::size_t first = out->size();
@@ -161,9 +166,7 @@ bool evaluate_real_vo(const VoInput& in, const VoEvalOptions& o, std::vector<Com
 bool measure_real_windows(const VoInput& in, const FrameSelection& frames, std::uint64_t seed,
                           const core::Capacities& replay, std::string* name, WindowSizes* sizes, std::string* error) {
   RealSequence seq;
-  const bool loaded = in.rgbd ? load_rgbd_sequence(in.dir, frames, &seq, error)
-                              : load_kitti_sequence(in.dir, in.calib, in.poses, frames, &seq, error);
-  if (!loaded) return false;
+  if (!load_sequence(in, frames, &seq, error)) return false;
   RealVoOptions vo;
   vo.seed = seed;
   vo.selector = Selector::kOriginal;

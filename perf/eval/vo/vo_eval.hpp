@@ -19,6 +19,7 @@ namespace keepless::eval::vo {
 
 struct VoInput {
   bool rgbd = false;
+  bool colour_only = false;       // with rgbd: the colour frames alone, run monocular (--rgb)
   std::string dir, calib, poses;  // calib, poses: KITTI layout only
 };
 
