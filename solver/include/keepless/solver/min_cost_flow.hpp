@@ -16,10 +16,9 @@
 // those with arcs (and the terminals), not node_count(): labels are 64-bit,
 // distance x B + hops (see Status::kCapacityExceeded). The minimum cost of
 // the maximum flow must fit int64 (a solve whose total cost would not
-// returns kInvalidInput). All storage is
-// sized by the constructor; nothing allocates afterwards. Deterministic: the
-// result is a pure function of the calls made (adjacency is visited in a
-// fixed order; no hashing, no floats).
+// returns kInvalidInput). All storage is sized by the constructor; nothing
+// allocates afterwards. Deterministic: the result is a pure function of the
+// calls made (adjacency is visited in a fixed order; no hashing, no floats).
 // Tie-break: among equal-cost shortest paths, the blocking flow serves each
 // node's arcs in insertion order (or the order given to set_tie_order), so
 // earlier arcs win ties (the paper's network inserts points by ascending id;
