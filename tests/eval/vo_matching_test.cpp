@@ -33,16 +33,9 @@ int bit_count_reference(const std::uint8_t* a, const std::uint8_t* b) {
 std::vector<std::pair<int, int>> triangulation_reference(const Map& map, int a, int b, const PinholeCamera& cam) {
   const KeyFrame& ka = map.kfs[static_cast<std::size_t>(a)];
   const KeyFrame& kb = map.kfs[static_cast<std::size_t>(b)];
-  const Eigen::Isometry3d Tba = kb.Tcw * ka.Tcw.inverse();
-  Eigen::Matrix3d tx;
-  const Eigen::Vector3d t = Tba.translation();
-  tx << 0, -t.z(), t.y(), t.z(), 0, -t.x(), -t.y(), t.x(), 0;
-  Eigen::Matrix3d K;
-  K << cam.fx, 0, cam.cx, 0, cam.fy, cam.cy, 0, 0, 1;
-  const Eigen::Matrix3d Kinv = K.inverse();
-  const Eigen::Matrix3d F = Kinv.transpose() * tx * Tba.linear() * Kinv;
-  const Eigen::Vector3d ca = kb.Tcw * ka.centre();
-  const double eu = cam.fx * ca.x() / ca.z() + cam.cx, ev = cam.fy * ca.y() / ca.z() + cam.cy;
+  const EpipolarGeometry g = epipolar_geometry(ka, kb, cam);  // the search's, not what is compared
+  const Eigen::Matrix3d& F = g.F;
+  const double eu = g.epipole_u, ev = g.epipole_v;
   std::vector<int> free_b;
   for (std::size_t j = 0; j < kb.mp.size(); ++j) {
     if (kb.mp[j] < 0) free_b.push_back(static_cast<int>(j));

@@ -283,13 +283,14 @@ Args parse(int argc, char** argv) {
       if (a.trajectories.empty() || !a.trajectories.back().format.empty()) fail("--format must follow its --trajectory");
       a.trajectories.back().format = v;
     } else if (f == "--images" || f == "--rgbd" || f == "--rgb") {
-      a.vo.push_back({f != "--images", f == "--rgb", val(), "", ""});
+      using L = ke::vo::VoLayout;
+      a.vo.push_back({f == "--images" ? L::kKittiImages : f == "--rgbd" ? L::kRgbd : L::kColourOnly, val(), "", ""});
       tracks_last = false;
     } else if (f == "--image-tracks") {
       a.images = val();
       tracks_last = true;
     } else if (f == "--calib" || f == "--poses") {  // for the --images or --image-tracks before it
-      const bool vo = !tracks_last && !a.vo.empty() && !a.vo.back().rgbd;
+      const bool vo = !tracks_last && !a.vo.empty() && a.vo.back().layout == ke::vo::VoLayout::kKittiImages;
       if (!tracks_last && !vo) fail(f + " must follow its --images or --image-tracks");
       (f == "--calib" ? (vo ? a.vo.back().calib : a.calib) : (vo ? a.vo.back().poses : a.poses)) = val();
     } else if (f == "--frames") {
@@ -417,8 +418,11 @@ Args parse(int argc, char** argv) {
              : "--use offline takes a share of a count: give --kept-fraction");
   }
   if (!a.images.empty() && (a.calib.empty() || a.poses.empty())) fail("--image-tracks needs --calib and --poses");
-  for (const auto& v : a.vo)
-    if (!v.rgbd && (v.calib.empty() || v.poses.empty())) fail("--images " + v.dir + " needs --calib and --poses");
+  for (const auto& v : a.vo) {
+    if (v.layout == ke::vo::VoLayout::kKittiImages && (v.calib.empty() || v.poses.empty())) {
+      fail("--images " + v.dir + " needs --calib and --poses");
+    }
+  }
   // runs.csv holds each input's path unquoted: refuse what it cannot hold before any run.
   std::vector<std::string> inputs = a.bal;
   for (const auto& t : a.trajectories) inputs.push_back(t.path);

@@ -199,22 +199,30 @@ int fuse(Map& map, int kf, const std::vector<int>& points, const PinholeCamera& 
   return changed;
 }
 
-std::vector<std::pair<int, int>> search_for_triangulation(const Map& map, int a, int b,
-                                                          const PinholeCamera& cam) {
-  const KeyFrame& ka = map.kfs[static_cast<std::size_t>(a)];
-  const KeyFrame& kb = map.kfs[static_cast<std::size_t>(b)];
-  // F_ba = K^-T [t]x R K^-1 with T_ba = T_b T_a^-1: x_b^T F x_a = 0.
-  const Eigen::Isometry3d Tba = kb.Tcw * ka.Tcw.inverse();
+EpipolarGeometry epipolar_geometry(const KeyFrame& a, const KeyFrame& b, const PinholeCamera& cam) {
+  // F_ba = K^-T [t]x R K^-1 with T_ba = T_b T_a^-1.
+  const Eigen::Isometry3d Tba = b.Tcw * a.Tcw.inverse();
   Eigen::Matrix3d tx;
   const Eigen::Vector3d t = Tba.translation();
   tx << 0, -t.z(), t.y(), t.z(), 0, -t.x(), -t.y(), t.x(), 0;
   Eigen::Matrix3d K;
   K << cam.fx, 0, cam.cx, 0, cam.fy, cam.cy, 0, 0, 1;
   const Eigen::Matrix3d Kinv = K.inverse();
-  const Eigen::Matrix3d F = Kinv.transpose() * tx * Tba.linear() * Kinv;
-  // The epipole of a in b: keypoints of b too close to it carry no depth.
-  const Eigen::Vector3d ca = kb.Tcw * ka.centre();
-  const double eu = cam.fx * ca.x() / ca.z() + cam.cx, ev = cam.fy * ca.y() / ca.z() + cam.cy;
+  EpipolarGeometry g;
+  g.F = Kinv.transpose() * tx * Tba.linear() * Kinv;
+  const Eigen::Vector3d ca = b.Tcw * a.centre();
+  g.epipole_u = cam.fx * ca.x() / ca.z() + cam.cx;
+  g.epipole_v = cam.fy * ca.y() / ca.z() + cam.cy;
+  return g;
+}
+
+std::vector<std::pair<int, int>> search_for_triangulation(const Map& map, int a, int b,
+                                                          const PinholeCamera& cam) {
+  const KeyFrame& ka = map.kfs[static_cast<std::size_t>(a)];
+  const KeyFrame& kb = map.kfs[static_cast<std::size_t>(b)];
+  const EpipolarGeometry g = epipolar_geometry(ka, kb, cam);
+  const Eigen::Matrix3d& F = g.F;
+  const double eu = g.epipole_u, ev = g.epipole_v;
 
   // b's unmatched keypoints by level, flat (the loop below runs |a| x |b|
   // times per neighbour), sorted by x and by y: a line's band is then a range

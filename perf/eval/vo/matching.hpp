@@ -39,6 +39,14 @@ int search_local_points(TrackedFrame& cur, Map& map, const std::vector<int>& poi
 // observation. Returns fused + added.
 int fuse(Map& map, int kf, const std::vector<int>& points, const PinholeCamera& cam);
 
+// The epipolar geometry of keyframe a seen from b: F with x_b^T F x_a = 0,
+// and a's centre projected into b (b's keypoints near it carry no depth).
+struct EpipolarGeometry {
+  Eigen::Matrix3d F;
+  double epipole_u = 0, epipole_v = 0;
+};
+EpipolarGeometry epipolar_geometry(const KeyFrame& a, const KeyFrame& b, const PinholeCamera& cam);
+
 // Unmatched keypoint pairs of keyframes a and b that satisfy the epipolar
 // constraint (chi2 3.84 at the level of b's keypoint), Hamming <= 50, ratio 0.7,
 // not near the epipole (monocular).

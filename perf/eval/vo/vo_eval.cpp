@@ -57,9 +57,9 @@ void log_run(const RealSequence& s, const RunRecord& r, const RealRunResult& x) 
 }
 
 bool load_sequence(const VoInput& in, const FrameSelection& frames, RealSequence* seq, std::string* error) {
-  if (!in.rgbd) return load_kitti_sequence(in.dir, in.calib, in.poses, frames, seq, error);
+  if (in.layout == VoLayout::kKittiImages) return load_kitti_sequence(in.dir, in.calib, in.poses, frames, seq, error);
   if (!load_rgbd_sequence(in.dir, frames, seq, error)) return false;
-  if (in.colour_only) drop_depth(seq);
+  if (in.layout == VoLayout::kColourOnly) drop_depth(seq);
   return true;
 }
 

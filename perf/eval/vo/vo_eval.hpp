@@ -17,10 +17,16 @@
 
 namespace keepless::eval::vo {
 
+// What a sequence folder holds and how the VO runs on it.
+enum class VoLayout {
+  kKittiImages,  // --images: KITTI greyscale frames, monocular (needs calib and poses)
+  kRgbd,         // --rgbd: a 7-Scenes sequence, colour and depth
+  kColourOnly,   // --rgb: a 7-Scenes sequence's colour frames alone, monocular
+};
+
 struct VoInput {
-  bool rgbd = false;
-  bool colour_only = false;       // with rgbd: the colour frames alone, run monocular (--rgb)
-  std::string dir, calib, poses;  // calib, poses: KITTI layout only
+  VoLayout layout = VoLayout::kKittiImages;
+  std::string dir, calib, poses;  // calib, poses: kKittiImages only
 };
 
 struct VoEvalOptions {
