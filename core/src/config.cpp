@@ -6,7 +6,14 @@
 
 namespace keepless::core {
 
-const char* to_string(Scope scope) { return scope == Scope::kNewest ? "newest" : "window"; }
+const char* to_string(Scope scope) {
+  switch (scope) {
+    case Scope::kNewest: return "newest";
+    case Scope::kAuto: return "auto";
+    case Scope::kWindow: break;
+  }
+  return "window";
+}
 
 const char* to_string(CostModel model) {
   switch (model) {
@@ -29,7 +36,7 @@ const char* to_string(BudgetKind kind) {
 }
 
 bool parse_scope(const char* text, Scope* out) {
-  for (Scope s : {Scope::kWindow, Scope::kNewest}) {
+  for (Scope s : {Scope::kWindow, Scope::kNewest, Scope::kAuto}) {
     if (std::strcmp(text, to_string(s)) == 0) {
       *out = s;
       return true;

@@ -64,6 +64,8 @@ struct Sparsifier::Impl {
   KeyframeId last_decided = 0;
   bool has_decided = false;
   bool missed = false;
+  // Scope::kAuto's smoothed counts: evaluated points, and those that came back.
+  std::uint64_t evaluated_sum = 0, returned_sum = 0;
   // What update() expects its stages to take, on the budget's clock, to plan
   // against a deadline. A solve counts only when it finished: a stopped one
   // says nothing of what a whole one needs.
@@ -119,7 +121,7 @@ struct Sparsifier::Impl {
   // keyframe's turn; a deferred, stopped or refused one leaves it (and the
   // ones before it not decided yet) to the next call that decides.
   void end_turn(const Window& window, Status r) {
-    if (params.scope != Scope::kNewest) return;
+    if (params.scope == Scope::kWindow) return;
     if (r != Status::kOk) {
       missed = true;
       return;
@@ -157,9 +159,9 @@ struct Sparsifier::Impl {
     }
     if (p.budget.kind == BudgetKind::kFraction) fraction = std::make_unique<FractionBudget>(c.max_points);
     // The policies' scratch only where they are on (Params are fixed).
-    if (p.scope == Scope::kNewest) in_scope.resize(c.max_points);
+    if (p.scope != Scope::kWindow) in_scope.resize(c.max_points);
     if (budgeted && p.tracked_first) tracked_now.resize(c.max_points);
-    if (p.coverage_floor > 0 || p.maturity_keyframes > 0) {
+    if (p.coverage_floor > 0 || p.maturity_keyframes > 0 || p.scope == Scope::kAuto) {
       slots_at.resize(std::size_t{c.max_points} + 1);
       slots.resize(c.max_observations);
     }
@@ -404,9 +406,12 @@ struct Sparsifier::Impl {
   template <typename Net>
   void protect_and_scope(const Window& window, const Net& net, std::uint32_t k) {
     const std::uint32_t maturity = params.maturity_keyframes;
-    if (maturity > 0) net.point_slots(slots_at.data(), slots.data());
+    const bool automatic = params.scope == Scope::kAuto;
+    if (maturity > 0 || automatic) net.point_slots(slots_at.data(), slots.data());
+    if (automatic) measure_returning();
     protect_tracking(window, k);
-    if (params.scope != Scope::kNewest || k <= maturity) return;
+    const bool newest = params.scope == Scope::kNewest || summary.decided_newest;
+    if (!newest || k <= maturity) return;
     const std::uint32_t decided = k - 1 - maturity;
     std::uint32_t from = decided;
     if (missed) {
@@ -414,6 +419,30 @@ struct Sparsifier::Impl {
       from = last < 0 ? 0 : std::min(static_cast<std::uint32_t>(last) + 1, decided);
     }
     restrict_to_slots(window, from, decided);
+  }
+
+  // Scope::kAuto: adds this window's evaluated points, and those a keyframe
+  // saw again after kReturnGap or more window keyframes without them, to the
+  // decaying sums, and decides as kNewest while the smoothed share is at
+  // least kReturningForNewestPermille. Sorts each point's slots in place
+  // (the other passes read them in any order).
+  void measure_returning() {
+    std::uint64_t evaluated = 0, returned = 0;
+    for (std::uint32_t i = 0; i < count; ++i) {
+      std::uint32_t* first = slots.data() + slots_at[i];
+      std::uint32_t* last = slots.data() + slots_at[i + 1];
+      if (last - first < 2) continue;
+      std::sort(first, last);
+      ++evaluated;
+      const auto came_back = [](std::uint32_t a, std::uint32_t b) { return b - a > kReturnGap; };
+      returned += std::adjacent_find(first, last, came_back) != last ? 1 : 0;
+    }
+    evaluated_sum = evaluated_sum - (evaluated_sum >> kReturnDecayShift) + evaluated;
+    returned_sum = returned_sum - (returned_sum >> kReturnDecayShift) + returned;
+    summary.returning_permille =
+        evaluated_sum == 0 ? 0 : static_cast<std::uint32_t>(returned_sum * 1000 / evaluated_sum);
+    summary.decided_newest =
+        evaluated_sum > 0 && returned_sum * 1000 >= std::uint64_t{kReturningForNewestPermille} * evaluated_sum;
   }
 
   // Turns a decided point into a skip, as the policies report skips (with a
@@ -566,7 +595,9 @@ Status Sparsifier::validate(const Params& p) {
   if (!std::isfinite(p.theta) || p.theta < 0.0 || p.theta > 1.0) return Status::kInvalidArgument;
   if (p.box_width < 0 || p.box_height < 0) return Status::kInvalidArgument;
   if (p.spatial_weight < 1 || p.spatial_weight > kMaxSpatialWeight) return Status::kInvalidArgument;
-  if (p.scope != Scope::kWindow && p.scope != Scope::kNewest) return Status::kInvalidArgument;
+  if (p.scope != Scope::kWindow && p.scope != Scope::kNewest && p.scope != Scope::kAuto) {
+    return Status::kInvalidArgument;
+  }
   // Bits beyond the defined terms would be ignored silently.
   if ((p.cost_terms & ~(kConnectivityCost | kSpatialCost | kBaselineCost)) != 0) return Status::kInvalidArgument;
   if ((p.track_terms & ~(kTrackLength | kTrackAge | kTrackError | kTrackAngle)) != 0) return Status::kInvalidArgument;
@@ -615,7 +646,7 @@ Status Sparsifier::update(const Window& window, const solver::Budget& budget) {
 }
 
 void Sparsifier::note_undecided() {
-  if (impl_->params.scope == Scope::kNewest) impl_->missed = true;
+  if (impl_->params.scope != Scope::kWindow) impl_->missed = true;
 }
 
 Status Sparsifier::Impl::run(const Window& window, const solver::Budget& budget) {
@@ -768,6 +799,7 @@ const std::uint32_t* Sparsifier::keep_thresholds() const {
 void Sparsifier::forget_history() {
   if (impl_->fraction) impl_->fraction->clear();
   impl_->has_decided = impl_->missed = false;
+  impl_->evaluated_sum = impl_->returned_sum = 0;
 }
 const Params& Sparsifier::params() const { return impl_->params; }
 const PaperNetwork& Sparsifier::network() const {

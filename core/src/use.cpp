@@ -21,7 +21,10 @@ void apply_use(Use use, Params* params) {
       params->scope = Scope::kNewest;
       params->maturity_keyframes = 2;
       break;
-    case Use::kMonocularDeferred: params->defer_keyframes = 2; break;
+    case Use::kMonocularDeferred:
+      params->defer_keyframes = 2;
+      params->scope = Scope::kAuto;
+      break;
     case Use::kOffline: params->budget.track_share = 1.0; break;
     case Use::kPaper: break;
   }

@@ -69,7 +69,7 @@ const std::vector<keepless::cli::Flag> kFlags = {
                       "(they refine it): paper (the default), monocular (--scope newest\n"
                       "--maturity 2, and --track-share 0.5 where the budget keeps >= 0.3 of\n"
                       "the points), rgbd (--scope newest --maturity 2), monocular-deferred\n"
-                      "(the paper's here), offline (--mode whole --track-share 1\n"
+                      "(--scope auto here), offline (--mode whole --track-share 1\n"
                       "--floor-over-longest 1.1; needs --keep-points or --keep-fraction)"},
     {"--mode", "replay|whole", "replay: the onboard node's sliding window; whole: one window\n"
                                "(default: replay for maps, whole for --window)"},
@@ -98,7 +98,7 @@ const std::vector<keepless::cli::Flag> kFlags = {
                            "network's order (default 0), at every budget"},
     {"--theta", "X", "keep iff flow > X * n(n-1)/2, in [0, 1] (default 0.5)"},
     {"--box", "WxH", "spatial-diversity box in pixels (default 64x48)"},
-    {"--scope", "window|newest", "decide every point, or only the newest keyframe's (default window)"},
+    {"--scope", "S", "window: decide every point; newest: only the newest keyframe's; auto: the\nnewest keyframe's while a third of the window's points come back (default window)"},
     {"--floor", "L", "every keyframe keeps >= L of its evaluated points (default 0: off)"},
     {"--cost", "paper|authors|information|track", "point -> pair costs (default paper)"},
     {"--track-terms", "LIST", "what --cost track sums: length,age,error,angle (default all; COLMAP\n"
@@ -230,7 +230,7 @@ int parse_args(int argc, char** argv, Options* opt, bool* help, bool* version) {
       opt->params.box_width = w;
       opt->params.box_height = h;
     } else if (flag == "--scope") {
-      if (!core::parse_scope(value, &opt->params.scope)) return usage_error(bad + " (window or newest)");
+      if (!core::parse_scope(value, &opt->params.scope)) return usage_error(bad + " (window, newest or auto)");
     } else if (flag == "--floor") {
       std::uint64_t floor = 0;
       if (!core::parse_uint64(value, &floor) || floor > std::numeric_limits<std::uint32_t>::max()) {

@@ -61,7 +61,7 @@ std::string node_usage() {
          "                            (they set --scope, --maturity, --defer and --track-share): paper (the\n"
          "                            default), monocular (--scope newest --maturity 2, and --track-share 0.5\n"
          "                            where the budget keeps >= 0.3 of the points), monocular-deferred\n"
-         "                            (--defer 2), rgbd (--scope newest --maturity 2), offline\n"
+         "                            (--defer 2 --scope auto), rgbd (--scope newest --maturity 2), offline\n"
          "                            (--track-share 1)\n"
          "  --max-points N            distinct points the window holds (default 6600; 0: K*N)\n"
          "  --max-window-observations N  observations the window holds (default 19100; 0: K*N)\n"
@@ -102,7 +102,9 @@ std::string node_usage() {
          "                            the network's order (default 0), at every budget\n"
          "  --theta X                 keep iff flow > X * n(n-1)/2 (default 0.5)\n"
          "  --box WxH                 spatial-diversity box in pixels (default 64x48)\n"
-         "  --scope window|newest     decide every window point, or only the newest keyframe's (default window)\n"
+         "  --scope window|newest|auto\n"
+         "                            decide every window point, only the newest keyframe's, or the newest\n"
+         "                            keyframe's while a third of the window's points come back (default window)\n"
          "  --floor L                 every keyframe keeps >= L of its evaluated points (default 0: off)\n"
          "  --cost paper|authors|information|track\n"
          "                            point -> pair costs (default paper; docs/design/policies.md)\n"
@@ -354,7 +356,7 @@ ParseResult parse_node_arguments(int argc, const char* const* argv, NodeConfig& 
         return bad("expected WxH, e.g. 64x48");
       }
     } else if (flag == "--scope") {
-      if (!core::parse_scope(value.c_str(), &config.params.scope)) return bad("expected window or newest");
+      if (!core::parse_scope(value.c_str(), &config.params.scope)) return bad("expected window, newest or auto");
     } else if (flag == "--floor") {
       if (!parse_u64(value, 0, std::numeric_limits<std::uint32_t>::max(), n)) return bad("expected an integer >= 0");
       config.params.coverage_floor = static_cast<std::uint32_t>(n);

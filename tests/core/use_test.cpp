@@ -59,7 +59,7 @@ TEST(Use, SetsThePolicyAndLeavesTheRest) {
       EXPECT_EQ(p.budget.kind, BudgetKind::kFraction);
       EXPECT_EQ(p.budget.fraction, 0.2);
       const bool guarded = u == Use::kMonocular || u == Use::kRgbd;
-      EXPECT_EQ(p.scope, guarded ? Scope::kNewest : Scope::kWindow);
+      EXPECT_EQ(p.scope, guarded ? Scope::kNewest : u == Use::kMonocularDeferred ? Scope::kAuto : Scope::kWindow);
       EXPECT_EQ(p.maturity_keyframes, guarded ? 2u : 0u);
       EXPECT_EQ(p.defer_keyframes, u == Use::kMonocularDeferred ? 2u : 0u);
       EXPECT_EQ(p.budget.track_share, u == Use::kOffline ? 1.0 : u == Use::kMonocular ? 0.5 : 0.0);

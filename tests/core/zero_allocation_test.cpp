@@ -214,7 +214,7 @@ TEST(ZeroAllocation, MemoryBytesCountsWhatConstructionAllocates) {
                                 {BudgetKind::kObservations, 150, 0.0}, {BudgetKind::kFraction, 0, 0.3, 0.5}};
   std::uint32_t checked = 0;
   for (const KeepBudget& budget : budgets) {
-    for (Scope scope : {Scope::kWindow, Scope::kNewest}) {
+    for (Scope scope : {Scope::kWindow, Scope::kNewest, Scope::kAuto}) {
       for (SolveMode mode : {SolveMode::kFromScratch, SolveMode::kIncremental}) {
         for (Start start : {Start::kClosedForm, Start::kZeroFlow}) {
           Params p;
@@ -234,16 +234,17 @@ TEST(ZeroAllocation, MemoryBytesCountsWhatConstructionAllocates) {
       }
     }
   }
-  EXPECT_EQ(checked, 40u);
+  EXPECT_EQ(checked, 60u);
 }
 
-// Tracking-safe culling on: a maturity guard with each scope and a floor,
+// Tracking-safe culling on: a maturity guard with each scope (auto's
+// measurement too) and a floor,
 // and tracked flags on the keyframes; incremental, and from scratch with a
 // fraction that keeps the tracked first.
 TEST(ZeroAllocation, TrackingGuardAllocatesNothing) {
   const Capacities caps{12, 2048, 8192, 32768, 2048};
   std::vector<std::unique_ptr<Sparsifier>> sparsifiers;
-  for (Scope scope : {Scope::kWindow, Scope::kNewest}) {
+  for (Scope scope : {Scope::kWindow, Scope::kNewest, Scope::kAuto}) {
     Params p;
     p.pair_capacity = 2;
     p.scope = scope;

@@ -421,7 +421,7 @@ TEST(RealVoQuick, UsesRunTheFlagsTheyName) {
   EXPECT_NE(ours("--use monocular --track-share 0", "0.3"), share);
   EXPECT_EQ(ours("--use rgbd --track-share 0", "0.3"), ours("--use rgbd", "0.3"));
   const std::string deferred = ours("--use monocular-deferred");
-  EXPECT_EQ(ours("--defer 2 --defer-refine --decide window --keyframe-culling count-culled"), deferred);
+  EXPECT_EQ(ours("--defer 2 --defer-refine --decide window --scope auto --keyframe-culling count-culled"), deferred);
   EXPECT_NE(deferred, paper);
   EXPECT_NE(deferred, monocular);
 }

@@ -264,6 +264,9 @@ TEST(NodeConfig, ParsesThePolicyFlags) {
   EXPECT_EQ(c.params.cost_model, keepless::core::CostModel::kInformation);
   EXPECT_EQ(c.params.image_width, 1241);
   EXPECT_EQ(c.params.image_height, 376);
+  NodeConfig automatic;
+  ASSERT_EQ(parse({"--scope", "auto"}, automatic, error), ParseResult::kOk) << error;
+  EXPECT_EQ(automatic.params.scope, keepless::core::Scope::kAuto);
   for (const std::vector<std::string>& bad :
        {std::vector<std::string>{"--scope", "all"}, {"--floor", "-1"}, {"--floor", "4294967296"},
         {"--cost", "Paper"}, {"--image", "0x480"}, {"--image", "640"}, {"--max-unmapped", "-1"},
@@ -395,7 +398,7 @@ TEST(NodeConfig, ParsesTheUses) {
   NodeConfig deferred;
   ASSERT_EQ(parse({"--use", "monocular-deferred"}, deferred, error), ParseResult::kOk) << error;
   EXPECT_EQ(deferred.params.defer_keyframes, 2u);
-  EXPECT_EQ(deferred.params.scope, Scope::kWindow);
+  EXPECT_EQ(deferred.params.scope, Scope::kAuto);
   NodeConfig rgbd;
   ASSERT_EQ(parse({"--use", "rgbd"}, rgbd, error), ParseResult::kOk) << error;
   EXPECT_EQ(rgbd.params.scope, Scope::kNewest);  // the monocular use's settings

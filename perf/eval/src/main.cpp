@@ -90,9 +90,11 @@ const std::vector<cli::Flag> kFlags = {
                       "the other flags, which refine it: monocular (--scope newest --maturity 2\n"
                       "--keyframe-culling count-culled, and --track-share 0.5 from a kept\n"
                       "fraction of 0.3), monocular-deferred (--defer 2 --defer-refine --decide\n"
-                      "window --keyframe-culling count-culled), rgbd (as monocular without\n"
-                      "the share), offline (--track-share 1), paper (the defaults)"},
-    {"--scope", "window|newest", "keepless's decision scope (core::Params scope)"},
+                      "window --scope auto --keyframe-culling count-culled), rgbd (as monocular\n"
+                      "without the share), offline (--track-share 1), paper (the defaults)"},
+    {"--scope", "S", "keepless's decision scope (core::Params scope): window, newest or auto;\n"
+                     "with --decide window, auto decides the new keyframe's points while a\n"
+                     "third of the window's come back, else the window's"},
     {"--floor", "L", "keepless's coverage floor (core::Params coverage_floor)"},
     {"--theta", "T", "keepless's keep threshold theta_f in [0, 1] (core::Params theta; default 0.5)"},
     {"--track-share", "S", "with --kept-fraction: keepless takes the share S in [0, 1] of its count by\n"
@@ -357,7 +359,7 @@ Args parse(int argc, char** argv) {
     else if (f == "--ablation-all") a.ablation_all = true;
     else if (f == "--scope") {
       const std::string v = val();
-      if (!keepless::core::parse_scope(v.c_str(), &a.policy.scope)) fail("--scope: expected window or newest, got '" + v + "'");
+      if (!keepless::core::parse_scope(v.c_str(), &a.policy.scope)) fail("--scope: expected window, newest or auto, got '" + v + "'");
     } else if (f == "--floor") a.policy.coverage_floor = static_cast<std::uint32_t>(parse_int(f, val(), 0, 100000));
     else if (f == "--theta") a.policy.theta = parse_double(f, val(), 0, 1);
     else if (f == "--track-share") {
@@ -649,7 +651,9 @@ int main(int argc, char** argv) {
   // The real VO's own scope (vo_eval.cpp): a kept fraction decides the new
   // keyframe's points unless --decide window; its local BA is its own.
   const bool fraction_ops = std::any_of(a.ops.begin(), a.ops.end(), [](const auto& op) { return std::isfinite(op.fraction); });
-  if (!a.vo.empty() && a.decide_window) summary.settings += " (the real VO: scope window, deciding its window)";
+  if (!a.vo.empty() && a.decide_window)
+    summary.settings += a.policy.scope == keepless::core::Scope::kAuto ? " (the real VO: deciding its window, scope auto)"
+                                                                       : " (the real VO: scope window, deciding its window)";
   else if (!a.vo.empty() && fraction_ops && a.policy.scope != keepless::core::Scope::kNewest)
     summary.settings += " (the real VO: scope newest under a kept fraction)";
   if (a.policy.theta != keepless::core::Params{}.theta) summary.settings += ", theta " + std::to_string(a.policy.theta);

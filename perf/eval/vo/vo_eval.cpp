@@ -118,15 +118,17 @@ bool evaluate_real_vo(const VoInput& in, const VoEvalOptions& o, std::vector<Com
       if (p == 0) log_run(seq, c.original.back(), original);
       // A kept fraction is a keep budget on the points the VO decides (the
       // new keyframe's, or with decide_window the window's): exact per
-      // window, no M. Deciding the window is keepless's scope window.
+      // window, no M. Deciding the window is keepless's scope window, or
+      // auto's choice between the window and the new keyframe.
+      const core::Scope window_scope = o.policy.scope == core::Scope::kAuto ? core::Scope::kAuto : core::Scope::kWindow;
       if (std::isfinite(c.target_fraction)) {
         vo.params.budget = o.policy.budget;  // its track share
         vo.params.budget.kind = core::BudgetKind::kFraction;
         vo.params.budget.fraction = c.target_fraction;
-        vo.params.scope = o.decide_window ? core::Scope::kWindow : core::Scope::kNewest;
+        vo.params.scope = o.decide_window ? window_scope : core::Scope::kNewest;
       } else {
         vo.params.budget = core::KeepBudget{};
-        vo.params.scope = o.decide_window ? core::Scope::kWindow : o.policy.scope;
+        vo.params.scope = o.decide_window ? window_scope : o.policy.scope;
         vo.params.pair_capacity = c.M;
       }
       const std::pair<Selector, std::vector<RunRecord>*> runs[] = {

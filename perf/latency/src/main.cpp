@@ -107,7 +107,7 @@ const std::vector<cli::Flag> kFlags = {
                       "flags, which refine it: paper, monocular, monocular-deferred, rgbd,\n"
                       "offline. The replay measures its decisions; the deferral of\n"
                       "monocular-deferred is the node's, measured with --lcm"},
-    {"--scope", "window|newest", "decision scope (keepless_node's flag; default window)"},
+    {"--scope", "S", "decision scope, window, newest or auto (keepless_node's flag; default window)"},
     {"--floor", "L", "coverage floor (keepless_node's flag; default 0)"},
     {"--cost", "paper|authors|information|track", "cost model (keepless_node's flag; default paper)"},
     {"--unmapped", "N", "unmapped keypoints per keyframe (default: half the workload's\n"
@@ -171,7 +171,7 @@ int parse(int argc, char** argv, Options* o) {
     } else if (a == "--profile") {
       o->profile = v;
     } else if (a == "--scope") {
-      if (!core::parse_scope(v, &o->params.scope)) return bad("window or newest");
+      if (!core::parse_scope(v, &o->params.scope)) return bad("window, newest or auto");
     } else if (a == "--cost") {
       if (!core::parse_cost_model(v, &o->params.cost_model)) return bad("paper, authors, information or track");
     } else if (a == "--keep-fraction") {

@@ -46,8 +46,22 @@ enum CostTerm : std::uint8_t { kConnectivityCost = 1, kSpatialCost = 2, kBaselin
 // pairs' M with every window point), so the scope is a pass over the exact
 // optimum and run() and update() share it. A keyframe whose turn was missed
 // (its call deferred or refused, or never made) is decided by the next call
-// that decides (Sparsifier, Summary::caught_up).
-enum class Scope : std::uint8_t { kWindow, kNewest };
+// that decides (Sparsifier, Summary::caught_up). kAuto (beyond the paper):
+// kNewest while the window's points come back to the camera, kWindow
+// otherwise. Each call counts its evaluated points and those a window
+// keyframe saw again after kReturnGap or more window keyframes without them;
+// both counts go into sums that lose 1/2^kReturnDecayShift per call
+// (integers), and the call decides as kNewest while the sums' share is at
+// least kReturningForNewestPermille (Summary::returning_permille,
+// Summary::decided_newest). Why: deciding the window re-decides about half
+// of what it kept, and deferred culling deletes those points once they go
+// unmatched; where they come back to the camera (a room) that costs
+// accuracy, where few do (a road) re-deciding is the better
+// (docs/evaluation/deferred-culling.md).
+enum class Scope : std::uint8_t { kWindow, kNewest, kAuto };
+inline constexpr std::uint32_t kReturnGap = 3;
+inline constexpr std::uint32_t kReturnDecayShift = 4;
+inline constexpr std::uint32_t kReturningForNewestPermille = 333;
 
 // How the point -> pair costs (and the pair -> sink costs) are computed.
 //   kPaper: section III-B as written (README, "The network").
@@ -200,7 +214,7 @@ struct Params {
   std::uint8_t track_terms = kTrackLength | kTrackAge | kTrackError | kTrackAngle;
 };
 
-// The options' names as command lines spell them: "window", "newest";
+// The options' names as command lines spell them: "window", "newest", "auto";
 // "paper", "authors", "information", "track". parse_* return false (and leave *out
 // alone) for any other text.
 const char* to_string(Scope scope);

@@ -38,6 +38,11 @@ struct Summary {
   // turns were missed (Sparsifier::note_undecided, a call that did not
   // return kOk); 0 while every call decides.
   std::uint32_t caught_up = 0;
+  // Scope::kAuto: the smoothed share of evaluated points that came back to
+  // the window's keyframes, per mille, and whether this call decided as
+  // Scope::kNewest (else as kWindow). 0 and false for the other scopes.
+  std::uint32_t returning_permille = 0;
+  bool decided_newest = false;
   // Params::coverage_floor: keyframes below the floor when their turn came
   // (the floor bound), the culled points promoted back to keep, and the
   // keyframes still below it with every evaluated point of theirs kept.

@@ -17,7 +17,7 @@
 // than Params::maturity_keyframes (Summary::guarded) and those the newest
 // keyframe flags tracked (Keyframe::tracked, Summary::tracked); then
 // Params::scope = kNewest (deciding the keyframe maturity_keyframes before
-// the newest) turns every evaluated point the
+// the newest; kAuto when it decides as kNewest) turns every evaluated point the
 // decided keyframe does not observe into a skip (flow and capacity reported
 // as 0, Summary::out_of_scope); after a missed turn (a call that did not
 // return kOk, or note_undecided()) the next call that decides also decides
