@@ -71,9 +71,11 @@ bool same_decisions(const Sparsifier& a, const Sparsifier& b) {
 
 // A stream with landmarks for keyframes [0, stop), then without: the auto
 // scope follows the reference's smoothed share, and decides as the fixed
-// scope it chose, by run() and by update().
-void follow_stream(std::uint32_t landmarks, std::uint32_t stop, std::uint32_t keyframes,
-                   std::vector<bool>* newest_at, std::uint32_t period = 4) {
+// scope it chose, by run() and by update(). Returns, per keyframe, whether
+// it decided as kNewest.
+std::vector<bool> follow_stream(std::uint32_t landmarks, std::uint32_t stop, std::uint32_t keyframes,
+                                std::uint32_t period = 4) {
+  std::vector<bool> newest_at;
   Params p;
   p.pair_capacity = 4;
   Params fixed_window = p, fixed_newest = p;
@@ -85,10 +87,10 @@ void follow_stream(std::uint32_t landmarks, std::uint32_t stop, std::uint32_t ke
   std::uint64_t evaluated_sum = 0, returned_sum = 0;
   for (std::uint32_t f = 0; f < keyframes; ++f) {
     add_keyframe(w, f, f < stop ? landmarks : 0, period);
-    ASSERT_EQ(by_run.run(w), Status::kOk);
-    ASSERT_EQ(by_update.update(w), Status::kOk);
-    ASSERT_EQ(window_scope.run(w), Status::kOk);
-    ASSERT_EQ(newest_scope.run(w), Status::kOk);
+    EXPECT_EQ(by_run.run(w), Status::kOk);
+    EXPECT_EQ(by_update.update(w), Status::kOk);
+    EXPECT_EQ(window_scope.run(w), Status::kOk);
+    EXPECT_EQ(newest_scope.run(w), Status::kOk);
     const auto [evaluated, returned] = returning(w);
     evaluated_sum = evaluated_sum - evaluated_sum / 16 + evaluated;
     returned_sum = returned_sum - returned_sum / 16 + returned;
@@ -99,21 +101,24 @@ void follow_stream(std::uint32_t landmarks, std::uint32_t stop, std::uint32_t ke
     EXPECT_TRUE(same_decisions(by_run, by_update)) << f;
     EXPECT_EQ(by_update.summary().returning_permille, s.returning_permille) << f;
     EXPECT_TRUE(same_decisions(by_run, newest ? newest_scope : window_scope)) << f;
-    newest_at->push_back(s.decided_newest);
+    newest_at.push_back(s.decided_newest);
   }
+  return newest_at;
 }
 
-TEST(AutoScope, ForwardMotionDecidesTheWindow) {
-  std::vector<bool> newest;
-  follow_stream(0, 0, 30, &newest);
-  EXPECT_EQ(std::count(newest.begin(), newest.end(), true), 0);
+// Forward motion; a tenth of the points coming back; landmarks back after
+// only two keyframes without them (not returning points): the window throughout.
+TEST(AutoScope, TheWindowWhereFewPointsComeBack) {
+  for (const auto& [landmarks, period] : {std::pair{0u, 4u}, {10u, 4u}, {100u, 3u}}) {
+    const std::vector<bool> newest = follow_stream(landmarks, 60, 60, period);
+    EXPECT_EQ(std::count(newest.begin(), newest.end(), true), 0) << landmarks << " landmarks every " << period;
+  }
 }
 
 // 100 landmarks against about 140 chained points: the share passes a third
 // once they have come back, and falls below it some keyframes after they stop.
 TEST(AutoScope, ReturningPointsDecideTheNewestKeyframeWhileTheyReturn) {
-  std::vector<bool> newest;
-  follow_stream(100, 20, 60, &newest);
+  const std::vector<bool> newest = follow_stream(100, 20, 60);
   EXPECT_FALSE(newest.front());
   EXPECT_TRUE(newest[19]);
   EXPECT_FALSE(newest.back());
@@ -121,20 +126,6 @@ TEST(AutoScope, ReturningPointsDecideTheNewestKeyframeWhileTheyReturn) {
   const auto flips = std::inner_product(newest.begin() + 1, newest.end(), newest.begin(), 0, std::plus<>(),
                                         std::not_equal_to<>());
   EXPECT_EQ(flips, 2);
-}
-
-// Too few landmarks (a tenth of the points): the window throughout.
-TEST(AutoScope, AFewReturningPointsLeaveTheWindow) {
-  std::vector<bool> newest;
-  follow_stream(10, 60, 60, &newest);
-  EXPECT_EQ(std::count(newest.begin(), newest.end(), true), 0);
-}
-
-// Landmarks back after two keyframes without them are not returning points.
-TEST(AutoScope, PointsBackAfterTwoKeyframesDoNotCount) {
-  std::vector<bool> newest;
-  follow_stream(100, 60, 60, &newest, 3);
-  EXPECT_EQ(std::count(newest.begin(), newest.end(), true), 0);
 }
 
 // A new map (forget_history) measures from nothing again; the other scopes
