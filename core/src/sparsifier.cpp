@@ -427,6 +427,7 @@ struct Sparsifier::Impl {
   // least kReturningForNewestPermille. Sorts each point's slots in place
   // (the other passes read them in any order).
   void measure_returning() {
+    const auto came_back = [](std::uint32_t a, std::uint32_t b) { return b - a > kReturnGap; };
     std::uint64_t evaluated = 0, returned = 0;
     for (std::uint32_t i = 0; i < count; ++i) {
       std::uint32_t* first = slots.data() + slots_at[i];
@@ -434,15 +435,14 @@ struct Sparsifier::Impl {
       if (last - first < 2) continue;
       std::sort(first, last);
       ++evaluated;
-      const auto came_back = [](std::uint32_t a, std::uint32_t b) { return b - a > kReturnGap; };
       returned += std::adjacent_find(first, last, came_back) != last ? 1 : 0;
     }
     evaluated_sum = evaluated_sum - (evaluated_sum >> kReturnDecayShift) + evaluated;
     returned_sum = returned_sum - (returned_sum >> kReturnDecayShift) + returned;
     summary.returning_permille =
         evaluated_sum == 0 ? 0 : static_cast<std::uint32_t>(returned_sum * 1000 / evaluated_sum);
-    summary.decided_newest =
-        evaluated_sum > 0 && returned_sum * 1000 >= std::uint64_t{kReturningForNewestPermille} * evaluated_sum;
+    // The per mille is floored, so this is share >= kReturningForNewestPermille / 1000 exactly.
+    summary.decided_newest = summary.returning_permille >= kReturningForNewestPermille;
   }
 
   // Turns a decided point into a skip, as the policies report skips (with a

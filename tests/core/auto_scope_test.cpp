@@ -12,6 +12,7 @@
 #include <numeric>
 #include <vector>
 
+#include "decision_checks.hpp"
 #include "keepless/core/sparsifier.hpp"
 
 namespace keepless::core {
@@ -60,15 +61,6 @@ std::pair<std::uint64_t, std::uint64_t> returning(const Window& w) {
   return {evaluated, returned};
 }
 
-bool same_decisions(const Sparsifier& a, const Sparsifier& b) {
-  if (a.decision_count() != b.decision_count()) return false;
-  for (std::uint32_t i = 0; i < a.decision_count(); ++i) {
-    const PointDecision &x = a.decisions()[i], &y = b.decisions()[i];
-    if (x.point != y.point || x.verdict != y.verdict || x.flow != y.flow) return false;
-  }
-  return a.summary().kept == b.summary().kept && a.summary().out_of_scope == b.summary().out_of_scope;
-}
-
 // A stream with landmarks for keyframes [0, stop), then without: the auto
 // scope follows the reference's smoothed share, and decides as the fixed
 // scope it chose, by run() and by update(). Returns, per keyframe, whether
@@ -94,13 +86,13 @@ std::vector<bool> follow_stream(std::uint32_t landmarks, std::uint32_t stop, std
     const auto [evaluated, returned] = returning(w);
     evaluated_sum = evaluated_sum - evaluated_sum / 16 + evaluated;
     returned_sum = returned_sum - returned_sum / 16 + returned;
-    const bool newest = evaluated_sum > 0 && 3 * returned_sum >= evaluated_sum;
+    const bool newest = evaluated_sum > 0 && returned_sum * 1000 >= kReturningForNewestPermille * evaluated_sum;
     const Summary& s = by_run.summary();
     EXPECT_EQ(s.returning_permille, evaluated_sum == 0 ? 0 : returned_sum * 1000 / evaluated_sum) << f;
     EXPECT_EQ(s.decided_newest, newest) << f;
-    EXPECT_TRUE(same_decisions(by_run, by_update)) << f;
+    EXPECT_TRUE(test::same_decisions(by_run, by_update)) << f;
     EXPECT_EQ(by_update.summary().returning_permille, s.returning_permille) << f;
-    EXPECT_TRUE(same_decisions(by_run, newest ? newest_scope : window_scope)) << f;
+    EXPECT_TRUE(test::same_decisions(by_run, newest ? newest_scope : window_scope)) << f;
     newest_at.push_back(s.decided_newest);
   }
   return newest_at;

@@ -54,27 +54,6 @@ const Capacities kCaps{16, 2048, 8192, 32768, 4096};
   return ::testing::AssertionSuccess();
 }
 
-// Same decisions and summary, field by field.
-::testing::AssertionResult same(const Sparsifier& a, const Sparsifier& b) {
-  if (a.decision_count() != b.decision_count()) return ::testing::AssertionFailure() << "counts";
-  for (std::uint32_t i = 0; i < a.decision_count(); ++i) {
-    const PointDecision& x = a.decisions()[i];
-    const PointDecision& y = b.decisions()[i];
-    if (x.point != y.point || x.verdict != y.verdict || x.flow != y.flow || x.capacity != y.capacity) {
-      return ::testing::AssertionFailure() << "point " << x.point << " differs";
-    }
-  }
-  const Summary& s = a.summary();
-  const Summary& t = b.summary();
-  if (s.kept != t.kept || s.culled != t.culled || s.skipped != t.skipped ||
-      s.max_flow != t.max_flow || s.total_cost != t.total_cost || s.out_of_scope != t.out_of_scope ||
-      s.floor_keyframes != t.floor_keyframes || s.floor_promoted != t.floor_promoted ||
-      s.floor_short != t.floor_short) {
-    return ::testing::AssertionFailure() << "summaries differ";
-  }
-  return ::testing::AssertionSuccess();
-}
-
 // The floor's guarantee, from the window itself: every keyframe has at least
 // L evaluated points not culled, or none of its evaluated points is culled.
 ::testing::AssertionResult floor_holds(const Window& w, const Sparsifier& s) {
@@ -181,8 +160,8 @@ TEST(Policies, UpdateMatchesRunAndReference) {
     const std::uint32_t size = 3 + static_cast<std::uint32_t>(seed % 6);
     const auto check = [&](const Window& window, const Sparsifier& run, const Sparsifier& closed,
                            const Sparsifier& zero, const test::RefKeyframe& f) {
-      ASSERT_TRUE(same(run, closed)) << "seed " << seed << " keyframe " << f.id;
-      ASSERT_TRUE(same(run, zero)) << "seed " << seed << " keyframe " << f.id;
+      ASSERT_TRUE(test::same_decisions(run, closed)) << "seed " << seed << " keyframe " << f.id;
+      ASSERT_TRUE(test::same_decisions(run, zero)) << "seed " << seed << " keyframe " << f.id;
       ASSERT_TRUE(agrees(run, test::reference_decide(test::ref_frames_of(window), c.params)))
           << "seed " << seed << " keyframe " << f.id;
       ++windows;
@@ -211,7 +190,7 @@ TEST(Policies, RebuiltWindowWithUnmappedKeypoints) {
   ASSERT_TRUE(test::load(b, c.frames));
   ASSERT_EQ(inc.update(b), Status::kOk);
   ASSERT_EQ(run.run(b), Status::kOk);
-  EXPECT_TRUE(same(run, inc));
+  EXPECT_TRUE(test::same_decisions(run, inc));
   EXPECT_TRUE(agrees(run, test::reference_decide(c.frames, c.params)));
 }
 
