@@ -401,12 +401,13 @@ std::uint32_t track_share_count(double share, std::uint32_t take) {
 }
 
 double track_share_at(const KeepBudget& budget, std::uint64_t take, std::uint64_t candidates) {
-  const double from = budget.track_share_from;
+  const double from = budget.track_share_from, to = budget.track_share_to;
   bool applies = true;
-  if (from > 0.0) {
+  if (from > 0.0 || to < 1.0) {
+    const double n = static_cast<double>(candidates), k = static_cast<double>(take);
     switch (budget.kind) {
-      case BudgetKind::kFraction: applies = budget.fraction >= from; break;
-      case BudgetKind::kPoints: applies = static_cast<double>(take) >= from * static_cast<double>(candidates); break;
+      case BudgetKind::kFraction: applies = budget.fraction >= from && budget.fraction <= to; break;
+      case BudgetKind::kPoints: applies = k >= from * n && k <= to * n; break;
       default: applies = false; break;
     }
   }

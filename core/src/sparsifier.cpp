@@ -615,13 +615,11 @@ Status Sparsifier::validate(const Params& p) {
   // A track share takes part of a count (kPoints, kFraction) by track length.
   const double share = p.budget.track_share;
   if (!std::isfinite(share) || share < 0.0 || share > 1.0) return Status::kInvalidArgument;
-  // A share that applies at every budget needs a count; one from a
-  // threshold (a use's) just never applies without one.
-  const double from = p.budget.track_share_from;
-  if (!std::isfinite(from) || from < 0.0 || from > 1.0) return Status::kInvalidArgument;
-  if (share > 0.0 && from == 0.0 && !keeps_a_count(p.budget.kind)) {
+  const double from = p.budget.track_share_from, to = p.budget.track_share_to;
+  if (!std::isfinite(from) || !std::isfinite(to) || from < 0.0 || from > to || to > 1.0) {
     return Status::kInvalidArgument;
   }
+  if (share_needs_a_count(p.budget) && !keeps_a_count(p.budget.kind)) return Status::kInvalidArgument;
   switch (p.cost_model) {
     case CostModel::kPaper:
     case CostModel::kInformation:

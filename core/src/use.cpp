@@ -12,6 +12,7 @@ void apply_use(Use use, Params* params) {
   params->defer_keyframes = paper.defer_keyframes;
   params->budget.track_share = paper.budget.track_share;
   params->budget.track_share_from = paper.budget.track_share_from;
+  params->budget.track_share_to = paper.budget.track_share_to;
   switch (use) {
     case Use::kMonocular:
       params->budget.track_share = 0.5;
@@ -24,6 +25,8 @@ void apply_use(Use use, Params* params) {
     case Use::kMonocularDeferred:
       params->defer_keyframes = 2;
       params->scope = Scope::kAuto;
+      params->budget.track_share = 0.5;
+      params->budget.track_share_to = 0.1;
       break;
     case Use::kOffline: params->budget.track_share = 1.0; break;
     case Use::kPaper: break;

@@ -32,7 +32,7 @@ function(run_latency last_var)
               incremental_median_ms scratch_over_incremental
               lemon_ns_median_ms lemon_cs_median_ms closed_form_median_ms ours_zero_flow_median_ms
               slide_zero_flow_median_ms identical_decisions
-              use scope maturity_keyframes defer_keyframes track_share track_share_from coverage_floor cost_model intrinsics_and_depths unmapped_per_kf floor_bound_decisions
+              use scope maturity_keyframes defer_keyframes track_share track_share_from track_share_to coverage_floor cost_model intrinsics_and_depths unmapped_per_kf floor_bound_decisions
               floor_promoted out_of_scope_mean decisions_digest reference reference_e2e_p50_ms
               reference_e2e_p99_ms reference_allocations_after_warmup reference_decisions_digest
               p50_ratio_to_paper p99_ratio_to_paper profile profile_fits node_memory_predicted_bytes
@@ -110,14 +110,14 @@ if(DEFINED KEEP)
   # The uses (keepless_node's --use) with that fraction: the fields each sets,
   # checked like the rest; monocular and offline decide otherwise than the
   # plain fraction, monocular-deferred as the fraction with --scope auto (its
-  # deferral is the node's).
+  # deferral is the node's; its track share stops at 0.1, below KEEP = 0.3).
   run_latency(auto_json --scope auto --keep-fraction ${KEEP})
   string(JSON auto_digest GET "${auto_json}" decisions_digest)
-  foreach(use_expect "monocular;newest;2;0;0.5;0.3" "offline;window;0;0;1;0" "monocular-deferred;auto;0;2;0;0")
+  foreach(use_expect "monocular;newest;2;0;0.5;0.3;1" "offline;window;0;0;1;0;1" "monocular-deferred;auto;0;2;0.5;0;0.1")
     list(GET use_expect 0 use)
     run_latency(use_json --use ${use} --keep-fraction ${KEEP})
     set(i 0)
-    foreach(key use scope maturity_keyframes defer_keyframes track_share track_share_from)
+    foreach(key use scope maturity_keyframes defer_keyframes track_share track_share_from track_share_to)
       string(JSON value GET "${use_json}" ${key})
       list(GET use_expect ${i} expected)
       math(EXPR i "${i} + 1")

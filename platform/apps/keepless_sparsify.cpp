@@ -69,7 +69,8 @@ const std::vector<keepless::cli::Flag> kFlags = {
                       "(they refine it): paper (the default), monocular (--scope newest\n"
                       "--maturity 2, and --track-share 0.5 where the budget keeps >= 0.3 of\n"
                       "the points), rgbd (--scope newest --maturity 2), monocular-deferred\n"
-                      "(--scope auto here), offline (--mode whole --track-share 1\n"
+                      "(--scope auto here, and --track-share 0.5 where the budget keeps\n"
+                      "<= 0.1 of the points), offline (--mode whole --track-share 1\n"
                       "--floor-over-longest 1.1; needs --keep-points or --keep-fraction)"},
     {"--mode", "replay|whole", "replay: the onboard node's sliding window; whole: one window\n"
                                "(default: replay for maps, whole for --window)"},
@@ -156,8 +157,7 @@ int parse_args(int argc, char** argv, Options* opt, bool* help, bool* version) {
   }
   bool m_given = false;  // --M and a keep budget exclude each other
   // Set on the budget once it is known (the use's unless given; a given share applies at every budget).
-  double track_share = opt->params.budget.track_share;
-  double track_share_from = opt->params.budget.track_share_from;
+  core::KeepBudget share = opt->params.budget;  // its track share fields
   for (int i = 1; i < argc; ++i) {
     const keepless::cli::Flag* entry = nullptr;
     const char* value = nullptr;
@@ -214,10 +214,11 @@ int parse_args(int argc, char** argv, Options* opt, bool* help, bool* version) {
             flag == "--keep-points" ? core::BudgetKind::kPoints : core::BudgetKind::kObservations, n, 0.0};
       }
     } else if (flag == "--track-share") {
-      if (!core::parse_finite_double(value, &track_share) || !(track_share >= 0.0 && track_share <= 1.0)) {
+      if (!core::parse_finite_double(value, &share.track_share) || !(share.track_share >= 0.0 && share.track_share <= 1.0)) {
         return usage_error(bad + " (a number in [0, 1])");
       }
-      track_share_from = 0.0;
+      share.track_share_from = 0.0;
+      share.track_share_to = 1.0;
     } else if (flag == "--theta") {
       double theta = 0;
       if (!core::parse_finite_double(value, &theta) || !(theta >= 0.0 && theta <= 1.0)) {
@@ -284,12 +285,11 @@ int parse_args(int argc, char** argv, Options* opt, bool* help, bool* version) {
     return usage_error(std::string("--M and --keep-") + core::to_string(opt->params.budget.kind) +
                        " exclude each other: a keep budget replaces M");
   }
-  if (track_share > 0.0 && track_share_from == 0.0 && !core::keeps_a_count(opt->params.budget.kind)) {
+  core::copy_track_share(share, &opt->params.budget);
+  if (core::share_needs_a_count(opt->params.budget) && !core::keeps_a_count(opt->params.budget.kind)) {
     return usage_error(std::string("--track-share needs --keep-points or --keep-fraction: it is a share of their count") +
                        (use == core::Use::kOffline ? " (--use offline sets it to 1)" : ""));
   }
-  opt->params.budget.track_share = track_share;
-  opt->params.budget.track_share_from = track_share_from;
   if (use == core::Use::kOffline && !opt->model.mode_given) {
     opt->model.mode = keepless::sparsify::Mode::kWhole;
     opt->model.mode_given = true;
@@ -434,7 +434,7 @@ int decide_window_unguarded(const Options& opt, const core::WindowFile& file, co
       "\"scope\":\"%s\",\"floor\":%u,\"cost\":\"%s\",\"out_of_scope\":%u,"
       "\"floor_keyframes\":%u,\"floor_promoted\":%u,\"floor_short\":%u,"
       "\"budget\":\"%s\",\"budget_value\":%s,\"budget_m\":%" PRId64 ",\"budget_observations\":%" PRIu64 ","
-      "\"maturity\":%u,\"guarded\":%u,\"track_fallback\":%u,\"track_share_from\":%g,\"track_share\":%g}\n",
+      "\"maturity\":%u,\"guarded\":%u,\"track_fallback\":%u,\"track_share_from\":%g,\"track_share_to\":%g,\"track_share\":%g}\n",
       sum.keyframes, sum.points, sum.evaluated, sum.kept, sum.culled, sum.skipped, sum.pairs,
       sum.arcs, sum.max_flow, sum.total_cost, opt.params.pair_capacity, theta, opt.params.box_width,
       opt.params.box_height, parse_ms, build_ms, solve_ms, memory, core::to_string(opt.params.scope),
@@ -442,7 +442,7 @@ int decide_window_unguarded(const Options& opt, const core::WindowFile& file, co
       sum.floor_keyframes, sum.floor_promoted, sum.floor_short,
       core::to_string(opt.params.budget.kind), keepless::sparsify::budget_value(opt.params.budget).c_str(),
       sum.budget_m, sum.budget_observations, opt.params.maturity_keyframes, sum.guarded, sum.track_fallback, opt.params.budget.track_share_from,
-      opt.params.budget.track_share);
+      opt.params.budget.track_share_to, opt.params.budget.track_share);
   return std::fflush(stdout) == 0 ? 0 : kExitInternal;
 }
 

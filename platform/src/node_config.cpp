@@ -61,7 +61,8 @@ std::string node_usage() {
          "                            (they set --scope, --maturity, --defer and --track-share): paper (the\n"
          "                            default), monocular (--scope newest --maturity 2, and --track-share 0.5\n"
          "                            where the budget keeps >= 0.3 of the points), monocular-deferred\n"
-         "                            (--defer 2 --scope auto), rgbd (--scope newest --maturity 2), offline\n"
+         "                            (--defer 2 --scope auto, and --track-share 0.5 where the budget keeps\n"
+         "                            <= 0.1 of the points), rgbd (--scope newest --maturity 2), offline\n"
          "                            (--track-share 1)\n"
          "  --max-points N            distinct points the window holds (default 6600; 0: K*N)\n"
          "  --max-window-observations N  observations the window holds (default 19100; 0: K*N)\n"
@@ -216,8 +217,7 @@ ParseResult parse_node_arguments(int argc, const char* const* argv, NodeConfig& 
   bool track_terms_given = false;  // --track-terms: with --cost track only
   // Set on the budget once it is known, whatever the flags' order (the use's unless given;
   // a given share applies at every budget).
-  double track_share = config.params.budget.track_share;
-  double track_share_from = config.params.budget.track_share_from;
+  core::KeepBudget share = config.params.budget;  // its track share fields
   bool share_given = false;  // --track-share: the error's note on offline's share is then beside the point
   for (int i = 1; i < argc; ++i) {
     std::string flag = argv[i];
@@ -342,10 +342,11 @@ ParseResult parse_node_arguments(int argc, const char* const* argv, NodeConfig& 
             flag == "--keep-points" ? core::BudgetKind::kPoints : core::BudgetKind::kObservations, n, 0.0};
       }
     } else if (flag == "--track-share") {
-      if (!parse_double(value, track_share) || !(track_share >= 0 && track_share <= 1)) {
+      if (!parse_double(value, share.track_share) || !(share.track_share >= 0 && share.track_share <= 1)) {
         return bad("expected a number in [0, 1]");
       }
-      track_share_from = 0;
+      share.track_share_from = 0;
+      share.track_share_to = 1;
       share_given = true;
     } else if (flag == "--theta") {
       double t = 0;
@@ -421,7 +422,8 @@ ParseResult parse_node_arguments(int argc, const char* const* argv, NodeConfig& 
             " exclude each other: a keep budget replaces M";
     return ParseResult::kError;
   }
-  if (track_share > 0 && track_share_from == 0 && !core::keeps_a_count(config.params.budget.kind)) {
+  core::copy_track_share(share, &config.params.budget);
+  if (core::share_needs_a_count(config.params.budget) && !core::keeps_a_count(config.params.budget.kind)) {
     error = "--track-share needs --keep-points or --keep-fraction: it is a share of their count";
     if (!share_given) error += " (--use offline sets it to 1)";  // only offline's share applies at every budget
     return ParseResult::kError;
@@ -440,8 +442,6 @@ ParseResult parse_node_arguments(int argc, const char* const* argv, NodeConfig& 
             "the tracked are kept first within it";
     return ParseResult::kError;
   }
-  config.params.budget.track_share = track_share;
-  config.params.budget.track_share_from = track_share_from;
   // The worst-case window must stay addressable by the solver's int32 arc ids.
   const std::uint64_t arcs = static_cast<std::uint64_t>(config.window) * config.max_observations *
                              (config.window - 1) / 2;

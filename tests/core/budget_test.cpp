@@ -18,9 +18,11 @@
 #include <memory>
 #include <set>
 #include <tuple>
+#include <utility>
 #include <vector>
 
 #include "case_count.hpp"
+#include "decision_checks.hpp"
 #include "keepless/core/closed_form.hpp"
 #include "keepless/core/keep_thresholds.hpp"
 #include "keepless/core/network.hpp"
@@ -264,23 +266,19 @@ TEST(KeepBudgets, BudgetsKeepExactly) {
   EXPECT_GT(limited, test::cases(100));
 }
 
+// test::same_decisions, and the budget's: each point's M*, the budget's M
+// and observations, and the kept-count curve.
 ::testing::AssertionResult same(const Sparsifier& a, const Sparsifier& b) {
-  if (a.decision_count() != b.decision_count()) return ::testing::AssertionFailure() << "counts";
+  if (::testing::AssertionResult r = test::same_decisions(a, b); !r) return r;
   for (std::uint32_t i = 0; i < a.decision_count(); ++i) {
-    const PointDecision& x = a.decisions()[i];
-    const PointDecision& y = b.decisions()[i];
-    if (x.point != y.point || x.verdict != y.verdict || x.flow != y.flow || x.capacity != y.capacity ||
-        a.keep_thresholds()[i] != b.keep_thresholds()[i]) {
-      return ::testing::AssertionFailure() << "point " << x.point << " differs";
+    if (a.keep_thresholds()[i] != b.keep_thresholds()[i]) {
+      return ::testing::AssertionFailure() << "point " << a.decisions()[i].point << ": M* differs";
     }
   }
   const Summary& s = a.summary();
   const Summary& t = b.summary();
-  if (s.kept != t.kept || s.culled != t.culled || s.skipped != t.skipped || s.max_flow != t.max_flow ||
-      s.total_cost != t.total_cost || s.out_of_scope != t.out_of_scope ||
-      s.floor_promoted != t.floor_promoted || s.budget_m != t.budget_m ||
-      s.budget_observations != t.budget_observations) {
-    return ::testing::AssertionFailure() << "summaries differ";
+  if (s.budget_m != t.budget_m || s.budget_observations != t.budget_observations) {
+    return ::testing::AssertionFailure() << "budgets differ";
   }
   for (std::int64_t m = 1; m <= 40; ++m) {
     if (a.kept_at(m) != b.kept_at(m)) return ::testing::AssertionFailure() << "curve at " << m;
@@ -711,6 +709,16 @@ TEST(KeepBudgets, TrackShareTakesTheLongestTracksAfterTheOrder) {
         Sparsifier gated(kCaps, from);
         ASSERT_EQ(gated.run(window), Status::kOk);
         ASSERT_EQ(kept_of(gated), take >= 0.3 * e ? kept : kept_of(ordered)) << "seed " << seed << " K " << k;
+        // Up to a share: where K <= 0.3 x candidates; with both bounds, only at 0.3 exactly.
+        Params to = p;
+        to.budget.track_share_to = 0.3;
+        Sparsifier capped(kCaps, to);
+        ASSERT_EQ(capped.run(window), Status::kOk);
+        ASSERT_EQ(kept_of(capped), take <= 0.3 * e ? kept : kept_of(ordered)) << "seed " << seed << " K " << k;
+        to.budget.track_share_from = 0.3;
+        Sparsifier both(kCaps, to);
+        ASSERT_EQ(both.run(window), Status::kOk);
+        ASSERT_EQ(kept_of(both), take == 0.3 * e ? kept : kept_of(ordered)) << "seed " << seed << " K " << k;
       }
     }
     // A fraction's count is unchanged by the share.
@@ -843,12 +851,22 @@ TEST(KeepBudgets, InvalidBudgets) {
     p.budget = KeepBudget{BudgetKind::kFraction, 0, 0.2, 0.5, from};
     EXPECT_EQ(Sparsifier::validate(p), Status::kInvalidArgument) << from;
   }
-  // A share from a threshold needs no count: without one it never applies.
-  for (BudgetKind kind : {BudgetKind::kNone, BudgetKind::kObservations}) {
-    p.budget = KeepBudget{kind, 10, 0.0, 0.5, 0.3};
-    EXPECT_EQ(Sparsifier::validate(p), Status::kOk);
-    EXPECT_EQ(track_share_at(p.budget, 10, 10), 0.0);
+  for (double to : {-0.1, 0.2, 1.5, std::nan("")}) {  // 0.2: below its from
+    p.budget = KeepBudget{BudgetKind::kFraction, 0, 0.2, 0.5, 0.3, to};
+    EXPECT_EQ(Sparsifier::validate(p), Status::kInvalidArgument) << to;
   }
+  // A share bounded to a range of budgets needs no count: without one it never applies.
+  for (BudgetKind kind : {BudgetKind::kNone, BudgetKind::kObservations}) {
+    for (const auto& [from, to] : {std::pair{0.3, 1.0}, std::pair{0.0, 0.1}}) {
+      p.budget = KeepBudget{kind, 10, 0.0, 0.5, from, to};
+      EXPECT_EQ(Sparsifier::validate(p), Status::kOk);
+      EXPECT_EQ(track_share_at(p.budget, 1, 10), 0.0);
+    }
+  }
+  p.budget = KeepBudget{BudgetKind::kFraction, 0, 0.1, 0.5, 0.0, 0.1};
+  EXPECT_EQ(track_share_at(p.budget, 100, 100), 0.5);  // F decides, not the decision's take
+  p.budget.fraction = 0.11;
+  EXPECT_EQ(track_share_at(p.budget, 0, 100), 0.0);
   p.budget = KeepBudget{BudgetKind::kFraction, 0, 0.3, 0.5, 0.3};
   EXPECT_EQ(track_share_at(p.budget, 0, 100), 0.5);  // F itself decides, not the decision's take
   p.budget.fraction = 0.29;

@@ -42,20 +42,11 @@ const Capacities kCaps{16, 2048, 8192, 32768, 4096};
   return ::testing::AssertionSuccess();
 }
 
+// test::same_decisions, and the guard's counts.
 ::testing::AssertionResult same(const Sparsifier& a, const Sparsifier& b) {
-  if (a.decision_count() != b.decision_count()) return ::testing::AssertionFailure() << "counts";
-  for (std::uint32_t i = 0; i < a.decision_count(); ++i) {
-    const PointDecision& x = a.decisions()[i];
-    const PointDecision& y = b.decisions()[i];
-    if (x.point != y.point || x.verdict != y.verdict || x.flow != y.flow || x.capacity != y.capacity) {
-      return ::testing::AssertionFailure() << "point " << x.point << " differs";
-    }
-  }
-  const Summary& s = a.summary();
-  const Summary& t = b.summary();
-  if (s.kept != t.kept || s.culled != t.culled || s.skipped != t.skipped || s.guarded != t.guarded ||
-      s.tracked != t.tracked || s.out_of_scope != t.out_of_scope || s.floor_promoted != t.floor_promoted) {
-    return ::testing::AssertionFailure() << "summaries differ";
+  if (::testing::AssertionResult r = test::same_decisions(a, b); !r) return r;
+  if (a.summary().guarded != b.summary().guarded || a.summary().tracked != b.summary().tracked) {
+    return ::testing::AssertionFailure() << "guard counts differ";
   }
   return ::testing::AssertionSuccess();
 }

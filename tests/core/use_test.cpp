@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cstdint>
+#include <initializer_list>
 #include <map>
 #include <string>
 
@@ -62,8 +63,10 @@ TEST(Use, SetsThePolicyAndLeavesTheRest) {
       EXPECT_EQ(p.scope, guarded ? Scope::kNewest : u == Use::kMonocularDeferred ? Scope::kAuto : Scope::kWindow);
       EXPECT_EQ(p.maturity_keyframes, guarded ? 2u : 0u);
       EXPECT_EQ(p.defer_keyframes, u == Use::kMonocularDeferred ? 2u : 0u);
-      EXPECT_EQ(p.budget.track_share, u == Use::kOffline ? 1.0 : u == Use::kMonocular ? 0.5 : 0.0);
+      const bool mono = u == Use::kMonocular || u == Use::kMonocularDeferred;
+      EXPECT_EQ(p.budget.track_share, u == Use::kOffline ? 1.0 : mono ? 0.5 : 0.0);
       EXPECT_EQ(p.budget.track_share_from, u == Use::kMonocular ? 0.3 : 0.0);
+      EXPECT_EQ(p.budget.track_share_to, u == Use::kMonocularDeferred ? 0.1 : 1.0);
     }
   }
   // The paper's are Params' defaults.
@@ -132,36 +135,45 @@ TEST(Use, MonocularDecidesOnlyPointsTwoKeyframesOld) {
   EXPECT_GT(young_culled_by_paper, 100u);
 }
 
-// Monocular from F = 0.3: over a sequence of windows, the decisions of the
-// same settings with the share at every budget; below, those without it.
-TEST(Use, MonocularTakesHalfByTrackLengthFromAKeptFractionOf03) {
-  std::uint32_t differ_below = 0, differ_from = 0;  // each side of 0.3: both must tell the two apart
-  for (double f : {0.1, 0.2, 0.29, 0.3, 0.4, 0.6}) {
+// Where `applies(F)`, over a sequence of windows, the use decides as the
+// same settings with its share at every budget; elsewhere, as without it.
+void expect_share_where(Use use, std::initializer_list<double> fractions, bool (*applies)(double)) {
+  std::uint32_t differ_in = 0, differ_out = 0;  // each side of the bound: both must tell the two apart
+  for (double f : fractions) {
     Params mono;
     mono.budget = KeepBudget{BudgetKind::kFraction, 0, f};
-    apply_use(Use::kMonocular, &mono);
+    apply_use(use, &mono);
     Params always = mono;
     always.budget.track_share_from = 0.0;
+    always.budget.track_share_to = 1.0;
     Params never = mono;
     never.budget.track_share = 0.0;
     Sparsifier used(kCaps, mono), with(kCaps, always), without(kCaps, never);
     Window window(kCaps);
-    for (std::uint64_t seed = 1; seed <= 60 && !HasFailure(); ++seed) {
+    for (std::uint64_t seed = 1; seed <= 60 && !::testing::Test::HasFailure(); ++seed) {
       test::RandomCase c = test::random_case(seed);
       ASSERT_TRUE(test::load(window, c.frames)) << "seed " << seed;
       ASSERT_EQ(used.run(window), Status::kOk);
       ASSERT_EQ(with.run(window), Status::kOk);
       ASSERT_EQ(without.run(window), Status::kOk);
-      const Sparsifier& expected = f >= 0.3 ? with : without;
+      const Sparsifier& expected = applies(f) ? with : without;
       ASSERT_EQ(used.decision_count(), expected.decision_count());
       for (std::uint32_t i = 0; i < used.decision_count(); ++i) {
         ASSERT_EQ(used.decisions()[i].verdict, expected.decisions()[i].verdict) << "F " << f << " seed " << seed;
-        (f >= 0.3 ? differ_from : differ_below) += with.decisions()[i].verdict != without.decisions()[i].verdict;
+        (applies(f) ? differ_in : differ_out) += with.decisions()[i].verdict != without.decisions()[i].verdict;
       }
     }
   }
-  EXPECT_GT(differ_below, 50u);  // the share changes decisions
-  EXPECT_GT(differ_from, 50u);
+  EXPECT_GT(differ_in, 50u);  // the share changes decisions
+  EXPECT_GT(differ_out, 50u);
+}
+
+TEST(Use, MonocularTakesHalfByTrackLengthFromAKeptFractionOf03) {
+  expect_share_where(Use::kMonocular, {0.1, 0.2, 0.29, 0.3, 0.4, 0.6}, [](double f) { return f >= 0.3; });
+}
+
+TEST(Use, MonocularDeferredTakesHalfByTrackLengthToAKeptFractionOf01) {
+  expect_share_where(Use::kMonocularDeferred, {0.05, 0.1, 0.11, 0.2, 0.4}, [](double f) { return f <= 0.1; });
 }
 
 // Offline: a share of a count, so it needs one; with one it keeps exactly

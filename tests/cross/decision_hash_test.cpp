@@ -24,6 +24,7 @@
 #include "keepless/core/decision.hpp"
 #include "keepless/core/sparsifier.hpp"
 #include "keepless/core/status.hpp"
+#include "keepless/core/use.hpp"
 #include "keepless/core/window.hpp"
 
 namespace keepless::core {
@@ -36,6 +37,7 @@ constexpr std::uint64_t kExpectedPolicyHash = 0x8092a28e8907ad34ULL;
 // 2026-12-04: the budget workload's kept fractions remember points that left.
 constexpr std::uint64_t kExpectedBudgetHash = 0x092d7eb36f52bbcaULL;
 constexpr std::uint64_t kExpectedTrackHash = 0x458af2d5de07218dULL;
+constexpr std::uint64_t kExpectedAutoScopeHash = 0x4f0c8a6a3a54f8fbULL;
 
 // splitmix64: a fixed, portable stream (std:: distributions are not
 // specified bit for bit across standard libraries).
@@ -547,6 +549,79 @@ TEST(CrossArchitecture, TrackCostDecisionsMatchRecordedHash) {
   EXPECT_GT(fallback, 0u);
   EXPECT_EQ(hash.value(), kExpectedTrackHash)
       << "track cost decision hash " << hex(hash.value()) << " (expected " << hex(kExpectedTrackHash) << ")";
+}
+
+// Scope::kAuto over a sliding stream, whose share of returning points is
+// carried from call to call: landmarks seen every fourth keyframe (some
+// missed) in the first and third thirds of the stream, none in the second. The M decision by run(),
+// and monocular-deferred's at F = 0.1 (its track share on) by update():
+// the decisions, the share and the scope each call chose.
+TEST(CrossArchitecture, AutoScopeDecisionsOverAStreamMatchRecordedHash) {
+  constexpr std::uint32_t kKeyframes = 90, kWindowKeyframes = 8, kLandmarks = 120;
+  Capacities capacities = generated_capacities();
+  capacities.max_keyframes = kWindowKeyframes;
+  SplitMix64 rng(0x6175746f00000001ULL);
+  Params by_m;
+  by_m.scope = Scope::kAuto;
+  Params deferred;
+  apply_use(Use::kMonocularDeferred, &deferred);
+  deferred.budget = KeepBudget{BudgetKind::kFraction, 0, 0.1};
+  Sparsifier run_m(capacities, by_m), update_f(capacities, deferred, SolveMode::kIncremental);
+  Window window(capacities);
+  Fnv1a64 hash;
+  std::uint64_t newest = 0, window_decisions = 0, culled = 0, switches = 0;
+  bool was_newest = false;
+  std::vector<Observation> obs, previous;
+  for (std::uint32_t f = 0; f < kKeyframes; ++f) {
+    if (window.keyframe_count() == kWindowKeyframes) {
+      ASSERT_EQ(window.remove_keyframe(window.keyframe(0).id), Status::kOk);
+    }
+    obs.clear();
+    const auto at = [&](PointId id) {
+      return Observation{id, 640.0 * rng.fraction(20), 480.0 * rng.fraction(20), 0.0};
+    };
+    for (const Observation& o : previous) {
+      if (rng.below(4) != 0) obs.push_back(at(o.point));  // seen again by the next keyframe
+    }
+    const std::size_t chained = obs.size();
+    const std::uint32_t born = 15 + rng.below(10);
+    for (std::uint32_t i = 0; i < born; ++i) obs.push_back(at(PointId{1000} * (f + 1) + i));
+    previous.assign(obs.begin() + static_cast<std::ptrdiff_t>(chained), obs.end());
+    if ((f / 30) % 2 == 0) {
+      for (PointId l = 0; l < kLandmarks; ++l) {
+        if ((f + l) % 4 == 0 && rng.below(8) != 0) obs.push_back(at(PointId{1000000} + l));
+      }
+    }
+    Keyframe kf;
+    kf.id = 10 + f;
+    kf.centre[0] = f + rng.fraction(16);
+    kf.centre[1] = rng.fraction(16);
+    ASSERT_EQ(window.add_keyframe(kf, obs.data(), static_cast<std::uint32_t>(obs.size())), Status::kOk) << f;
+    ASSERT_EQ(run_m.run(window), Status::kOk) << f;
+    ASSERT_EQ(update_f.update(window), Status::kOk) << f;
+    switches += run_m.summary().decided_newest != was_newest;
+    was_newest = run_m.summary().decided_newest;
+    for (const Sparsifier* s : {&run_m, &update_f}) {
+      const Summary& sum = s->summary();
+      hash.add(f, 4);
+      for (std::uint32_t i = 0; i < s->decision_count(); ++i) {
+        hash.add(s->decisions()[i].point);
+        hash.add(static_cast<std::uint64_t>(s->decisions()[i].verdict), 1);
+        hash.add_signed(s->decisions()[i].flow);
+      }
+      hash.add_signed(sum.total_cost);
+      hash.add(sum.returning_permille, 4);
+      hash.add(sum.decided_newest ? 1 : 0, 1);
+      (sum.decided_newest ? newest : window_decisions) += 1;
+      culled += sum.culled;
+    }
+  }
+  EXPECT_GT(newest, 0u);  // both scopes chosen: to the newest, back, to the newest again
+  EXPECT_GT(window_decisions, 0u);
+  EXPECT_GE(switches, 3u) << newest << " newest, " << window_decisions << " window";
+  EXPECT_GT(culled, 0u);
+  EXPECT_EQ(hash.value(), kExpectedAutoScopeHash)
+      << "auto scope decision hash " << hex(hash.value()) << " (expected " << hex(kExpectedAutoScopeHash) << ")";
 }
 
 }  // namespace

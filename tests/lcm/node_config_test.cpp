@@ -44,7 +44,8 @@ std::string fields(const NodeConfig& c) {
     << p.spatial_weight << '|' << static_cast<int>(p.scope) << '|' << p.coverage_floor << '|'
     << static_cast<int>(p.cost_model) << '|' << p.image_width << 'x' << p.image_height << '|'
     << static_cast<int>(p.budget.kind) << '|' << p.budget.count << '|' << p.budget.fraction << '|'
-    << p.budget.track_share << '|' << p.budget.track_share_from << '|' << p.maturity_keyframes << '|'
+    << p.budget.track_share << '|' << p.budget.track_share_from << '|' << p.budget.track_share_to << '|'
+    << p.maturity_keyframes << '|'
     << p.defer_keyframes << '|' << int{p.track_terms};
   return s.str();
 }
@@ -388,6 +389,7 @@ TEST(NodeConfig, ParsesTheUses) {
             ParseResult::kOk) << error;
   EXPECT_EQ(given.params.budget.track_share, 0.5);
   EXPECT_EQ(given.params.budget.track_share_from, 0.0);
+  EXPECT_EQ(given.params.budget.track_share_to, 1.0);
   NodeConfig off;
   ASSERT_EQ(parse({"--use", "monocular", "--keep-fraction", "0.4", "--track-share", "0"}, off, error), ParseResult::kOk);
   EXPECT_EQ(off.params.budget.track_share, 0.0);
@@ -399,6 +401,13 @@ TEST(NodeConfig, ParsesTheUses) {
   ASSERT_EQ(parse({"--use", "monocular-deferred"}, deferred, error), ParseResult::kOk) << error;
   EXPECT_EQ(deferred.params.defer_keyframes, 2u);
   EXPECT_EQ(deferred.params.scope, Scope::kAuto);
+  EXPECT_EQ(deferred.params.budget.track_share, 0.5);  // up to F = 0.1, which needs no count
+  EXPECT_EQ(deferred.params.budget.track_share_to, 0.1);
+  NodeConfig deferred_given;  // a given share applies at every budget
+  ASSERT_EQ(parse({"--use", "monocular-deferred", "--keep-fraction", "0.2", "--track-share", "0.25"}, deferred_given,
+                  error), ParseResult::kOk) << error;
+  EXPECT_EQ(deferred_given.params.budget.track_share, 0.25);
+  EXPECT_EQ(deferred_given.params.budget.track_share_to, 1.0);
   NodeConfig rgbd;
   ASSERT_EQ(parse({"--use", "rgbd"}, rgbd, error), ParseResult::kOk) << error;
   EXPECT_EQ(rgbd.params.scope, Scope::kNewest);  // the monocular use's settings

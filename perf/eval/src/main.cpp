@@ -90,8 +90,9 @@ const std::vector<cli::Flag> kFlags = {
                       "the other flags, which refine it: monocular (--scope newest --maturity 2\n"
                       "--keyframe-culling count-culled, and --track-share 0.5 from a kept\n"
                       "fraction of 0.3), monocular-deferred (--defer 2 --defer-refine --decide\n"
-                      "window --scope auto --keyframe-culling count-culled), rgbd (as monocular\n"
-                      "without the share), offline (--track-share 1), paper (the defaults)"},
+                      "window --scope auto --keyframe-culling count-culled, and --track-share\n"
+                      "0.5 to a kept fraction of 0.1), rgbd (as monocular without the share),\n"
+                      "offline (--track-share 1), paper (the defaults)"},
     {"--scope", "S", "keepless's decision scope (core::Params scope): window, newest or auto;\n"
                      "with --decide window, auto decides the new keyframe's points while a\n"
                      "third of the window's come back, else the window's"},
@@ -365,6 +366,7 @@ Args parse(int argc, char** argv) {
     else if (f == "--track-share") {
       a.policy.budget.track_share = parse_double(f, val(), 0, 1);
       a.policy.budget.track_share_from = 0;  // a given share applies at every fraction
+      a.policy.budget.track_share_to = 1;
     }
     else if (f == "--maturity") a.policy.maturity_keyframes = static_cast<std::uint32_t>(parse_int(f, val(), 0, 1000));
     else if (f == "--tracked-flags") a.tracked_flags = true;
@@ -414,7 +416,7 @@ Args parse(int argc, char** argv) {
   }
   if (by_M && by_fraction) fail("--M and --kept-fraction exclude each other");
   if (by_M && a.policy.tracked_first) fail("--tracked-first needs --kept-fraction: under --M there is no budget to keep the tracked first within (--tracked-flags skips them)");
-  if (a.policy.budget.track_share > 0 && a.policy.budget.track_share_from == 0 && !by_fraction) {
+  if (keepless::core::share_needs_a_count(a.policy.budget) && !by_fraction) {
     fail(cli::last_value(argc, argv, "--track-share") != nullptr
              ? "--track-share needs --kept-fraction: it is a share of its count"
              : "--use offline takes a share of a count: give --kept-fraction");
@@ -660,6 +662,8 @@ int main(int argc, char** argv) {
   if (a.policy.budget.track_share > 0) summary.settings += ", track share " + std::to_string(a.policy.budget.track_share);
   if (a.policy.budget.track_share > 0 && a.policy.budget.track_share_from > 0)
     summary.settings += " from F " + std::to_string(a.policy.budget.track_share_from);
+  if (a.policy.budget.track_share > 0 && a.policy.budget.track_share_to < 1)
+    summary.settings += " to F " + std::to_string(a.policy.budget.track_share_to);
   if (a.policy.maturity_keyframes > 0) summary.settings += ", maturity " + std::to_string(a.policy.maturity_keyframes);
   if (a.tracked_flags) summary.settings += a.policy.tracked_first ? ", tracked first" : ", tracked flags";
   if (a.weak_keyframe > 0) summary.settings += ", a keyframe below " + std::to_string(a.weak_keyframe) + " inliers";

@@ -216,7 +216,7 @@ int parse(int argc, char** argv, Options* o) {
   // The policy as keepless_node checks it: refused here, not by every decision of the replay.
   if (core::Sparsifier::validate(o->params) != core::Status::kOk) {
     const core::KeepBudget& b = o->params.budget;
-    if (b.track_share > 0 && b.track_share_from == 0 && !core::keeps_a_count(b.kind)) {
+    if (core::share_needs_a_count(b) && !core::keeps_a_count(b.kind)) {
       return cli::usage_error(kTool, "--use " + o->use +
                                          " takes a share of a count: give --keep-points or --keep-fraction");
     }
@@ -664,11 +664,11 @@ int main(int argc, char** argv) {
   if (o.params.budget.kind == core::BudgetKind::kPoints || o.params.budget.kind == core::BudgetKind::kObservations)
     std::printf(" %llu", static_cast<unsigned long long>(o.params.budget.count));
   std::printf("\n");
-  std::printf("policy: use %s, scope %s, maturity %u, floor %u, cost %s, track share %.2f from %.2f; stream:"
+  std::printf("policy: use %s, scope %s, maturity %u, floor %u, cost %s, track share %.2f from %.2f to %.2f; stream:"
               " intrinsics and depths %s, %u unmapped keypoints per keyframe; reference: %s\n",
               o.use.empty() ? "-" : o.use.c_str(), core::to_string(o.params.scope), o.params.maturity_keyframes,
               o.params.coverage_floor, core::to_string(o.params.cost_model), o.params.budget.track_share,
-              o.params.budget.track_share_from,
+              o.params.budget.track_share_from, o.params.budget.track_share_to,
               camera ? "yes" : "no", unmapped_per_kf,
               with_reference ? "the paper's defaults on the same stream, replayed after" : "this run");
 
@@ -841,7 +841,7 @@ int main(int argc, char** argv) {
   std::printf(
       "\"keep_budget\":\"%s\",\"keep_budget_value\":%.4f,\"keep_budget_share_p50\":%s,\"keep_budget_share_p99\":%s,"
       "\"use\":\"%s\",\"scope\":\"%s\",\"maturity_keyframes\":%u,\"defer_keyframes\":%u,\"track_share\":%.3f,\"track_share_from\":%.3f,"
-      "\"coverage_floor\":%u,\"cost_model\":\"%s\",\"intrinsics_and_depths\":%s,"
+      "\"track_share_to\":%.3f,\"coverage_floor\":%u,\"cost_model\":\"%s\",\"intrinsics_and_depths\":%s,"
       "\"unmapped_per_kf\":%u,\"floor_bound_decisions\":%u,\"floor_promoted\":%llu,\"out_of_scope_mean\":%.1f,"
       "\"decisions_digest\":\"%016llx\",\"reference\":\"%s\",\"reference_e2e_p50_ms\":%.4f,"
       "\"reference_e2e_p99_ms\":%.4f,\"reference_budget_exhausted\":%u,"
@@ -857,7 +857,8 @@ int main(int argc, char** argv) {
                                                           : static_cast<double>(o.params.budget.count),
       json_or_null(budget_share_p50).c_str(), json_or_null(budget_share_p99).c_str(), o.use.c_str(),
       core::to_string(o.params.scope), o.params.maturity_keyframes, o.params.defer_keyframes,
-      o.params.budget.track_share, o.params.budget.track_share_from, o.params.coverage_floor,
+      o.params.budget.track_share, o.params.budget.track_share_from, o.params.budget.track_share_to,
+      o.params.coverage_floor,
       core::to_string(o.params.cost_model), camera ? "true" : "false", unmapped_per_kf, r.floor_bound,
       static_cast<unsigned long long>(r.floor_promoted),
       r.decisions > 0 ? static_cast<double>(r.out_of_scope) / r.decisions : 0.0,

@@ -723,7 +723,7 @@ int run_model(const ModelOptions& opt) {
       "\"scope\":\"%s\",\"floor\":%u,\"cost\":\"%s\",\"out_of_scope\":%u,"
       "\"floor_keyframes\":%u,\"floor_promoted\":%u,\"floor_short\":%u,"
       "\"input_bytes\":%" PRIu64 ",\"output_bytes\":%" PRIu64 ",\"points2D_dropped\":%" PRIu64 ","
-      "\"maturity\":%u,\"guarded\":%u,\"track_fallback\":%u,\"track_share_from\":%g,\"track_share\":%g,"
+      "\"maturity\":%u,\"guarded\":%u,\"track_fallback\":%u,\"track_share_from\":%g,\"track_share_to\":%g,\"track_share\":%g,"
       "\"budget\":\"%s\",\"budget_value\":%s}\n",
       t.keyframes, t.points, t.evaluated, points_kept, culled, t.skipped, t.pairs, t.arcs, t.max_flow, t.total_cost,
       opt.params.pair_capacity, theta, opt.params.box_width, opt.params.box_height, parse_ms, solve_ms,
@@ -736,7 +736,7 @@ int run_model(const ModelOptions& opt) {
       opt.params.coverage_floor, core::to_string(opt.params.cost_model), t.out_of_scope, t.floor_keyframes,
       t.floor_promoted, t.floor_short, input_bytes, output_bytes, m.compacted,
       opt.params.maturity_keyframes, t.guarded, t.track_fallback, opt.params.budget.track_share_from,
-      opt.params.budget.track_share, core::to_string(opt.params.budget.kind),
+      opt.params.budget.track_share_to, opt.params.budget.track_share, core::to_string(opt.params.budget.kind),
       budget_value(opt.params.budget).c_str());
   return std::fflush(stdout) == 0 ? 0 : kExitInternal;
 }

@@ -126,11 +126,12 @@ enum TrackTerm : std::uint8_t {
 // ties in that order (take_longest_tracks). The network's order spreads
 // points evenly over the keyframe pairs; camera accuracy after BA follows
 // long tracks more (docs/evaluation/budget-sweep.md, offline). With
-// track_share_from > 0 the share applies only where the budget keeps at
-// least that share of the candidates (kFraction: F >= it, so the whole
-// sequence alike; kPoints: K >= it x candidates, per decision; never for
-// the other kinds): on monocular KITTI a share helped from F = 0.3 and cost
-// tracking at F = 0.2 (Use::kMonocular).
+// track_share_from > 0 or track_share_to < 1 the share applies only where
+// the budget keeps a share of the candidates in [from, to] (kFraction: F,
+// so the whole sequence alike; kPoints: K / candidates, per decision; never
+// for the other kinds): on monocular KITTI a share helped from F = 0.3 and
+// cost tracking at F = 0.2 (Use::kMonocular); with deferred culling it
+// helped at F = 0.1 and cost local-BA time at 0.2 (Use::kMonocularDeferred).
 enum class BudgetKind : std::uint8_t { kNone, kPoints, kFraction, kObservations };
 
 struct KeepBudget {
@@ -138,7 +139,8 @@ struct KeepBudget {
   std::uint64_t count = 0;   // kPoints: K; kObservations: B
   double fraction = 0.0;     // kFraction: F
   double track_share = 0.0;  // S in [0, 1]; 0: every point by the network's order
-  double track_share_from = 0.0;  // in [0, 1]; 0: S applies at every budget
+  double track_share_from = 0.0;  // in [0, 1]; with track_share_to 1: S applies at every budget
+  double track_share_to = 1.0;    // in [track_share_from, 1]
 };
 
 // "none", "points", "fraction", "observations".
@@ -146,6 +148,17 @@ const char* to_string(BudgetKind kind);
 // A budget that keeps a number of points (kPoints, kFraction): what a track
 // share, an exact count and a floor taken within it need.
 constexpr bool keeps_a_count(BudgetKind kind) { return kind == BudgetKind::kPoints || kind == BudgetKind::kFraction; }
+// A share at every budget (a caller's --track-share) needs a count; one
+// bounded to a range of budgets (a use's) just never applies without one.
+constexpr bool share_needs_a_count(const KeepBudget& b) {
+  return b.track_share > 0.0 && b.track_share_from == 0.0 && b.track_share_to >= 1.0;
+}
+// Copies `from`'s share and the budgets it applies at onto *to.
+constexpr void copy_track_share(const KeepBudget& from, KeepBudget* to) {
+  to->track_share = from.track_share;
+  to->track_share_from = from.track_share_from;
+  to->track_share_to = from.track_share_to;
+}
 // --- end keep budgets -------------------------------------------------------
 
 constexpr std::int32_t kMaxSpatialWeight = 1 << 16;

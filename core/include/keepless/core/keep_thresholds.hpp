@@ -125,7 +125,7 @@ class FractionBudget {
 // max_views + 1 entries and `scratch` `candidates`; no allocation.
 std::uint32_t track_share_count(double share, std::uint32_t take);
 // The share a decision keeping `take` of `candidates` applies: the budget's
-// track_share, or 0 below its track_share_from (KeepBudget).
+// track_share, or 0 outside [track_share_from, track_share_to] (KeepBudget).
 double track_share_at(const KeepBudget& budget, std::uint64_t take, std::uint64_t candidates);
 void take_longest_tracks(std::uint32_t* ranked, std::uint32_t candidates, std::uint32_t take, double share,
                          const std::uint32_t* views, std::uint32_t max_views, std::uint32_t* histogram,

@@ -27,10 +27,13 @@ enum class Use : std::uint8_t {
   // deleted lists) and keeps excluded points' structure refined: culls
   // deleted once 2 keyframes in a row miss them, the window decided, or the
   // new keyframe's points while a third of the window's come back
-  // (Scope::kAuto). It tracked every seed at F = 0.1 and 0.2, where the
-  // monocular use did not; the auto scope changed 1 of 80 KITTI runs and
-  // brought 7-Scenes' colour frames from 1.28x / 1.16x the original's ATE
-  // to 1.09x / 1.01x.
+  // (Scope::kAuto), and up to F = 0.1 half the count by track length
+  // (track share 0.5 to 0.1). It tracked every seed at F = 0.1 and 0.2,
+  // where the monocular use did not; the auto scope changed 1 of 80 KITTI
+  // runs and brought 7-Scenes' colour frames from 1.28x / 1.16x the
+  // original's ATE to 1.09x / 1.01x. The share lowered the ATE at F = 0.1
+  // on both KITTI sequences and at 5 Hz on 7-Scenes, and at 0.2 took local
+  // BA past half the original's time for little or no gain, hence to 0.1.
   kMonocularDeferred,
   // RGB-D: the monocular use's scope and guard, for accuracy rather than
   // tracking (depth makes new points usable at once; every selector
@@ -46,9 +49,9 @@ enum class Use : std::uint8_t {
   kOffline,
 };
 
-// Sets scope, maturity_keyframes, defer_keyframes, budget.track_share and
-// budget.track_share_from to the use's values; every other field of *params
-// is left as it was.
+// Sets scope, maturity_keyframes, defer_keyframes and budget.track_share,
+// track_share_from and track_share_to to the use's values; every other
+// field of *params is left as it was.
 void apply_use(Use use, Params* params);
 
 // "paper", "monocular", "monocular-deferred", "rgbd", "offline"; parse_use
