@@ -193,6 +193,22 @@ TEST(EvalWindowSizes, AWindowCountsEachPointsPairsOnce) {
   EXPECT_EQ(most.keyframes, 3u);
 }
 
+// The auto scope's choices over a run: decisions of the new keyframe's
+// points, and each change of scope (the first decision starts from the window).
+TEST(EvalSelectorCounts, AutoScopeSwitchesAreCountedEachWay) {
+  ke::SelectorCounts c;
+  for (bool newest : {false, true, true, false, true, true, true}) {
+    keepless::core::Summary s;
+    s.decided_newest = newest;
+    s.floor_promoted = 2;
+    c.add(s);
+  }
+  EXPECT_EQ(c.windows, 7u);
+  EXPECT_EQ(c.decided_newest, 5u);
+  EXPECT_EQ(c.scope_switches, 3u);
+  EXPECT_EQ(c.floor_promoted, 14u);
+}
+
 TEST(EvalContract, SummarizeGivesMeanSdSeedCountsAndRatios) {
   ke::Comparison c;
   c.info.input = "x";

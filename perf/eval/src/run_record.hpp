@@ -29,15 +29,22 @@ namespace keepless::eval {
 
 // The selector's windows and, summed over them, core::Summary's coverage
 // floor counts: keyframes where the floor bound, points it promoted,
-// keyframes below it with all their points kept. For a baseline they
-// describe the keepless run that set its count on its own window.
+// keyframes below it with all their points kept; and Scope::kAuto's
+// decisions of the new keyframe's points and its switches between the two
+// scopes (how often it flickers). For a baseline they describe the keepless
+// run that set its count on its own window.
 struct SelectorCounts {
   std::uint64_t windows = 0, floor_keyframes = 0, floor_promoted = 0, floor_short = 0;
+  std::uint64_t decided_newest = 0, scope_switches = 0;
+  bool last_newest = false;
   void add(const core::Summary& s) {
     ++windows;
     floor_keyframes += s.floor_keyframes;
     floor_promoted += s.floor_promoted;
     floor_short += s.floor_short;
+    decided_newest += s.decided_newest;
+    scope_switches += s.decided_newest != last_newest;
+    last_newest = s.decided_newest;
   }
 };
 

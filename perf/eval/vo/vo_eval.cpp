@@ -35,7 +35,7 @@ void log_run(const RealSequence& s, const RunRecord& r, const RealRunResult& x) 
                "  %s seed %llu %s M=%lld: tracked %d/%d (losses %d) mps %d kfs %d (made %d) culled %lld deleted %lld "
                "excluded matched %lld rule violations %lld culled outside the keyframe %lld (windows %llu, refused %d) "
                "kept %.1f%% (of evaluated, map %.1f%%) floor kfs %llu promoted %llu "
-               "short %llu, ate %.4f m, "
+               "short %llu, auto scope newest %llu (switches %llu), ate %.4f m, "
                "local BA %.2f s (%d, cpu %.2f s, %lld obs), refine cpu %.2f s, total %.1f s, "
                "BA points %lld (mean track %.2f, angle %.2f deg)\n",
                s.name.c_str(), static_cast<unsigned long long>(r.seed), r.variant.c_str(),
@@ -49,7 +49,9 @@ void log_run(const RealSequence& s, const RunRecord& r, const RealRunResult& x) 
                    : 100.0,
                static_cast<unsigned long long>(x.selector.floor_keyframes),
                static_cast<unsigned long long>(x.selector.floor_promoted),
-               static_cast<unsigned long long>(x.selector.floor_short), x.ate_m,
+               static_cast<unsigned long long>(x.selector.floor_short),
+               static_cast<unsigned long long>(x.selector.decided_newest),
+               static_cast<unsigned long long>(x.selector.scope_switches), x.ate_m,
                x.local_ba_seconds, x.local_bas, x.local_ba_cpu_seconds,
                static_cast<long long>(x.local_ba_observations), x.refine_cpu_seconds, x.total_seconds,
                static_cast<long long>(x.ba_points), x.ba_points > 0 ? x.ba_point_track_sum / double(x.ba_points) : 0.0,
