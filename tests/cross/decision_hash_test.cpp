@@ -37,7 +37,7 @@ constexpr std::uint64_t kExpectedPolicyHash = 0x8092a28e8907ad34ULL;
 // 2026-12-04: the budget workload's kept fractions remember points that left.
 constexpr std::uint64_t kExpectedBudgetHash = 0x092d7eb36f52bbcaULL;
 constexpr std::uint64_t kExpectedTrackHash = 0x458af2d5de07218dULL;
-constexpr std::uint64_t kExpectedAutoScopeHash = 0x4f0c8a6a3a54f8fbULL;
+constexpr std::uint64_t kExpectedAutoScopeHash = 0x6cb2f6d7607062d1ULL;
 
 // splitmix64: a fixed, portable stream (std:: distributions are not
 // specified bit for bit across standard libraries).
@@ -553,9 +553,11 @@ TEST(CrossArchitecture, TrackCostDecisionsMatchRecordedHash) {
 
 // Scope::kAuto over a sliding stream, whose share of returning points is
 // carried from call to call: landmarks seen every fourth keyframe (some
-// missed) in the first and third thirds of the stream, none in the second. The M decision by run(),
-// and monocular-deferred's at F = 0.1 (its track share on) by update():
-// the decisions, the share and the scope each call chose.
+// missed) in the first and third thirds of the stream, none in the second;
+// tracks that go on with probability 3/4 a keyframe, so their lengths differ
+// and the track share has a choice. The M decision by run(), and
+// monocular-deferred's at F = 0.1 (its track share on) by update(): the
+// decisions, the share and the scope each call chose.
 TEST(CrossArchitecture, AutoScopeDecisionsOverAStreamMatchRecordedHash) {
   constexpr std::uint32_t kKeyframes = 90, kWindowKeyframes = 8, kLandmarks = 120;
   Capacities capacities = generated_capacities();
@@ -565,11 +567,15 @@ TEST(CrossArchitecture, AutoScopeDecisionsOverAStreamMatchRecordedHash) {
   by_m.scope = Scope::kAuto;
   Params deferred;
   apply_use(Use::kMonocularDeferred, &deferred);
-  deferred.budget = KeepBudget{BudgetKind::kFraction, 0, 0.1};
+  deferred.budget.kind = BudgetKind::kFraction;  // field by field: a whole KeepBudget would reset the share
+  deferred.budget.fraction = 0.1;
+  Params no_share = deferred;
+  no_share.budget.track_share = 0.0;
   Sparsifier run_m(capacities, by_m), update_f(capacities, deferred, SolveMode::kIncremental);
+  Sparsifier plain(capacities, no_share);  // what the share changes: not hashed
   Window window(capacities);
   Fnv1a64 hash;
-  std::uint64_t newest = 0, window_decisions = 0, culled = 0, switches = 0;
+  std::uint64_t newest = 0, window_decisions = 0, culled = 0, switches = 0, shared = 0;
   bool was_newest = false;
   std::vector<Observation> obs, previous;
   for (std::uint32_t f = 0; f < kKeyframes; ++f) {
@@ -583,10 +589,9 @@ TEST(CrossArchitecture, AutoScopeDecisionsOverAStreamMatchRecordedHash) {
     for (const Observation& o : previous) {
       if (rng.below(4) != 0) obs.push_back(at(o.point));  // seen again by the next keyframe
     }
-    const std::size_t chained = obs.size();
     const std::uint32_t born = 15 + rng.below(10);
     for (std::uint32_t i = 0; i < born; ++i) obs.push_back(at(PointId{1000} * (f + 1) + i));
-    previous.assign(obs.begin() + static_cast<std::ptrdiff_t>(chained), obs.end());
+    previous = obs;  // chained and new: a track goes on until a keyframe misses it
     if ((f / 30) % 2 == 0) {
       for (PointId l = 0; l < kLandmarks; ++l) {
         if ((f + l) % 4 == 0 && rng.below(8) != 0) obs.push_back(at(PointId{1000000} + l));
@@ -599,6 +604,10 @@ TEST(CrossArchitecture, AutoScopeDecisionsOverAStreamMatchRecordedHash) {
     ASSERT_EQ(window.add_keyframe(kf, obs.data(), static_cast<std::uint32_t>(obs.size())), Status::kOk) << f;
     ASSERT_EQ(run_m.run(window), Status::kOk) << f;
     ASSERT_EQ(update_f.update(window), Status::kOk) << f;
+    ASSERT_EQ(plain.run(window), Status::kOk) << f;
+    for (std::uint32_t i = 0; i < plain.decision_count() && i < update_f.decision_count(); ++i) {
+      shared += plain.decisions()[i].verdict != update_f.decisions()[i].verdict;
+    }
     switches += run_m.summary().decided_newest != was_newest;
     was_newest = run_m.summary().decided_newest;
     for (const Sparsifier* s : {&run_m, &update_f}) {
@@ -620,6 +629,7 @@ TEST(CrossArchitecture, AutoScopeDecisionsOverAStreamMatchRecordedHash) {
   EXPECT_GT(window_decisions, 0u);
   EXPECT_GE(switches, 3u) << newest << " newest, " << window_decisions << " window";
   EXPECT_GT(culled, 0u);
+  EXPECT_GT(shared, 0u);  // the share took part of the count
   EXPECT_EQ(hash.value(), kExpectedAutoScopeHash)
       << "auto scope decision hash " << hex(hash.value()) << " (expected " << hex(kExpectedAutoScopeHash) << ")";
 }
