@@ -156,8 +156,6 @@ int parse_args(int argc, char** argv, Options* opt, bool* help, bool* version) {
     core::apply_use(use, &opt->params);
   }
   bool m_given = false;  // --M and a keep budget exclude each other
-  // Set on the budget once it is known (the use's unless given; a given share applies at every budget).
-  core::KeepBudget share = opt->params.budget;  // its track share fields
   for (int i = 1; i < argc; ++i) {
     const keepless::cli::Flag* entry = nullptr;
     const char* value = nullptr;
@@ -204,21 +202,23 @@ int parse_args(int argc, char** argv, Options* opt, bool* help, bool* version) {
         if (!core::parse_finite_double(value, &f) || !(f >= 0.0 && f <= 1.0)) {
           return usage_error(bad + " (a number in [0, 1])");
         }
-        opt->params.budget = core::KeepBudget{core::BudgetKind::kFraction, 0, f};
+        opt->params.budget.kind = core::BudgetKind::kFraction;  // field by field: the use's share stays
+        opt->params.budget.fraction = f;
       } else {
         std::uint64_t n = 0;
         if (!core::parse_uint64(value, &n) || n > std::numeric_limits<std::uint32_t>::max()) {
           return usage_error(bad + " (an integer >= 0)");
         }
-        opt->params.budget = core::KeepBudget{
-            flag == "--keep-points" ? core::BudgetKind::kPoints : core::BudgetKind::kObservations, n, 0.0};
+        opt->params.budget.kind = flag == "--keep-points" ? core::BudgetKind::kPoints : core::BudgetKind::kObservations;
+        opt->params.budget.count = n;
       }
     } else if (flag == "--track-share") {
-      if (!core::parse_finite_double(value, &share.track_share) || !(share.track_share >= 0.0 && share.track_share <= 1.0)) {
+      core::KeepBudget& b = opt->params.budget;  // a given share applies at every budget
+      if (!core::parse_finite_double(value, &b.track_share) || !(b.track_share >= 0.0 && b.track_share <= 1.0)) {
         return usage_error(bad + " (a number in [0, 1])");
       }
-      share.track_share_from = 0.0;
-      share.track_share_to = 1.0;
+      b.track_share_from = 0.0;
+      b.track_share_to = 1.0;
     } else if (flag == "--theta") {
       double theta = 0;
       if (!core::parse_finite_double(value, &theta) || !(theta >= 0.0 && theta <= 1.0)) {
@@ -285,7 +285,6 @@ int parse_args(int argc, char** argv, Options* opt, bool* help, bool* version) {
     return usage_error(std::string("--M and --keep-") + core::to_string(opt->params.budget.kind) +
                        " exclude each other: a keep budget replaces M");
   }
-  core::copy_track_share(share, &opt->params.budget);
   if (core::share_needs_a_count(opt->params.budget) && !core::keeps_a_count(opt->params.budget.kind)) {
     return usage_error(std::string("--track-share needs --keep-points or --keep-fraction: it is a share of their count") +
                        (use == core::Use::kOffline ? " (--use offline sets it to 1)" : ""));

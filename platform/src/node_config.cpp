@@ -215,9 +215,6 @@ ParseResult parse_node_arguments(int argc, const char* const* argv, NodeConfig& 
   if (ParseResult r = parse_early_flags(argc, argv, config, error); r != ParseResult::kOk) return r;
   bool m_given = false;  // --M and a keep budget exclude each other
   bool track_terms_given = false;  // --track-terms: with --cost track only
-  // Set on the budget once it is known, whatever the flags' order (the use's unless given;
-  // a given share applies at every budget).
-  core::KeepBudget share = config.params.budget;  // its track share fields
   bool share_given = false;  // --track-share: the error's note on offline's share is then beside the point
   for (int i = 1; i < argc; ++i) {
     std::string flag = argv[i];
@@ -335,18 +332,20 @@ ParseResult parse_node_arguments(int argc, const char* const* argv, NodeConfig& 
       if (flag == "--keep-fraction") {
         double f = 0;
         if (!parse_double(value, f) || !(f >= 0 && f <= 1)) return bad("expected a number in [0, 1]");
-        config.params.budget = core::KeepBudget{core::BudgetKind::kFraction, 0, f};
+        config.params.budget.kind = core::BudgetKind::kFraction;  // field by field: the share stays
+        config.params.budget.fraction = f;
       } else {
         if (!parse_u64(value, 0, std::numeric_limits<std::uint32_t>::max(), n)) return bad("expected an integer >= 0");
-        config.params.budget = core::KeepBudget{
-            flag == "--keep-points" ? core::BudgetKind::kPoints : core::BudgetKind::kObservations, n, 0.0};
+        config.params.budget.kind = flag == "--keep-points" ? core::BudgetKind::kPoints : core::BudgetKind::kObservations;
+        config.params.budget.count = n;
       }
     } else if (flag == "--track-share") {
-      if (!parse_double(value, share.track_share) || !(share.track_share >= 0 && share.track_share <= 1)) {
+      core::KeepBudget& b = config.params.budget;  // a given share applies at every budget
+      if (!parse_double(value, b.track_share) || !(b.track_share >= 0 && b.track_share <= 1)) {
         return bad("expected a number in [0, 1]");
       }
-      share.track_share_from = 0;
-      share.track_share_to = 1;
+      b.track_share_from = 0;
+      b.track_share_to = 1;
       share_given = true;
     } else if (flag == "--theta") {
       double t = 0;
@@ -422,7 +421,6 @@ ParseResult parse_node_arguments(int argc, const char* const* argv, NodeConfig& 
             " exclude each other: a keep budget replaces M";
     return ParseResult::kError;
   }
-  core::copy_track_share(share, &config.params.budget);
   if (core::share_needs_a_count(config.params.budget) && !core::keeps_a_count(config.params.budget.kind)) {
     error = "--track-share needs --keep-points or --keep-fraction: it is a share of their count";
     if (!share_given) error += " (--use offline sets it to 1)";  // only offline's share applies at every budget

@@ -153,12 +153,6 @@ constexpr bool keeps_a_count(BudgetKind kind) { return kind == BudgetKind::kPoin
 constexpr bool share_needs_a_count(const KeepBudget& b) {
   return b.track_share > 0.0 && b.track_share_from == 0.0 && b.track_share_to >= 1.0;
 }
-// Copies `from`'s share and the budgets it applies at onto *to.
-constexpr void copy_track_share(const KeepBudget& from, KeepBudget* to) {
-  to->track_share = from.track_share;
-  to->track_share_from = from.track_share_from;
-  to->track_share_to = from.track_share_to;
-}
 // --- end keep budgets -------------------------------------------------------
 
 constexpr std::int32_t kMaxSpatialWeight = 1 << 16;
