@@ -5,7 +5,8 @@
 # (the perf rule: two cores) and LEMON, the reference, was timed. Timings are
 # not asserted.
 #
-# With -DKEEP=F it also runs --keep-fraction F, alone and with each --use (see below).
+# With -DKEEP=F it also runs --keep-fraction F, alone, with each --use and with
+# --track-share (see below).
 #
 # With -DCOST=authors|information (optionally -DFLOOR=L) it also runs that
 # cost model and checks the policy's keys: the stream carried what the model
@@ -138,6 +139,21 @@ if(DEFINED KEEP)
       message(FATAL_ERROR "--use ${use} decided as the plain fraction (${digest}): ${use_json}")
     endif()
   endforeach()
+  # A given --track-share applies at every budget (the use's bound reset), so
+  # at KEEP it changes what monocular-deferred decides.
+  run_latency(share_json --use monocular-deferred --keep-fraction ${KEEP} --track-share 0.5)
+  foreach(key_expect "track_share;0.5" "track_share_from;0" "track_share_to;1")
+    list(GET key_expect 0 key)
+    list(GET key_expect 1 expected)
+    string(JSON value GET "${share_json}" ${key})
+    if(NOT value EQUAL expected)
+      message(FATAL_ERROR "--track-share 0.5: ${key} is ${value}, expected ${expected}: ${share_json}")
+    endif()
+  endforeach()
+  string(JSON share_digest GET "${share_json}" decisions_digest)
+  if(share_digest STREQUAL auto_digest)
+    message(FATAL_ERROR "--track-share 0.5 decided as the use without it (${auto_digest}): ${share_json}")
+  endif()
 endif()
 if(LCM)
   run_latency(lcm_json --lcm --cost authors)

@@ -117,6 +117,8 @@ const std::vector<cli::Flag> kFlags = {
                              "each decision, plus those kept before)"},
     {"--keep-observations", "B", "a keep budget: points while their observations sum to <= B;\n"
                                  "with a budget the paper's M = 100 is the reference"},
+    {"--track-share", "S", "with --keep-points or --keep-fraction: the share S in [0, 1] of the\n"
+                           "count taken by track length, at every budget (keepless_node's flag)"},
     {"--profile", "small|default|large", "also report keepless_node's fixed memory with that --profile\n"
                                          "(predicted, counted by the node, resident-set growth) and\n"
                                          "whether this workload's windows fit its capacities"},
@@ -125,7 +127,7 @@ const std::vector<cli::Flag> kFlags = {
 std::string usage() {
   return cli::usage("usage: keepless_latency [options]", kFlags,
                     "With a policy other than the defaults (--use, --scope, --floor, --cost, a keep\n"
-                    "budget), the same stream is replayed again with the defaults as the reference\n"
+                    "budget, --track-share), the same stream is replayed again with the defaults as the reference\n"
                     "of the *_ratio_to_paper figures; the defaults are then replayed once more, last,\n"
                     "as an A/A control (aa_*: what the machine alone moves a ratio by). The last\n"
                     "stdout line is a JSON summary.");
@@ -142,6 +144,7 @@ int parse(int argc, char** argv, Options* o) {
     core::apply_use(use, &o->params);
     o->use = name;
   }
+  bool share_given = false;  // --track-share, named by the refusal below
   for (int i = 1; i < argc; ++i) {
     const cli::Flag* flag = nullptr;
     const char* v = nullptr;
@@ -153,7 +156,7 @@ int parse(int argc, char** argv, Options* o) {
       return cli::usage_error(kTool, "bad value for " + a + ": '" + v + "' (" + expected + ")");
     };
     for (const char* policy : {"--use", "--scope", "--floor", "--cost", "--keep-points", "--keep-fraction",
-                               "--keep-observations"}) {
+                               "--keep-observations", "--track-share"}) {
       if (a == policy) o->node_flags.insert(o->node_flags.end(), {a, v});
     }
     if (a == "--use") {
@@ -189,6 +192,13 @@ int parse(int argc, char** argv, Options* o) {
       }
       o->params.budget.kind = a == "--keep-points" ? core::BudgetKind::kPoints : core::BudgetKind::kObservations;
       o->params.budget.count = x;
+    } else if (a == "--track-share") {
+      core::KeepBudget& b = o->params.budget;  // as the node: a given share applies at every budget
+      b.track_share = std::strtod(v, &end);
+      if (end == v || *end != '\0' || !(b.track_share >= 0 && b.track_share <= 1)) return bad("a number in [0, 1]");
+      b.track_share_from = 0;
+      b.track_share_to = 1;
+      share_given = true;
     } else if (a == "--budget-ms" || a == "--budget-fraction") {
       const double x = std::strtod(v, &end);
       if (end == v || *end != '\0' || !std::isfinite(x) || x < 0) return bad("a number >= 0");
@@ -217,7 +227,7 @@ int parse(int argc, char** argv, Options* o) {
   if (core::Sparsifier::validate(o->params) != core::Status::kOk) {
     const core::KeepBudget& b = o->params.budget;
     if (core::share_needs_a_count(b) && !core::keeps_a_count(b.kind)) {
-      return cli::usage_error(kTool, "--use " + o->use +
+      return cli::usage_error(kTool, (share_given ? std::string("--track-share") : "--use " + o->use) +
                                          " takes a share of a count: give --keep-points or --keep-fraction");
     }
     return cli::usage_error(kTool, "invalid policy parameters");
