@@ -26,7 +26,7 @@ void apply_use(Use use, Params* params) {
       params->defer_keyframes = 2;
       params->scope = Scope::kAuto;
       params->budget.track_share = 0.5;
-      params->budget.track_share_to = 0.1;
+      params->budget.track_share_to = 0.15;
       break;
     case Use::kOffline: params->budget.track_share = 1.0; break;
     case Use::kPaper: break;

@@ -111,10 +111,10 @@ if(DEFINED KEEP)
   # The uses (keepless_node's --use) with that fraction: the fields each sets,
   # checked like the rest; monocular and offline decide otherwise than the
   # plain fraction, monocular-deferred as the fraction with --scope auto (its
-  # deferral is the node's; its track share stops at 0.1, below KEEP = 0.3).
+  # deferral is the node's; its track share stops at 0.15, below KEEP = 0.3).
   run_latency(auto_json --scope auto --keep-fraction ${KEEP})
   string(JSON auto_digest GET "${auto_json}" decisions_digest)
-  foreach(use_expect "monocular;newest;2;0;0.5;0.3;1" "offline;window;0;0;1;0;1" "monocular-deferred;auto;0;2;0.5;0;0.1")
+  foreach(use_expect "monocular;newest;2;0;0.5;0.3;1" "offline;window;0;0;1;0;1" "monocular-deferred;auto;0;2;0.5;0;0.15")
     list(GET use_expect 0 use)
     run_latency(use_json --use ${use} --keep-fraction ${KEEP})
     set(i 0)

@@ -70,7 +70,7 @@ const std::vector<keepless::cli::Flag> kFlags = {
                       "--maturity 2, and --track-share 0.5 where the budget keeps >= 0.3 of\n"
                       "the points), rgbd (--scope newest --maturity 2), monocular-deferred\n"
                       "(--scope auto here, and --track-share 0.5 where the budget keeps\n"
-                      "<= 0.1 of the points), offline (--mode whole --track-share 1\n"
+                      "<= 0.15 of the points), offline (--mode whole --track-share 1\n"
                       "--floor-over-longest 1.1; needs --keep-points or --keep-fraction)"},
     {"--mode", "replay|whole", "replay: the onboard node's sliding window; whole: one window\n"
                                "(default: replay for maps, whole for --window)"},

@@ -62,7 +62,7 @@ std::string node_usage() {
          "                            default), monocular (--scope newest --maturity 2, and --track-share 0.5\n"
          "                            where the budget keeps >= 0.3 of the points), monocular-deferred\n"
          "                            (--defer 2 --scope auto, and --track-share 0.5 where the budget keeps\n"
-         "                            <= 0.1 of the points), rgbd (--scope newest --maturity 2), offline\n"
+         "                            <= 0.15 of the points), rgbd (--scope newest --maturity 2), offline\n"
          "                            (--track-share 1)\n"
          "  --max-points N            distinct points the window holds (default 6600; 0: K*N)\n"
          "  --max-window-observations N  observations the window holds (default 19100; 0: K*N)\n"

@@ -66,7 +66,7 @@ TEST(Use, SetsThePolicyAndLeavesTheRest) {
       const bool mono = u == Use::kMonocular || u == Use::kMonocularDeferred;
       EXPECT_EQ(p.budget.track_share, u == Use::kOffline ? 1.0 : mono ? 0.5 : 0.0);
       EXPECT_EQ(p.budget.track_share_from, u == Use::kMonocular ? 0.3 : 0.0);
-      EXPECT_EQ(p.budget.track_share_to, u == Use::kMonocularDeferred ? 0.1 : 1.0);
+      EXPECT_EQ(p.budget.track_share_to, u == Use::kMonocularDeferred ? 0.15 : 1.0);
     }
   }
   // The paper's are Params' defaults.
@@ -172,8 +172,8 @@ TEST(Use, MonocularTakesHalfByTrackLengthFromAKeptFractionOf03) {
   expect_share_where(Use::kMonocular, {0.1, 0.2, 0.29, 0.3, 0.4, 0.6}, [](double f) { return f >= 0.3; });
 }
 
-TEST(Use, MonocularDeferredTakesHalfByTrackLengthToAKeptFractionOf01) {
-  expect_share_where(Use::kMonocularDeferred, {0.05, 0.1, 0.11, 0.2, 0.4}, [](double f) { return f <= 0.1; });
+TEST(Use, MonocularDeferredTakesHalfByTrackLengthToAKeptFractionOf015) {
+  expect_share_where(Use::kMonocularDeferred, {0.05, 0.1, 0.15, 0.16, 0.2, 0.4}, [](double f) { return f <= 0.15; });
 }
 
 // Offline: a share of a count, so it needs one; with one it keeps exactly

@@ -424,7 +424,7 @@ TEST(RealVoQuick, UsesRunTheFlagsTheyName) {
   EXPECT_EQ(ours("--defer 2 --defer-refine --decide window --scope auto --keyframe-culling count-culled"), deferred);
   EXPECT_NE(deferred, paper);
   EXPECT_NE(deferred, monocular);
-  // Up to a kept fraction of 0.1, monocular-deferred takes half the count by track length (0.2 above: not).
+  // Up to a kept fraction of 0.15, monocular-deferred takes half the count by track length (0.2 above: not).
   const std::string deferred_share = ours("--use monocular-deferred", "0.1");
   EXPECT_EQ(ours("--defer 2 --defer-refine --decide window --scope auto --keyframe-culling count-culled "
                  "--track-share 0.5", "0.1"),

@@ -401,8 +401,8 @@ TEST(NodeConfig, ParsesTheUses) {
   ASSERT_EQ(parse({"--use", "monocular-deferred"}, deferred, error), ParseResult::kOk) << error;
   EXPECT_EQ(deferred.params.defer_keyframes, 2u);
   EXPECT_EQ(deferred.params.scope, Scope::kAuto);
-  EXPECT_EQ(deferred.params.budget.track_share, 0.5);  // up to F = 0.1, which needs no count
-  EXPECT_EQ(deferred.params.budget.track_share_to, 0.1);
+  EXPECT_EQ(deferred.params.budget.track_share, 0.5);  // up to F = 0.15, which needs no count
+  EXPECT_EQ(deferred.params.budget.track_share_to, 0.15);
   NodeConfig deferred_given;  // a given share applies at every budget
   ASSERT_EQ(parse({"--use", "monocular-deferred", "--keep-fraction", "0.2", "--track-share", "0.25"}, deferred_given,
                   error), ParseResult::kOk) << error;

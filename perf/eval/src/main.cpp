@@ -91,7 +91,7 @@ const std::vector<cli::Flag> kFlags = {
                       "--keyframe-culling count-culled, and --track-share 0.5 from a kept\n"
                       "fraction of 0.3), monocular-deferred (--defer 2 --defer-refine --decide\n"
                       "window --scope auto --keyframe-culling count-culled, and --track-share\n"
-                      "0.5 to a kept fraction of 0.1), rgbd (as monocular without the share),\n"
+                      "0.5 to a kept fraction of 0.15), rgbd (as monocular without the share),\n"
                       "offline (--track-share 1), paper (the defaults)"},
     {"--scope", "S", "keepless's decision scope (core::Params scope): window, newest or auto;\n"
                      "with --decide window, auto decides the new keyframe's points while a\n"

@@ -27,13 +27,14 @@ enum class Use : std::uint8_t {
   // deleted lists) and keeps excluded points' structure refined: culls
   // deleted once 2 keyframes in a row miss them, the window decided, or the
   // new keyframe's points while a third of the window's come back
-  // (Scope::kAuto), and up to F = 0.1 half the count by track length
-  // (track share 0.5 to 0.1). It tracked every seed at F = 0.1 and 0.2,
+  // (Scope::kAuto), and up to F = 0.15 half the count by track length
+  // (track share 0.5 to 0.15). It tracked every seed at F = 0.1 and 0.2,
   // where the monocular use did not; the auto scope changed 1 of 80 KITTI
   // runs and brought 7-Scenes' colour frames from 1.28x / 1.16x the
   // original's ATE to 1.09x / 1.01x. The share lowered the ATE at F = 0.1
-  // on both KITTI sequences and at 5 Hz on 7-Scenes, and at 0.2 took local
-  // BA past half the original's time for little or no gain, hence to 0.1.
+  // on both KITTI sequences and at 5 Hz on 7-Scenes, was lower or level on
+  // all four at 0.15, and at 0.2 took local BA past half the original's time
+  // for little or no gain, hence to 0.15.
   kMonocularDeferred,
   // RGB-D: the monocular use's scope and guard, for accuracy rather than
   // tracking (depth makes new points usable at once; every selector
