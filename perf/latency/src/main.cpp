@@ -127,10 +127,10 @@ const std::vector<cli::Flag> kFlags = {
 std::string usage() {
   return cli::usage("usage: keepless_latency [options]", kFlags,
                     "With a policy other than the defaults (--use, --scope, --floor, --cost, a keep\n"
-                    "budget, --track-share), the same stream is replayed again with the defaults as the reference\n"
-                    "of the *_ratio_to_paper figures; the defaults are then replayed once more, last,\n"
-                    "as an A/A control (aa_*: what the machine alone moves a ratio by). The last\n"
-                    "stdout line is a JSON summary.");
+                    "budget, --track-share), the same stream is replayed again with the defaults as\n"
+                    "the reference of the *_ratio_to_paper figures; the defaults are then replayed\n"
+                    "once more, last, as an A/A control (aa_*: what the machine alone moves a ratio\n"
+                    "by). The last stdout line is a JSON summary.");
 }
 
 // Returns -1 to go on, else the exit status.
