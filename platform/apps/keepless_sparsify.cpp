@@ -213,12 +213,9 @@ int parse_args(int argc, char** argv, Options* opt, bool* help, bool* version) {
         opt->params.budget.count = n;
       }
     } else if (flag == "--track-share") {
-      core::KeepBudget& b = opt->params.budget;  // a given share applies at every budget
-      if (!core::parse_finite_double(value, &b.track_share) || !(b.track_share >= 0.0 && b.track_share <= 1.0)) {
-        return usage_error(bad + " (a number in [0, 1])");
-      }
-      b.track_share_from = 0.0;
-      b.track_share_to = 1.0;
+      double s = 0;
+      if (!core::parse_finite_double(value, &s) || !(s >= 0.0 && s <= 1.0)) return usage_error(bad + " (a number in [0, 1])");
+      core::share_at_every_budget(s, &opt->params.budget);
     } else if (flag == "--theta") {
       double theta = 0;
       if (!core::parse_finite_double(value, &theta) || !(theta >= 0.0 && theta <= 1.0)) {

@@ -340,12 +340,9 @@ ParseResult parse_node_arguments(int argc, const char* const* argv, NodeConfig& 
         config.params.budget.count = n;
       }
     } else if (flag == "--track-share") {
-      core::KeepBudget& b = config.params.budget;  // a given share applies at every budget
-      if (!parse_double(value, b.track_share) || !(b.track_share >= 0 && b.track_share <= 1)) {
-        return bad("expected a number in [0, 1]");
-      }
-      b.track_share_from = 0;
-      b.track_share_to = 1;
+      double s = 0;
+      if (!parse_double(value, s) || !(s >= 0 && s <= 1)) return bad("expected a number in [0, 1]");
+      core::share_at_every_budget(s, &config.params.budget);
       share_given = true;
     } else if (flag == "--theta") {
       double t = 0;

@@ -363,11 +363,7 @@ Args parse(int argc, char** argv) {
       if (!keepless::core::parse_scope(v.c_str(), &a.policy.scope)) fail("--scope: expected window, newest or auto, got '" + v + "'");
     } else if (f == "--floor") a.policy.coverage_floor = static_cast<std::uint32_t>(parse_int(f, val(), 0, 100000));
     else if (f == "--theta") a.policy.theta = parse_double(f, val(), 0, 1);
-    else if (f == "--track-share") {
-      a.policy.budget.track_share = parse_double(f, val(), 0, 1);
-      a.policy.budget.track_share_from = 0;  // a given share applies at every fraction
-      a.policy.budget.track_share_to = 1;
-    }
+    else if (f == "--track-share") keepless::core::share_at_every_budget(parse_double(f, val(), 0, 1), &a.policy.budget);
     else if (f == "--maturity") a.policy.maturity_keyframes = static_cast<std::uint32_t>(parse_int(f, val(), 0, 1000));
     else if (f == "--tracked-flags") a.tracked_flags = true;
     else if (f == "--tracked-first") a.tracked_flags = a.policy.tracked_first = true;

@@ -193,11 +193,9 @@ int parse(int argc, char** argv, Options* o) {
       o->params.budget.kind = a == "--keep-points" ? core::BudgetKind::kPoints : core::BudgetKind::kObservations;
       o->params.budget.count = x;
     } else if (a == "--track-share") {
-      core::KeepBudget& b = o->params.budget;  // as the node: a given share applies at every budget
-      b.track_share = std::strtod(v, &end);
-      if (end == v || *end != '\0' || !(b.track_share >= 0 && b.track_share <= 1)) return bad("a number in [0, 1]");
-      b.track_share_from = 0;
-      b.track_share_to = 1;
+      const double s = std::strtod(v, &end);
+      if (end == v || *end != '\0' || !(s >= 0 && s <= 1)) return bad("a number in [0, 1]");
+      core::share_at_every_budget(s, &o->params.budget);
       share_given = true;
     } else if (a == "--budget-ms" || a == "--budget-fraction") {
       const double x = std::strtod(v, &end);

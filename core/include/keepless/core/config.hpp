@@ -153,6 +153,13 @@ constexpr bool keeps_a_count(BudgetKind kind) { return kind == BudgetKind::kPoin
 constexpr bool share_needs_a_count(const KeepBudget& b) {
   return b.track_share > 0.0 && b.track_share_from == 0.0 && b.track_share_to >= 1.0;
 }
+// A caller's share (--track-share S): S of the count at every budget, in
+// place of a use's share and the budgets it applied at.
+constexpr void share_at_every_budget(double share, KeepBudget* b) {
+  b->track_share = share;
+  b->track_share_from = 0.0;
+  b->track_share_to = 1.0;
+}
 // --- end keep budgets -------------------------------------------------------
 
 constexpr std::int32_t kMaxSpatialWeight = 1 << 16;
