@@ -62,6 +62,46 @@ struct Window::Impl {
     }
   }
 
+  // Removes the keyframe in `slot`, compacting the pool and the keyframe
+  // list so both stay in slot order.
+  void remove(std::uint32_t slot) {
+    const std::uint32_t begin = obs_begin[slot];
+    const std::uint32_t n = obs_count[slot];
+    for (std::uint32_t i = 0; i < n; ++i) remove_view(pool[begin + i].point);
+    const std::uint32_t tail = total - begin - n;
+    if (tail > 0) {
+      std::memmove(pool.data() + begin, pool.data() + begin + n, tail * sizeof(Observation));
+      std::memmove(tracked.data() + begin, tracked.data() + begin + n, tail);
+      if (caps.hold_quality) {
+        std::memmove(quality.data() + begin, quality.data() + begin + n, tail * sizeof(PointQuality));
+      }
+    }
+    const std::uint32_t dropped = keyframes[slot].unmapped_count;
+    if (dropped > 0) {
+      const auto from = static_cast<std::size_t>(keyframes[slot].unmapped - unmapped.data());
+      std::memmove(unmapped.data() + from, unmapped.data() + from + dropped,
+                   (unmapped_total - from - dropped) * sizeof(Keypoint));
+      unmapped_total -= dropped;
+    }
+    for (std::uint32_t s = slot; s + 1 < count; ++s) {
+      keyframes[s] = keyframes[s + 1];
+      stamps[s] = stamps[s + 1];
+      obs_begin[s] = obs_begin[s + 1] - n;
+      obs_count[s] = obs_count[s + 1];
+      relink_observations(s);
+    }
+    total -= n;
+    --count;
+    if (dropped > 0) relink_unmapped();
+  }
+
+  // Keyframe `slot`'s tracked flags and quality (if it has them) at its
+  // observations' place in the pool.
+  void relink_observations(std::uint32_t s) {
+    if (keyframes[s].tracked != nullptr) keyframes[s].tracked = tracked.data() + obs_begin[s];
+    if (keyframes[s].quality != nullptr) keyframes[s].quality = quality.data() + obs_begin[s];
+  }
+
   bool contains(PointId point) const { return views.find(point) != nullptr; }
 
   // Callers check the point capacity first, so the insertion cannot fail.
@@ -80,25 +120,34 @@ Window::~Window() = default;
 
 Status Window::add_keyframe(const Keyframe& keyframe, const Observation* observations,
                             std::uint32_t count) {
-  return add(keyframe, observations, count, 0);
+  return add(keyframe, observations, count, 0, false);
+}
+
+Status Window::slide(const Keyframe& keyframe, const Observation* observations, std::uint32_t count) {
+  return add(keyframe, observations, count, 0, true);
 }
 
 Status Window::copy_keyframe(const Window& from, std::uint32_t slot) {
   if (slot >= from.keyframe_count()) return Status::kInvalidArgument;
   return add(from.keyframe(slot), from.observations(slot), from.observation_count(slot),
-             from.keyframe_stamp(slot));
+             from.keyframe_stamp(slot), false);
 }
 
 Status Window::add(const Keyframe& keyframe, const Observation* observations, std::uint32_t count,
-                   std::uint64_t stamp) {
+                   std::uint64_t stamp, bool slide) {
   Impl& w = *impl_;
-  // Validate everything first; commit only when nothing can fail.
-  if (w.count >= w.caps.max_keyframes) return Status::kCapacityExceeded;
-  if (count > w.caps.max_observations - w.total || count > w.scratch.size()) {
+  if (slide && w.count == 0) return Status::kInvalidArgument;
+  // Validate everything first, against what stays (all but the oldest when
+  // sliding); commit only when nothing can fail.
+  const std::uint32_t staying = w.count - (slide ? 1 : 0);
+  const std::uint32_t total = w.total - (slide ? w.obs_count[0] : 0);
+  const std::uint32_t unmapped_total = w.unmapped_total - (slide ? w.keyframes[0].unmapped_count : 0);
+  if (staying >= w.caps.max_keyframes) return Status::kCapacityExceeded;
+  if (count > w.caps.max_observations - total || count > w.scratch.size()) {
     return Status::kCapacityExceeded;
   }
   if (count > 0 && observations == nullptr) return Status::kInvalidArgument;
-  if (keyframe.unmapped_count > w.caps.max_unmapped_keypoints - w.unmapped_total) {
+  if (keyframe.unmapped_count > w.caps.max_unmapped_keypoints - unmapped_total) {
     return Status::kCapacityExceeded;
   }
   if (keyframe.unmapped_count > 0 && keyframe.unmapped == nullptr) return Status::kInvalidArgument;
@@ -133,8 +182,20 @@ Status Window::add(const Keyframe& keyframe, const Observation* observations, st
     if (i > 0 && ids[i] == ids[i - 1]) return Status::kDuplicateObservation;
     if (!w.contains(ids[i])) ++fresh;
   }
-  if (fresh > w.caps.max_points - w.views.size()) return Status::kCapacityExceeded;
+  std::uint32_t points = w.views.size();
+  if (slide) {
+    // The oldest's points seen by it alone leave; those this keyframe sees
+    // come back as fresh ones.
+    const Observation* old = w.pool.data() + w.obs_begin[0];
+    for (std::uint32_t i = 0; i < w.obs_count[0]; ++i) {
+      if (point_views(old[i].point) != 1) continue;
+      --points;
+      if (std::binary_search(ids, ids + count, old[i].point)) ++fresh;
+    }
+  }
+  if (fresh > w.caps.max_points - points) return Status::kCapacityExceeded;
 
+  if (slide) w.remove(0);
   const std::uint32_t slot = w.count;
   w.keyframes[slot] = keyframe;
   // A stamp vouches for what this window holds: a copy that drops the
@@ -171,40 +232,48 @@ Status Window::add(const Keyframe& keyframe, const Observation* observations, st
 }
 
 Status Window::remove_keyframe(KeyframeId id) {
-  Impl& w = *impl_;
   const std::int32_t found = find_keyframe(id);
   if (found < 0) return Status::kUnknownKeyframe;
-  const auto slot = static_cast<std::uint32_t>(found);
-  const std::uint32_t begin = w.obs_begin[slot];
-  const std::uint32_t n = w.obs_count[slot];
-  for (std::uint32_t i = 0; i < n; ++i) w.remove_view(w.pool[begin + i].point);
-  // Compact the pool and the keyframe list so both stay in slot order.
-  const std::uint32_t tail = w.total - begin - n;
-  if (tail > 0) {
-    std::memmove(w.pool.data() + begin, w.pool.data() + begin + n, tail * sizeof(Observation));
-    std::memmove(w.tracked.data() + begin, w.tracked.data() + begin + n, tail);
-    if (w.caps.hold_quality) {
-      std::memmove(w.quality.data() + begin, w.quality.data() + begin + n, tail * sizeof(PointQuality));
+  impl_->remove(static_cast<std::uint32_t>(found));
+  return Status::kOk;
+}
+
+Status Window::remove_points(const PointId* sorted_points, std::uint32_t count) {
+  if (count == 0) return Status::kOk;
+  if (sorted_points == nullptr) return Status::kInvalidArgument;
+  for (std::uint32_t i = 1; i < count; ++i) {
+    if (sorted_points[i] < sorted_points[i - 1]) return Status::kInvalidArgument;
+  }
+  Impl& w = *impl_;
+  // Compact the pool (and the arrays beside it) in one pass, in slot order.
+  std::uint32_t at = 0;
+  for (std::uint32_t s = 0; s < w.count; ++s) {
+    const std::uint32_t begin = w.obs_begin[s];
+    const std::uint32_t n = w.obs_count[s];
+    w.obs_begin[s] = at;
+    for (std::uint32_t i = begin; i < begin + n; ++i) {
+      const PointId p = w.pool[i].point;
+      if (std::binary_search(sorted_points, sorted_points + count, p)) {
+        w.remove_view(p);
+        continue;
+      }
+      w.pool[at] = w.pool[i];
+      w.tracked[at] = w.tracked[i];
+      if (w.caps.hold_quality) w.quality[at] = w.quality[i];
+      ++at;
     }
+    const std::uint32_t kept = at - w.obs_begin[s];
+    if (kept != n) {
+      w.obs_count[s] = kept;
+      w.stamps[s] = next_stamp.fetch_add(1, std::memory_order_relaxed);
+    }
+    if (kept == 0) {  // as add_keyframe holds a keyframe without observations
+      w.keyframes[s].tracked = nullptr;
+      w.keyframes[s].quality = nullptr;
+    }
+    w.relink_observations(s);
   }
-  const std::uint32_t dropped = w.keyframes[slot].unmapped_count;
-  if (dropped > 0) {
-    const auto from = static_cast<std::size_t>(w.keyframes[slot].unmapped - w.unmapped.data());
-    std::memmove(w.unmapped.data() + from, w.unmapped.data() + from + dropped,
-                 (w.unmapped_total - from - dropped) * sizeof(Keypoint));
-    w.unmapped_total -= dropped;
-  }
-  for (std::uint32_t s = slot; s + 1 < w.count; ++s) {
-    w.keyframes[s] = w.keyframes[s + 1];
-    w.stamps[s] = w.stamps[s + 1];
-    w.obs_begin[s] = w.obs_begin[s + 1] - n;
-    w.obs_count[s] = w.obs_count[s + 1];
-    if (w.keyframes[s].tracked != nullptr) w.keyframes[s].tracked = w.tracked.data() + w.obs_begin[s];
-    if (w.keyframes[s].quality != nullptr) w.keyframes[s].quality = w.quality.data() + w.obs_begin[s];
-  }
-  w.total -= n;
-  --w.count;
-  if (dropped > 0) w.relink_unmapped();
+  w.total = at;
   return Status::kOk;
 }
 

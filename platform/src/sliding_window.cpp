@@ -35,9 +35,9 @@ core::Status SlidingWindow::push(const core::Keyframe& keyframe, const core::Obs
   if (count > obs_scratch_.size()) return core::Status::kCapacityExceeded;
   const std::uint32_t slide = active_->keyframe_count() < capacities_.max_keyframes ? 0 : 1;
   if (active_->find_keyframe(keyframe.id) >= 0) return core::Status::kDuplicateKeyframe;
-  // Full: the new keyframe replaces the oldest, in the spare window.
-  core::Status s = slide == 0 ? active_->add_keyframe(keyframe, observations, count)  // atomic by contract
-                              : rebuild(1, nullptr, 0, 0, 0, &keyframe, observations, count);
+  // Full: the new keyframe replaces the oldest (both atomic by contract).
+  core::Status s = slide == 0 ? active_->add_keyframe(keyframe, observations, count)
+                              : active_->slide(keyframe, observations, count);
   if (s != core::Status::kCapacityExceeded) return s;
   // Beyond the window's points, observations or unmapped keypoints: older
   // keyframes make room (at most every one), unless it cannot fit alone.
@@ -95,7 +95,7 @@ core::Status SlidingWindow::drop_points(const core::PointId* points, std::uint32
   if (count > drop_table_.size()) return core::Status::kCapacityExceeded;
   std::copy(points, points + count, drop_table_.begin());
   std::sort(drop_table_.begin(), drop_table_.begin() + count);
-  return rebuild(0, nullptr, 0, count, 0, nullptr, nullptr, 0);
+  return active_->remove_points(drop_table_.data(), count);
 }
 
 core::Status SlidingWindow::edit(const Edit& e) {

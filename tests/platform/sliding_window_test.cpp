@@ -1,7 +1,7 @@
-// platform::SlidingWindow rebuilds its window into a spare one on every slide
-// or edit: keyframes it carries over unchanged keep their stamps (so the
-// incremental network knows them without comparing contents), those an edit
-// changed get new ones, and the contents are the same either way.
+// platform::SlidingWindow slides and drops points in place, and rebuilds into
+// its spare window for the other edits: either way, keyframes it carries over
+// unchanged keep their stamps (so the incremental network knows them without
+// comparing contents), those an edit changed get new ones.
 
 #include <gtest/gtest.h>
 
@@ -68,6 +68,19 @@ TEST(SlidingWindow, UnchangedKeyframesKeepTheirStampsAcrossSlidesAndEdits) {
       EXPECT_NE(w.window().observations(s)[i].point, 45u);
     }
   }
+
+  // A map event's deletion (rebuilt into the spare window): point 31 is in
+  // keyframes 1-3 only.
+  before = after;
+  const core::PointId deleted[] = {31};
+  SlidingWindow::Edit e;
+  e.deleted = deleted;
+  e.deleted_count = 1;
+  ASSERT_EQ(w.edit(e), core::Status::kOk);
+  after = stamps(w.window());
+  EXPECT_EQ(after[4], before[4]);
+  for (core::KeyframeId id : {1, 2, 3}) EXPECT_NE(after[id], before[id]) << id;
+  EXPECT_EQ(w.window().point_views(31), 0u);
 }
 
 }  // namespace

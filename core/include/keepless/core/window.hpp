@@ -82,6 +82,15 @@ class Window {
   // keyframe by keyframe. kInvalidArgument for a slot out of range.
   [[nodiscard]] Status copy_keyframe(const Window& from, std::uint32_t slot);
   [[nodiscard]] Status remove_keyframe(KeyframeId id);  // kUnknownKeyframe if absent
+  // Removes the oldest keyframe and adds this one, as add_keyframe would into
+  // the window without the oldest, atomically: on any error (as
+  // add_keyframe's; an id equal to the oldest's is a duplicate) the window
+  // is unchanged, the oldest included. kInvalidArgument for an empty window.
+  [[nodiscard]] Status slide(const Keyframe& keyframe, const Observation* observations, std::uint32_t count);
+  // Drops every observation of these points, given in ascending order
+  // (kInvalidArgument otherwise). Keyframes that lose an observation get new
+  // stamps; the others keep theirs. Nothing else can fail.
+  [[nodiscard]] Status remove_points(const PointId* sorted_points, std::uint32_t count);
   void clear();
 
   std::uint32_t keyframe_count() const;
@@ -112,9 +121,10 @@ class Window {
   std::size_t memory_bytes() const;
 
  private:
-  // add_keyframe with the given stamp (0: a new one).
+  // add_keyframe with the given stamp (0: a new one); `slide`: in place of
+  // the oldest keyframe.
   Status add(const Keyframe& keyframe, const Observation* observations, std::uint32_t count,
-             std::uint64_t stamp);
+             std::uint64_t stamp, bool slide);
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };

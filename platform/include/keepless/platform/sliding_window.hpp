@@ -1,9 +1,9 @@
 #pragma once
 // The node's window of the last K keyframes, double-buffered so every edit is
-// atomic: an edit that needs more than Window::add_keyframe/remove_keyframe
-// (sliding when full, dropping culled points, applying a map event) is built
-// into the spare window and swapped in only if it succeeded. All storage is
-// sized at construction; no edit allocates.
+// atomic: slides and dropped points are the window's own atomic edits, in
+// place; an edit beyond them (evicting older keyframes to make room,
+// applying a map event) is built into the spare window and swapped in only
+// if it succeeded. All storage is sized at construction; no edit allocates.
 
 #include <cstddef>
 #include <cstdint>
