@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <charconv>
-#include <deque>
 #include <numeric>
 #include <unordered_map>
 
@@ -120,59 +119,34 @@ core::Status replay(const core::WindowFile& f, const core::Params& params, std::
   const auto slot_of = [&](core::PointId p) { return static_cast<std::uint32_t>(find_decision(decisions, p)); };
 
   const core::Capacities caps = replay_capacities(f, K);
-  core::Window a(caps), b(caps);
-  core::Window* active = &a;
-  core::Window* spare = &b;
+  // One window, slid and edited in place as the node's is: a keyframe enters
+  // without the points culled before it, and culled points leave at once.
+  core::Window window(caps);
   core::Sparsifier sparsifier(caps, params, core::SolveMode::kIncremental);
   std::vector<bool> culled(decisions.size(), false);
-  // What each keyframe in the window holds now: observations and their slots.
-  const std::size_t n = f.keyframes.size();
-  std::vector<std::vector<core::Observation>> live(n);
-  std::vector<std::vector<std::uint32_t>> live_slots(n);
-  // Point quality follows the live observations (Keyframe::quality is per observation).
-  std::vector<std::vector<core::PointQuality>> live_quality(n);
-  const auto add_live = [&](core::Window* to, std::size_t j) {
-    core::Keyframe kf = f.keyframes[j];
-    if (kf.quality != nullptr) kf.quality = live_quality[j].data();
-    return to->add_keyframe(kf, live[j].data(), static_cast<std::uint32_t>(live[j].size()));
-  };
-  std::vector<bool> changed(n, false);  // lost points since it entered the active window
-  std::deque<std::size_t> members;
+  std::vector<core::Observation> entering;
+  std::vector<std::uint8_t> entering_tracked;  // flags and quality follow the observations
+  std::vector<core::PointQuality> entering_quality;
   std::vector<core::PointId> culled_now;
-  for (std::size_t i = 0; i < n; ++i) {
-    const core::PointQuality* quality = f.keyframes[i].quality;
+  for (std::size_t i = 0; i < f.keyframes.size(); ++i) {
+    core::Keyframe kf = f.keyframes[i];
+    entering.clear();
+    entering_tracked.clear();
+    entering_quality.clear();
     for (std::size_t k = 0; k < f.observations[i].size(); ++k) {
       const core::Observation& o = f.observations[i][k];
-      const std::uint32_t s = slot_of(o.point);
-      if (culled[s]) continue;
-      live[i].push_back(o);
-      live_slots[i].push_back(s);
-      if (quality != nullptr) live_quality[i].push_back(quality[k]);
+      if (culled[slot_of(o.point)]) continue;
+      entering.push_back(o);
+      if (kf.tracked != nullptr) entering_tracked.push_back(kf.tracked[k]);
+      if (kf.quality != nullptr) entering_quality.push_back(kf.quality[k]);
     }
-    // The spare window: the active one minus its oldest keyframe when full,
-    // unchanged keyframes copied (keeping their stamps, as the node's window
-    // does), plus the new keyframe.
-    spare->clear();
-    const std::size_t first = members.size() == K ? 1 : 0;
-    for (std::size_t m = first; m < members.size(); ++m) {
-      const std::size_t j = members[m];
-      const core::Status s =
-          changed[j] ? add_live(spare, j) : spare->copy_keyframe(*active, static_cast<std::uint32_t>(m));
-      if (s != core::Status::kOk) return s;
-    }
-    core::Status s = add_live(spare, i);
+    if (kf.tracked != nullptr) kf.tracked = entering_tracked.data();
+    if (kf.quality != nullptr) kf.quality = entering_quality.data();
+    const auto count = static_cast<std::uint32_t>(entering.size());
+    core::Status s = window.keyframe_count() == caps.max_keyframes ? window.slide(kf, entering.data(), count)
+                                                                  : window.add_keyframe(kf, entering.data(), count);
     if (s != core::Status::kOk) return s;
-    std::swap(active, spare);
-    if (first == 1) {
-      live[members.front()].clear();
-      live_slots[members.front()].clear();
-      live_quality[members.front()].clear();
-      members.pop_front();
-    }
-    members.push_back(i);
-    for (const std::size_t j : members) changed[j] = false;
-
-    s = sparsifier.update(*active);
+    s = sparsifier.update(window);
     if (s != core::Status::kOk) return s;
     ++out->slides;
     add_totals(sparsifier.summary(), &out->totals);
@@ -187,24 +161,12 @@ core::Status replay(const core::WindowFile& f, const core::Params& params, std::
         culled_now.push_back(d[k].point);
       }
     }
-    if (culled_now.empty()) continue;
-    for (const std::size_t j : members) {
-      std::size_t w = 0;
-      for (std::size_t r = 0; r < live[j].size(); ++r) {
-        if (culled[live_slots[j][r]]) continue;
-        live[j][w] = live[j][r];
-        live_slots[j][w] = live_slots[j][r];
-        if (!live_quality[j].empty()) live_quality[j][w] = live_quality[j][r];
-        ++w;
-      }
-      if (w != live[j].size()) changed[j] = true;
-      live[j].resize(w);
-      live_slots[j].resize(w);
-      if (!live_quality[j].empty()) live_quality[j].resize(w);
-    }
+    std::sort(culled_now.begin(), culled_now.end());
+    s = window.remove_points(culled_now.data(), static_cast<std::uint32_t>(culled_now.size()));
+    if (s != core::Status::kOk) return s;
   }
   out->capacities = caps;
-  out->memory_bytes = a.memory_bytes() + b.memory_bytes() + sparsifier.memory_bytes();
+  out->memory_bytes = window.memory_bytes() + sparsifier.memory_bytes();
   return core::Status::kOk;
 }
 
@@ -244,7 +206,7 @@ core::Capacities decision_capacities(const core::WindowFile& keyframes, Mode mod
 double decision_bytes(const core::WindowFile& keyframes, Mode mode, const core::Params& params, std::uint32_t K) {
   const platform::MemoryModel model =
       mode == Mode::kWhole ? platform::probe_memory_model(params, core::SolveMode::kFromScratch, 1)
-                           : platform::probe_memory_model(params, core::SolveMode::kIncremental, 2);
+                           : platform::probe_memory_model(params, core::SolveMode::kIncremental, 1);
   // Replay also keeps one decision per distinct point of the map.
   const double decisions =
       mode == Mode::kReplay ? static_cast<double>(sizeof(core::PointDecision)) * keyframes.needs.max_points : 0.0;
