@@ -417,17 +417,15 @@ void compare_window(const core::Sparsifier& scratch, const core::Capacities& cap
   ++r->compared;
 }
 
-// Keyframe k of the stream into `window`, the oldest out once K are held:
-// the windows both passes of replay() decide. False if the oldest could not
-// be removed; `added` is the keyframe's own status.
-bool slide_in(const KeyframeStream& stream, std::uint32_t k, core::Window& window, core::Status* added) {
-  if (window.keyframe_count() == stream.window &&
-      window.remove_keyframe(window.keyframe(0).id) != core::Status::kOk) {
-    return false;
-  }
+// Keyframe k of the stream into `window`, in place of the oldest once K are
+// held, as the node's window slides: the windows both passes of replay()
+// decide.
+core::Status slide_in(const KeyframeStream& stream, std::uint32_t k, core::Window& window) {
+  const core::Keyframe& kf = stream.keyframes[k];
   const std::vector<core::Observation>& obs = stream.observations[k];
-  *added = window.add_keyframe(stream.keyframes[k], obs.data(), static_cast<std::uint32_t>(obs.size()));
-  return true;
+  const auto n = static_cast<std::uint32_t>(obs.size());
+  return window.keyframe_count() == stream.window ? window.slide(kf, obs.data(), n)
+                                                  : window.add_keyframe(kf, obs.data(), n);
 }
 
 // One pass over the stream. budget_ns == 0: no deadline.
@@ -483,8 +481,7 @@ bool replay(const KeyframeStream& stream, std::uint32_t warmup, std::uint64_t bu
     // --- the decision path ---
     const std::uint64_t t0 = clock.now_ns();  // the keyframe arrives
     const std::uint64_t cpu0 = thread_cpu_ns();
-    core::Status added = core::Status::kOk;
-    if (!slide_in(stream, k, window, &added)) return false;
+    const core::Status added = slide_in(stream, k, window);
     const std::uint64_t t1 = clock.now_ns();
     // The solver gets 90% of the budget; the rest is for deciding and
     // publishing, which follow it.
@@ -545,8 +542,7 @@ bool replay(const KeyframeStream& stream, std::uint32_t warmup, std::uint64_t bu
   core::Window check(caps);
   std::size_t next = 0;
   for (std::uint32_t k = 0; k < total && next < answers.size(); ++k) {
-    core::Status added = core::Status::kOk;  // a refusal was counted in the first pass
-    if (!slide_in(stream, k, check, &added)) return false;
+    (void)slide_in(stream, k, check);  // a refusal was counted in the first pass
     // `fresh` decides every window the path decided, so that its buffers are
     // as warm as the path's when a sampled window times it (and, under a kept
     // fraction, it holds the same memory).
